@@ -1,0 +1,26 @@
+// Small file helpers shared by every writer: outputs appear whole or not at all.
+#pragma once
+
+#include <string>
+
+namespace triadcal {
+
+// Writes content to path through a temporary file in the same folder and a
+// rename, so that readers never see a partial file. Throws InputError when the
+// folder cannot be written.
+void WriteFileAtomically(const std::string& path, const std::string& content);
+
+// Reads a whole file; throws InputError("PATH: cannot read ...").
+std::string ReadFile(const std::string& path);
+
+// Shortest decimal text that reads back to exactly the same double.
+std::string FormatDouble(double x);
+
+// Resolves a data path written in a run or scenario file: relative paths are
+// relative to the folder of that file. A path starting with "shared:" names a
+// file of the project's shared data folder, found as TRIADCAL_SHARED or as a
+// folder "shared" beside any parent of the referring file's folder; empty
+// string when no such folder exists.
+std::string ResolveDataPath(const std::string& referring_file, const std::string& path);
+
+}  // namespace triadcal

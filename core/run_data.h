@@ -1,0 +1,36 @@
+// One recorded run, in memory: time, recorded bench angles, readings, and the
+// optional rate and temperature channels. Everything SI/radians except the
+// readings (mV). Angles are unwrapped. Readings are already in the platform
+// frame (the IMU mounting of run.yaml applied).
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace triadcal {
+
+struct RunData {
+  std::vector<double> t_s;
+  std::vector<double> lambda_rad[2];    // recorded lambda1, lambda2 (unwrapped)
+  std::vector<double> rate_rad_s[2];    // recorded rates, empty when not in the file
+  std::vector<double> w_mV[3];          // readings wx, wy, wz
+  std::vector<double> temp_C;           // empty when not in the file
+
+  std::size_t size() const { return t_s.size(); }
+  bool has_rates() const { return !rate_rad_s[0].empty(); }
+  bool has_temp() const { return !temp_C.empty(); }
+  Eigen::Vector3d readings_mV(std::size_t k) const {
+    return {w_mV[0][k], w_mV[1][k], w_mV[2][k]};
+  }
+};
+
+// What validation found that is worth telling but not fatal ("12 duplicate time
+// stamps dropped"); each is one line for stderr.
+struct RunWarnings {
+  std::vector<std::string> lines;
+};
+
+}  // namespace triadcal
