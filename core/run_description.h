@@ -70,6 +70,11 @@ struct RunDescription {
   // mounting: platform axis i carries IMU channel axis_source[i] times axis_sign[i].
   int axis_source[3] = {0, 1, 2};
   double axis_sign[3] = {1.0, 1.0, 1.0};
+
+  // priors: {NAME: SIGMA} in file units: the 1 sigma of the weak prior on a
+  // parameter around its nominal value; absent names use the defaults of
+  // solvers/priors.h. (Parsed from the optional `priors:` key.)
+  std::map<std::string, double> prior_sigma;
 };
 
 // Reads and checks run.yaml. Throws InputError with "FILE: key: what is wrong".

@@ -17,5 +17,6 @@ struct Command {
 
 Command AddSimulateCommand(CLI::App& app);
 Command AddInfoCommand(CLI::App& app);
+Command AddFilterCommand(CLI::App& app);
 
 }  // namespace triadcal

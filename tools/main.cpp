@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
 
   std::vector<triadcal::Command> commands = {
       triadcal::AddSimulateCommand(app),
+      triadcal::AddFilterCommand(app),
       triadcal::AddInfoCommand(app),
   };
 

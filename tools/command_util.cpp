@@ -1,0 +1,63 @@
+#include "tools/command_util.h"
+
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+#include <unistd.h>
+
+#include "core/errors.h"
+#include "core/file_util.h"
+#include "core/run_io.h"
+
+namespace triadcal {
+
+LoadedRun LoadRunOrThrow(const std::string& run_yaml) {
+  LoadedRun r;
+  r.description = LoadRunDescription(run_yaml);
+  RunWarnings warnings;
+  r.data = LoadRunData(r.description, &warnings);
+  for (const std::string& w : warnings.lines) std::cerr << "triadcal: warning: " << w << "\n";
+  return r;
+}
+
+std::vector<Effect> ParseEffectList(const std::string& list) {
+  std::vector<Effect> out;
+  std::stringstream ss(list);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    if (item.empty()) continue;
+    try {
+      out.push_back(EffectFromName(item));
+    } catch (const std::invalid_argument& e) {
+      throw InputError(std::string("--effects: ") + e.what());
+    }
+  }
+  return out;
+}
+
+namespace {
+bool& ProgressShown() {
+  static bool shown = false;
+  return shown;
+}
+}  // namespace
+
+void ShowProgress(const std::string& what, double fraction) {
+  if (!isatty(fileno(stderr))) return;
+  std::fprintf(stderr, "\r%s %3.0f%%", what.c_str(), 100.0 * fraction);
+  std::fflush(stderr);
+  ProgressShown() = true;
+}
+
+void EndProgress() {
+  if (ProgressShown()) {
+    std::fprintf(stderr, "\r%60s\r", "");
+    ProgressShown() = false;
+  }
+}
+
+void WriteJson(const nlohmann::json& j, const std::string& path) {
+  WriteFileAtomically(path, j.dump(2) + "\n");
+}
+
+}  // namespace triadcal

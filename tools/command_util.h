@@ -1,0 +1,35 @@
+// What several commands share: loading a run with its warnings on stderr,
+// the --effects list, a progress line, and writing JSON outputs whole.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/effects.h"
+#include "core/run_data.h"
+#include "core/run_description.h"
+
+namespace triadcal {
+
+struct LoadedRun {
+  RunDescription description;
+  RunData data;
+};
+
+// Loads run.yaml and its data; prints each validation warning to stderr as
+// "triadcal: warning: ...".
+LoadedRun LoadRunOrThrow(const std::string& run_yaml);
+
+// "a,b" -> effects; throws InputError("--effects: unknown effect ...").
+std::vector<Effect> ParseEffectList(const std::string& list);
+
+// A progress line on stderr ("filter: pass 1/2  37%"), only on a terminal.
+void ShowProgress(const std::string& what, double fraction);
+void EndProgress();
+
+// Serialises with 2-space indentation and writes atomically.
+void WriteJson(const nlohmann::json& j, const std::string& path);
+
+}  // namespace triadcal
