@@ -15,11 +15,18 @@
 //                                             # as its name or name_unit (tau or
 //                                             # tau_ms); absent parameters are 0
 //   run: {bench: ..., triad: ..., constraints: ...}   # what run.yaml declares;
-//        # triad.noise_mV and bench.angle_noise_arcsec default to the `noise`
-//        # section (the run declares the true noise); `data`, `columns` and
-//        # `mounting` are not allowed (simulate writes the CSV contract itself)
+//        # bench.angle_noise_arcsec defaults to noise.angle_arcsec (0 included)
+//        # and triad.noise_mV to the true reading noise sqrt(accel_mV^2 + q^2/12)
+//        # (q = sensor.quantization_mV), at least kMinDeclaredNoise_mV since
+//        # run.yaml needs noise_mV > 0; `data`, `columns` and `mounting` are not
+//        # allowed (simulate writes the CSV contract itself)
 //   # optional keys beyond SPEC section 7:
 //   seed: 1                                   # overridden by `simulate --seed N`
+//   truth_spread: {dlambda2: 0.5}             # per-seed Gaussian spread added to
+//                                             # the truth (file units), drawn from
+//                                             # a stream of its own (SampleTruth):
+//                                             # Monte Carlo over a population of
+//                                             # sensors and benches
 //   sensor: {quantization_mV: 0.5, saturation_mV: [0, 3300]}   # recording chain
 //   temperature: {start_C: 25, rate_C_per_h: 10}   # temp_C(t) = start + rate t;
 //                                             # required by thermal_drift_temp
@@ -43,12 +50,12 @@
 // (the normal distribution's algorithm is implementation-defined).
 #pragma once
 
+#include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/bench_model.h"
 #include "core/run_data.h"
@@ -73,21 +80,30 @@ struct HarmonicProfile {
 struct Scenario {
   std::string yaml_path;
   HarmonicProfile profile;
-  RunDescription run;             // what run.yaml declares
-  ParameterLayout truth_layout;   // base + injected effects
-  Eigen::VectorXd truth;          // SI, in truth_layout
+  RunDescription run;            // what run.yaml declares
+  ParameterLayout truth_layout;  // base + injected effects
+  Eigen::VectorXd truth;         // SI, in truth_layout
   // noise, 1 sigma per sample
   double accel_noise_mV = 2.0;
   double angle_noise_rad = 0.0;
   // optional sensor imperfections of the recording chain
-  double quantization_mV = 0.0;                // 0: none
+  double quantization_mV = 0.0;  // 0: none
   double saturation_low_mV = -1e300, saturation_high_mV = 1e300;
   // optional channels
   bool write_rates = false;
   double temp_start_C = 25.0, temp_rate_C_per_h = 0.0;
   bool write_temp = false;
   std::uint64_t seed = 1;
+  // (parameter index, sigma SI): see truth_spread above
+  std::vector<std::pair<int, double>> truth_spread;
 };
+
+// The truth of this seed: s.truth plus the truth_spread draws. Call after the
+// seed is final; the data noise stream is not affected.
+void SampleTruth(Scenario* s);
+
+// The reading noise a run declares for noise-free data (run.yaml requires > 0).
+constexpr double kMinDeclaredNoise_mV = 1e-3;
 
 // Most samples a scenario may ask for (about 2 GB of run data).
 constexpr std::size_t kMaxSimulatedSamples = 20000000;
@@ -116,6 +132,12 @@ double TruthFileValue(const ParameterLayout& layout, const Eigen::VectorXd& thet
 // Writes DIR/run.csv, DIR/run.yaml and DIR/truth.json (creating DIR). The
 // three files are written under temporary names and renamed at the end, so a
 // failure leaves none of them (and no DIR when this call created it).
+//   run.csv     the CSV contract, with "# simulated by ...", "# scenario: NAME",
+//               "# seed: N" comment lines
+//   run.yaml    RunDescriptionToYaml(run, "run.csv"): injected effects NOT declared
+//   truth.json  {"parameters": {"Kx": 171.5, ..., "angle_latency.tau_ms": 2},
+//                "units": {...}, "injected_effects": [...], "scenario": NAME,
+//                "seed": N, "noise": {"accel_mV", "angle_arcsec"}, "samples": N}
 void WriteSimulation(const Scenario& s, const RunData& data, const std::string& dir);
 
 }  // namespace triadcal
