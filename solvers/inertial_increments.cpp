@@ -2,6 +2,8 @@
 
 #include <ceres/jet.h>
 
+#include "core/b1_jacobian.h"
+
 #include <cmath>
 #include <stdexcept>
 
@@ -68,6 +70,21 @@ IntervalIncrement IntegrateInterval(const ModelConfig& cfg, const Eigen::VectorX
                                                                 run.readings_mV(k), ctx);
       inc.dv_mps += alpha[k - k0] * a;
       inc.ds_m += beta[k - k0] * a;
+    }
+    return inc;
+  }
+  if (B1HasAnalyticJacobian(cfg.layout)) {
+    inc.ddv_dtheta = Eigen::MatrixXd::Zero(3, n);
+    inc.dds_dtheta = Eigen::MatrixXd::Zero(3, n);
+    Eigen::MatrixXd Jk(3, n);
+    Eigen::Vector3d a;
+    for (std::size_t k = k0; k <= k1; ++k) {
+      const SampleContext ctx{run.t_s[k], run.has_temp() ? run.temp_C[k] : 0.0};
+      AccelerationWithJacobian(cfg, theta.data(), s.recorded[k], run.readings_mV(k), ctx, &a, Jk);
+      inc.dv_mps += alpha[k - k0] * a;
+      inc.ds_m += beta[k - k0] * a;
+      inc.ddv_dtheta += alpha[k - k0] * Jk;
+      inc.dds_dtheta += beta[k - k0] * Jk;
     }
     return inc;
   }

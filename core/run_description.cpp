@@ -1,0 +1,188 @@
+// run.yaml in and out (SPEC section 7): the bench and triad nominal values, the
+// constraints, and the column mapping and mounting for foreign data files.
+#include "core/run_description.h"
+
+#include "core/column_mapping.h"
+#include "core/constraint_parser.h"
+#include "core/errors.h"
+#include "core/file_util.h"
+#include "core/yaml_fields.h"
+
+namespace triadcal {
+
+namespace {
+
+void ParseBench(const YAML::Node& node, const YamlPlace& at, RunDescription* run) {
+  CheckKeys(node, at, {"lever_arm_mm", "angle_noise_arcsec", "g_mps2"});
+  if (node["lever_arm_mm"]) {
+    run->lever_arm0_m = ReadVector3(node["lever_arm_mm"], at.Child("lever_arm_mm")) * kMmToM;
+  }
+  if (node["angle_noise_arcsec"]) {
+    run->angle_noise_rad =
+        ReadNonNegative(node["angle_noise_arcsec"], at.Child("angle_noise_arcsec")) * kArcsecToRad;
+  }
+  if (node["g_mps2"]) run->g_mps2 = ReadPositive(node["g_mps2"], at.Child("g_mps2"));
+}
+
+void ParseTriad(const YAML::Node& node, const YamlPlace& at, RunDescription* run) {
+  CheckKeys(node, at, {"scale_mV_per_g", "bias_mV", "noise_mV"});
+  if (node["scale_mV_per_g"]) {
+    const YamlPlace p = at.Child("scale_mV_per_g");
+    run->scale_mV_per_g = ReadVector3(node["scale_mV_per_g"], p);
+    for (int i = 0; i < 3; ++i) {
+      if (!(run->scale_mV_per_g[i] > 0.0)) {
+        p.Index(i).Fail("must be > 0, got " + FormatDouble(run->scale_mV_per_g[i]) +
+                        " (an inverted axis belongs in mounting.axes)");
+      }
+    }
+  }
+  if (node["bias_mV"]) run->bias_mV = ReadVector3(node["bias_mV"], at.Child("bias_mV"));
+  if (node["noise_mV"]) run->noise_mV = ReadPositive(node["noise_mV"], at.Child("noise_mV"));
+}
+
+// Readings in g or mg become mV at 1000 mV/g: without a triad section saying
+// otherwise, the nominal triad is then 1000 mV/g with no bias.
+void DefaultTriadForGReadings(const YAML::Node& triad, RunDescription* run) {
+  for (const char* ch : {"wx", "wy", "wz"}) {
+    const std::string unit = SourceOf(*run, ch).unit;
+    if (unit != "g" && unit != "mg") return;
+  }
+  if (!triad || !triad["scale_mV_per_g"]) run->scale_mV_per_g.setConstant(1000.0);
+  if (!triad || !triad["bias_mV"]) run->bias_mV.setZero();
+}
+
+YAML::Emitter& EmitVector(YAML::Emitter& out, const Eigen::Vector3d& v) {
+  out << YAML::Flow << YAML::BeginSeq;
+  for (int i = 0; i < 3; ++i) out << FormatDouble(v[i]);
+  return out << YAML::EndSeq;
+}
+
+// priors: {NAME: SIGMA} in file units, for any base or effect parameter.
+void ParsePriors(const YAML::Node& node, const YamlPlace& at, RunDescription* run) {
+  if (!node.IsMap()) at.Fail("expected a map {parameter: sigma in file units}");
+  std::vector<Effect> all;
+  for (const EffectSpec& e : EffectCatalogue()) all.push_back(e.id);
+  const ParameterLayout every(all);
+  for (const auto& kv : node) {
+    const std::string name = kv.first.as<std::string>();
+    const YamlPlace p = at.Child(name);
+    if (every.IndexOf(name) < 0) p.Fail("unknown parameter (see `triadcal params`)");
+    run->prior_sigma[name] = ReadPositive(kv.second, p);
+  }
+}
+
+}  // namespace
+
+RunDescription LoadRunDescription(const std::string& yaml_path) {
+  const YAML::Node root = LoadYamlFile(yaml_path);
+  const YamlPlace at{yaml_path, ""};
+  if (!root.IsMap()) at.Fail("expected a map of keys (data, bench, triad, ...)");
+  if (!root["data"]) {
+    at.Child("data").Fail("missing: the data file (relative to this file, or shared:PATH)");
+  }
+  return ParseRunDescription(root, yaml_path, yaml_path);
+}
+
+RunDescription ParseRunDescription(const YAML::Node& node, const std::string& yaml_path,
+                                   const std::string& where) {
+  RunDescription run;
+  run.yaml_path = yaml_path;
+  run.constraints = DefaultConstraints();
+  const YamlPlace at{where, ""};
+  if (!node.IsDefined() || node.IsNull()) return run;
+  CheckKeys(node, at,
+            {"data", "bench", "triad", "constraints", "columns", "mounting", "priors"});
+  if (node["data"]) {
+    const std::string data = ReadString(node["data"], at.Child("data"));
+    if (data.empty()) at.Child("data").Fail("empty file name");
+    run.data_path = ResolveDataPath(yaml_path, data);
+    if (run.data_path.empty()) {
+      at.Child("data").Fail("shared data folder not found for '" + data +
+                            "' (set TRIADCAL_SHARED)");
+    }
+  }
+  if (node["bench"]) ParseBench(node["bench"], at.Child("bench"), &run);
+  if (node["triad"]) ParseTriad(node["triad"], at.Child("triad"), &run);
+  if (node["constraints"]) {
+    run.constraints = ParseConstraints(node["constraints"], at.Child("constraints"));
+  }
+  if (node["columns"]) run.columns = ParseColumns(node["columns"], at.Child("columns"));
+  if (node["mounting"]) ParseMounting(node["mounting"], at.Child("mounting"), &run);
+  if (node["priors"]) ParsePriors(node["priors"], at.Child("priors"), &run);
+  DefaultTriadForGReadings(node["triad"], &run);
+  return run;
+}
+
+std::string RunDescriptionToYaml(const RunDescription& run, const std::string& data_relative) {
+  YAML::Emitter out;
+  out << YAML::Comment("triadcal run description (SPEC section 7)") << YAML::Newline;
+  out << YAML::BeginMap;
+  out << YAML::Key << "data" << YAML::Value << data_relative;
+
+  out << YAML::Key << "bench" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "lever_arm_mm" << YAML::Value;
+  EmitVector(out, run.lever_arm0_m / kMmToM);
+  out << YAML::Key << "angle_noise_arcsec" << YAML::Value
+      << FormatDouble(run.angle_noise_rad / kArcsecToRad);
+  if (run.g_mps2 != kStandardGravity) {
+    out << YAML::Key << "g_mps2" << YAML::Value << FormatDouble(run.g_mps2);
+  }
+  out << YAML::EndMap;
+
+  out << YAML::Key << "triad" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "scale_mV_per_g" << YAML::Value;
+  EmitVector(out, run.scale_mV_per_g);
+  out << YAML::Key << "bias_mV" << YAML::Value;
+  EmitVector(out, run.bias_mV);
+  out << YAML::Key << "noise_mV" << YAML::Value << FormatDouble(run.noise_mV);
+  out << YAML::EndMap;
+
+  out << YAML::Key << "constraints" << YAML::Value;
+  if (run.constraints.empty()) {
+    out << YAML::Flow << YAML::BeginSeq << YAML::EndSeq;
+  } else {
+    out << YAML::BeginSeq;
+    for (const Constraint& c : run.constraints) EmitConstraint(c, &out);
+    out << YAML::EndSeq;
+  }
+
+  if (!run.columns.empty()) {
+    out << YAML::Key << "columns" << YAML::Value;
+    EmitColumns(run.columns, &out);
+  }
+  if (!run.prior_sigma.empty()) {
+    out << YAML::Key << "priors" << YAML::Value << YAML::BeginMap;
+    for (const auto& [name, sigma] : run.prior_sigma) {
+      out << YAML::Key << name << YAML::Value << FormatDouble(sigma);
+    }
+    out << YAML::EndMap;
+  }
+  if (!IsIdentityMounting(run)) {
+    out << YAML::Key << "mounting" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "axes" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+    for (int i = 0; i < 3; ++i) out << YAML::DoubleQuoted << MountingAxisText(run, i);
+    out << YAML::EndSeq << YAML::EndMap;
+  }
+  out << YAML::EndMap;
+  if (!out.good()) throw std::logic_error("run.yaml emitter: " + out.GetLastError());
+  return std::string(out.c_str()) + "\n";
+}
+
+Eigen::VectorXd NominalTheta(const RunDescription& run, const ParameterLayout& layout) {
+  Eigen::VectorXd theta = Eigen::VectorXd::Zero(layout.size());
+  for (int i = 0; i < 3; ++i) {
+    theta[kKx + i] = run.scale_mV_per_g[i];
+    theta[kW0x + i] = run.bias_mV[i];
+  }
+  return theta;
+}
+
+ModelConfig MakeModelConfig(const RunDescription& run, const ParameterLayout& layout) {
+  ModelConfig cfg;
+  cfg.lever_arm0_m = run.lever_arm0_m;
+  cfg.g_mps2 = run.g_mps2;
+  cfg.layout = layout;
+  return cfg;
+}
+
+}  // namespace triadcal
