@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <algorithm>
 #include <cmath>
 
 namespace triadcal {
@@ -30,39 +31,68 @@ Eigen::Vector4d LocalCubic(const double* t, const double* y, int n, double t0, d
 
 }  // namespace
 
+namespace {
+
+// Rate and acceleration of both axes at sample k from the samples in the
+// window [lo, hi) (widened to at least 5 points).
+void FitAt(const RunData& run, std::size_t k, std::size_t lo, std::size_t hi, double h,
+           BenchAngles<double>* o) {
+  const std::size_t n = run.size();
+  const double t0 = run.t_s[k];
+  std::size_t a = lo, b = hi;
+  while (b - a < 5 && (a > 0 || b < n)) {
+    if (a > 0) --a;
+    if (b - a < 5 && b < n) ++b;
+  }
+  const int m = static_cast<int>(b - a);
+  const int degree = std::min(3, m - 1);
+  for (int i = 0; i < 2; ++i) {
+    if (run.has_rates()) {
+      o->axis[i].rate = run.rate_rad_s[i][k];
+      const Eigen::Vector4d c =
+          LocalCubic(&run.t_s[a], &run.rate_rad_s[i][a], m, t0, h, std::min(degree, 2));
+      o->axis[i].accel = c[1];
+    } else {
+      const Eigen::Vector4d c = LocalCubic(&run.t_s[a], &run.lambda_rad[i][a], m, t0, h, degree);
+      o->axis[i].rate = c[1];
+      o->axis[i].accel = 2.0 * c[2];
+    }
+  }
+}
+
+}  // namespace
+
+bool NeedsRatesAtEverySample(const ParameterLayout& layout) {
+  return layout.has(Effect::kAngleLatency) || layout.has(Effect::kEncoderHarmonic) ||
+         layout.has(Effect::kSizeEffect);
+}
+
 std::vector<BenchAngles<double>> EstimateAngleDerivatives(const RunData& run,
-                                                          const AngleDerivativeOptions& opt) {
-  const size_t n = run.size();
+                                                          const AngleDerivativeOptions& opt,
+                                                          const std::vector<std::size_t>* only) {
+  const std::size_t n = run.size();
   std::vector<BenchAngles<double>> out(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    for (int i = 0; i < 2; ++i) out[k].axis[i].angle = run.lambda_rad[i][k];
+  }
   const double h = opt.half_window_s;
-  size_t lo = 0, hi = 0;  // window [lo, hi)
-  for (size_t k = 0; k < n; ++k) {
+  auto window = [&](std::size_t k, std::size_t* lo, std::size_t* hi) {
     const double t0 = run.t_s[k];
-    while (lo < k && run.t_s[lo] < t0 - h) ++lo;
-    if (hi < k + 1) hi = k + 1;
-    while (hi < n && run.t_s[hi] <= t0 + h) ++hi;
-    // Keep at least 5 points (cubic + 1) even where the window is sparse.
-    size_t a = lo, b = hi;
-    while (b - a < 5 && (a > 0 || b < n)) {
-      if (a > 0) --a;
-      if (b - a < 5 && b < n) ++b;
+    *lo = std::lower_bound(run.t_s.begin(), run.t_s.begin() + k, t0 - h) - run.t_s.begin();
+    *hi = std::upper_bound(run.t_s.begin() + k, run.t_s.end(), t0 + h) - run.t_s.begin();
+  };
+  if (only) {
+    for (std::size_t k : *only) {
+      std::size_t lo, hi;
+      window(k, &lo, &hi);
+      FitAt(run, k, lo, hi, h, &out[k]);
     }
-    const int m = static_cast<int>(b - a);
-    const int degree = std::min(3, m - 1);
-    for (int i = 0; i < 2; ++i) {
-      BenchAngles<double>& o = out[k];
-      o.axis[i].angle = run.lambda_rad[i][k];
-      if (run.has_rates()) {
-        o.axis[i].rate = run.rate_rad_s[i][k];
-        const Eigen::Vector4d c =
-            LocalCubic(&run.t_s[a], &run.rate_rad_s[i][a], m, t0, h, std::min(degree, 2));
-        o.axis[i].accel = c[1];
-      } else {
-        const Eigen::Vector4d c = LocalCubic(&run.t_s[a], &run.lambda_rad[i][a], m, t0, h, degree);
-        o.axis[i].rate = c[1];
-        o.axis[i].accel = 2.0 * c[2];
-      }
-    }
+    return out;
+  }
+  for (std::size_t k = 0; k < n; ++k) {
+    std::size_t lo, hi;
+    window(k, &lo, &hi);
+    FitAt(run, k, lo, hi, h, &out[k]);
   }
   return out;
 }

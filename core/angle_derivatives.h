@@ -27,8 +27,16 @@ struct AngleDerivativeOptions {
 // Per sample: recorded angle (as is), rate and angular acceleration of both
 // axes. With rate columns, the rate is taken from the file and the acceleration
 // is the local-fit derivative of the rate.
-std::vector<BenchAngles<double>> EstimateAngleDerivatives(const RunData& run,
-                                                          const AngleDerivativeOptions& opt);
+// With `only` given, rates and accelerations are estimated at those sample
+// indices alone (the others keep their angle with rate = accel = 0): the base
+// model needs lambda' only at the measurement epochs.
+std::vector<BenchAngles<double>> EstimateAngleDerivatives(
+    const RunData& run, const AngleDerivativeOptions& opt,
+    const std::vector<std::size_t>* only = nullptr);
+
+// True when the model needs lambda', lambda'' at every sample (effects of the
+// angle stage, and the size effect's per-axis kinematics in block B1).
+bool NeedsRatesAtEverySample(const ParameterLayout& layout);
 
 // sigma(lambda') / sigma(lambda) of the local fit at an interior sample of a
 // uniformly sampled run with interval dt_s [1/s].

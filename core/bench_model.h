@@ -379,9 +379,11 @@ Vec3<T> SpecificForceFromReadings_g(const ModelConfig& cfg, const T* theta,
     return J;
   };
   Vec3<double> W0 = M0.inverse() * u0;
-  for (int it = 0; it < 6; ++it) {
+  for (int it = 0; it < 8; ++it) {  // quadratic: 2-3 steps for |K_ij| ~ 1e-3
     const Vec3<double> F = M0 * W0 + W0.cwiseProduct(K0 * W0) - u0;
-    W0 -= jacobian(W0).inverse() * F;
+    const Vec3<double> step = jacobian(W0).inverse() * F;
+    W0 -= step;
+    if (step.cwiseAbs().maxCoeff() <= 1e-15 * (1.0 + W0.cwiseAbs().maxCoeff())) break;
   }
   const Vec3<T> W = W0.template cast<T>();
   const Vec3<T> F = M * W + W.cwiseProduct(K * W) - u;

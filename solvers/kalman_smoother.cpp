@@ -6,18 +6,13 @@
 
 #include "core/errors.h"
 #include "solvers/inertial_increments.h"
+#include "solvers/run_problem.h"
 
 namespace triadcal {
 namespace {
 
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 using Mat6 = Eigen::Matrix<double, 6, 6>;
-
-// A constraint as a row over theta.
-struct ConstraintRow {
-  Eigen::VectorXd c;
-  double value, sigma;
-};
 
 // The process step of the interval that ends at an epoch.
 struct Interval {
@@ -51,16 +46,7 @@ Eigen::MatrixXd Unpack(const std::vector<double>& v, int N) {
   return P;
 }
 
-struct Context {
-  ModelConfig cfg;
-  SampleSeries series;
-  std::vector<std::size_t> epochs;
-  Prior prior;
-  std::vector<ConstraintRow> constraints;
-  double accel_var = 0.0;
-  double sigma_angle = 0.0, sigma_rate = 0.0;
-  int n = 0;
-};
+using Context = RunProblem;
 
 Eigen::MatrixXd TransitionMatrix(const Interval& in, int n) {
   Eigen::MatrixXd F = Eigen::MatrixXd::Identity(6 + n, 6 + n);
@@ -228,56 +214,10 @@ Estimate Smooth(const Context& c, const PassResult& pass) {
 
 }  // namespace
 
-std::vector<std::size_t> ChooseEpochs(const RunData& data, double epoch_s) {
-  std::vector<std::size_t> ep;
-  const std::size_t n = data.size();
-  if (n == 0) return ep;
-  ep.push_back(0);
-  for (std::size_t k = 1; k < n; ++k) {
-    if (data.t_s[k] - data.t_s[ep.back()] >= epoch_s - 1e-9) ep.push_back(k);
-  }
-  if (ep.back() != n - 1) {
-    // Merge a short last interval into the previous one.
-    if (ep.size() > 1 && data.t_s[n - 1] - data.t_s[ep.back()] < 0.5 * epoch_s) ep.back() = n - 1;
-    else ep.push_back(n - 1);
-  }
-  return ep;
-}
-
 FilterResult RunFilterSmoother(const RunDescription& run, const RunData& data,
                                const ParameterLayout& layout, const FilterOptions& options) {
-  if (!(options.epoch_s > 0.0)) throw InputError("filter: --epoch-s must be > 0");
-  Context c;
-  c.cfg = MakeModelConfig(run, layout);
-  if (data.has_temp()) c.cfg.temp_ref_C = data.temp_C.front();
-  c.series.run = &data;
-  c.series.recorded = EstimateAngleDerivatives(data, options.derivatives);
-  c.epochs = ChooseEpochs(data, options.epoch_s);
-  if (c.epochs.size() < 3) {
-    throw InputError(run.data_path + ": run too short for the filter (" +
-                     std::to_string(c.epochs.size()) + " epochs of " +
-                     std::to_string(options.epoch_s) + " s)");
-  }
-  c.prior = MakePrior(run, layout);
-  c.n = layout.size();
-  for (const Constraint& k : run.constraints) {
-    ConstraintRow row{Eigen::VectorXd::Zero(c.n), k.value_si, k.sigma_si};
-    for (const auto& [name, coef] : k.terms) {
-      const int i = layout.IndexOf(name);
-      if (i < 0) {
-        throw InputError(run.yaml_path + ": constraints: '" + k.expr + "' names '" + name +
-                         "', which is not estimated in this run");
-      }
-      row.c[i] += coef;
-    }
-    c.constraints.push_back(row);
-  }
-  const double min_scale = run.scale_mV_per_g.cwiseAbs().minCoeff();
-  c.accel_var = AccelSampleVariance(run.noise_mV, min_scale, run.angle_noise_rad, run.g_mps2);
-  c.sigma_angle = run.angle_noise_rad;
-  const double dt = (data.t_s.back() - data.t_s.front()) / std::max<std::size_t>(1, data.size() - 1);
-  c.sigma_rate = data.has_rates() ? 0.0 : RateNoiseGain(dt, options.derivatives) * c.sigma_angle;
-
+  const RunProblem c =
+      BuildRunProblem(run, data, layout, options.epoch_s, options.derivatives);
   FilterResult res;
   res.prior = c.prior;
   res.epochs = static_cast<int>(c.epochs.size());

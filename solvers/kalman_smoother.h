@@ -42,6 +42,7 @@
 #include "core/run_data.h"
 #include "core/run_description.h"
 #include "solvers/priors.h"
+#include "solvers/run_problem.h"
 
 namespace triadcal {
 
@@ -82,9 +83,5 @@ struct FilterResult {
 
 FilterResult RunFilterSmoother(const RunDescription& run, const RunData& data,
                                const ParameterLayout& layout, const FilterOptions& options);
-
-// Sample indices of the measurement epochs: the first sample, then the first
-// sample at least epoch_s after the previous epoch, and the last sample.
-std::vector<std::size_t> ChooseEpochs(const RunData& data, double epoch_s);
 
 }  // namespace triadcal

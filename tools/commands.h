@@ -18,5 +18,6 @@ struct Command {
 Command AddSimulateCommand(CLI::App& app);
 Command AddInfoCommand(CLI::App& app);
 Command AddFilterCommand(CLI::App& app);
+Command AddFitCommand(CLI::App& app);
 
 }  // namespace triadcal

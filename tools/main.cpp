@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   std::vector<triadcal::Command> commands = {
       triadcal::AddSimulateCommand(app),
       triadcal::AddFilterCommand(app),
+      triadcal::AddFitCommand(app),
       triadcal::AddInfoCommand(app),
   };
 

@@ -1,0 +1,282 @@
+#include "solvers/batch_solver.h"
+
+#include <ceres/ceres.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cmath>
+#include <memory>
+
+#include "core/errors.h"
+#include "solvers/batch_costs.h"
+#include "solvers/parallel.h"
+#include "solvers/run_problem.h"
+#include "solvers/schur_covariance.h"
+
+namespace triadcal {
+namespace {
+
+double Seconds(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Starting point of theta (and its sigma when an estimator gave one).
+Estimate Initialise(const RunDescription& run, const RunData& data, const ParameterLayout& layout,
+                    const RunProblem& p, const BatchOptions& opt) {
+  const int n = p.n;
+  Estimate e{p.prior.mean, Eigen::MatrixXd(p.prior.sigma.array().square().matrix().asDiagonal())};
+  if (opt.init == BatchInit::kGiven) {
+    if (opt.init_theta.size() != n) throw std::invalid_argument("init_theta has the wrong size");
+    e.theta = opt.init_theta;
+    return e;
+  }
+  if (opt.init == BatchInit::kNominal) return e;
+  // RTS on samples thinned to about init_decimation_hz: a start within a few
+  // sigma of the optimum at a fraction of a full pass.
+  const double span = data.t_s.back() - data.t_s.front();
+  const double rate = (data.size() - 1) / std::max(span, 1e-9);
+  const std::size_t m = std::max<std::size_t>(
+      1, static_cast<std::size_t>(std::floor(rate / std::max(1, opt.init_decimation_hz))));
+  const RunData thin = Decimate(data, m);
+  FilterOptions fo;
+  fo.epoch_s = std::max(opt.epoch_s, 1.0);  // coarse epochs: the start needs no more
+  fo.derivatives = opt.derivatives;
+  fo.smoother_iterations = 1;
+  const FilterResult fr = RunFilterSmoother(run, thin, layout, fo);
+  return fr.rts;
+}
+
+std::unique_ptr<ceres::LossFunction> MakeLoss(const BatchOptions& opt) {
+  if (opt.robust_loss.empty()) return nullptr;
+  if (opt.robust_loss == "huber") return std::make_unique<ceres::HuberLoss>(opt.robust_scale);
+  if (opt.robust_loss == "cauchy") return std::make_unique<ceres::CauchyLoss>(opt.robust_scale);
+  throw InputError("--robust: unknown loss '" + opt.robust_loss + "' (huber, cauchy)");
+}
+
+ceres::LinearSolverType SolverType(const std::string& name) {
+  if (name == "sparse_normal_cholesky") return ceres::SPARSE_NORMAL_CHOLESKY;
+  if (name == "sparse_schur") return ceres::SPARSE_SCHUR;
+  if (name == "dense_qr") return ceres::DENSE_QR;
+  throw InputError("--linear-solver: unknown '" + name +
+                   "' (sparse_normal_cholesky, sparse_schur, dense_qr)");
+}
+
+}  // namespace
+
+BatchResult SolveBatch(const RunDescription& run, const RunData& data,
+                       const ParameterLayout& layout, const BatchOptions& opt) {
+  const auto t_start = std::chrono::steady_clock::now();
+  const int threads = opt.threads > 0 ? opt.threads : DefaultThreads();
+  const ceres::LinearSolverType solver_type = SolverType(opt.linear_solver);
+  const RunProblem p = BuildRunProblem(run, data, layout, opt.epoch_s, opt.derivatives);
+  const int n = p.n;
+  const std::size_t E = p.epochs.size();
+  auto say = [&](const std::string& s) {
+    if (opt.progress) opt.progress(s);
+  };
+
+  BatchResult res;
+  res.prior = p.prior;
+  res.epochs = static_cast<int>(E);
+  res.linear_solver = opt.linear_solver;
+  say("initialising (" + std::string(opt.init == BatchInit::kRts ? "RTS smoother" : "nominal") +
+      ")");
+  res.initial = Initialise(run, data, layout, p, opt);
+  res.init_seconds = Seconds(t_start);
+
+  // Unknowns: theta and the trajectory, started on the B2 reference motion.
+  Eigen::VectorXd theta = res.initial.theta;
+  std::vector<double> x(6 * E);
+  for (std::size_t e = 0; e < E; ++e) {
+    const ReferenceSample r = EvaluateReference(p.cfg, theta, p.series.recorded[p.epochs[e]], false);
+    Eigen::Map<Vec6>(&x[6 * e]) << r.v_mps, r.p_m;
+  }
+
+  // Priors and constraints: fixed linear rows over theta.
+  const int nc = static_cast<int>(p.constraints.size());
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n + nc, n);
+  Eigen::VectorXd b(n + nc);
+  for (int i = 0; i < n; ++i) {
+    A(i, i) = 1.0 / p.prior.sigma[i];
+    b[i] = p.prior.mean[i] / p.prior.sigma[i];
+  }
+  for (int j = 0; j < nc; ++j) {
+    A.row(n + j) = p.constraints[j].c.transpose() / p.constraints[j].sigma;
+    b[n + j] = p.constraints[j].value / p.constraints[j].sigma;
+  }
+
+  const auto t_solve = std::chrono::steady_clock::now();
+  Eigen::VectorXd theta_lin;
+  std::vector<IntervalIncrement> inc(E - 1);
+  std::vector<Mat6> LQ(E - 1), LR(E);
+  std::unique_ptr<ceres::Problem> problem;
+  std::vector<ProcessCost*> process_costs(E - 1);
+  std::vector<MeasurementCost*> measurement_costs(E);
+  double last_step = 0.0;
+  for (int outer = 0; outer < opt.max_outer_iterations; ++outer) {
+    say("relinearising pass " + std::to_string(outer + 1));
+    theta_lin = theta;
+    ParallelFor(E - 1, threads, [&](std::size_t e) {
+      inc[e] = IntegrateInterval(p.cfg, theta_lin, p.series, p.epochs[e], p.epochs[e + 1],
+                                 !opt.exact_increments);
+      Mat6 Q = Mat6::Zero();
+      const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+      Q.block<3, 3>(0, 0) = p.accel_var * inc[e].sum_alpha2 * I;
+      Q.block<3, 3>(0, 3) = Q.block<3, 3>(3, 0) = p.accel_var * inc[e].sum_alpha_beta * I;
+      Q.block<3, 3>(3, 3) = p.accel_var * inc[e].sum_beta2 * I;
+      LQ[e] = WhiteningOf(Q);
+    });
+    ParallelFor(E, threads, [&](std::size_t e) {
+      LR[e] = WhiteningOf(ReferenceNoiseCovariance(p.cfg, theta_lin, p.series.recorded[p.epochs[e]],
+                                                   p.sigma_angle, p.sigma_rate));
+    });
+
+    ceres::Problem::Options po;
+    po.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+    po.loss_function_ownership = ceres::TAKE_OWNERSHIP;
+    problem = std::make_unique<ceres::Problem>(po);
+    for (std::size_t e = 0; e < E; ++e) problem->AddParameterBlock(&x[6 * e], 6);
+    problem->AddParameterBlock(theta.data(), n);
+    for (std::size_t e = 0; e + 1 < E; ++e) {
+      process_costs[e] = new ProcessCost(&inc[e], &theta_lin, LQ[e],
+                                         opt.exact_increments ? &p : nullptr, p.epochs[e],
+                                         p.epochs[e + 1]);
+      problem->AddResidualBlock(process_costs[e], MakeLoss(opt).release(), &x[6 * e],
+                                &x[6 * (e + 1)], theta.data());
+    }
+    for (std::size_t e = 0; e < E; ++e) {
+      measurement_costs[e] = new MeasurementCost(&p, p.epochs[e], LR[e]);
+      problem->AddResidualBlock(measurement_costs[e], MakeLoss(opt).release(), &x[6 * e],
+                                theta.data());
+    }
+    problem->AddResidualBlock(new LinearThetaCost(A, b), nullptr, theta.data());
+
+    ceres::Solver::Options so;
+    so.linear_solver_type = solver_type;
+    so.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
+    so.max_num_iterations = opt.max_ceres_iterations;
+    so.num_threads = threads;
+    so.function_tolerance = 1e-12;
+    so.gradient_tolerance = 1e-12;
+    so.parameter_tolerance = 1e-12;
+    so.logging_type = ceres::SILENT;
+    // The problem is close to linear (B1 enters linearised, B2 is smooth in
+    // theta): start with a Gauss-Newton-sized step instead of Ceres's cautious
+    // default radius, which costs a dozen iterations on a 72k-unknown problem.
+    so.initial_trust_region_radius = 1e12;
+    if (solver_type == ceres::SPARSE_SCHUR) {
+      // Eliminate every other epoch's state: an independent set, since the
+      // process residuals couple only neighbours.
+      auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+      for (std::size_t e = 0; e < E; ++e) ordering->AddElementToGroup(&x[6 * e], e % 2 == 0 ? 0 : 1);
+      ordering->AddElementToGroup(theta.data(), 1);
+      so.linear_solver_ordering = ordering;
+    }
+    ceres::Solver::Summary summary;
+    ceres::Solve(so, problem.get(), &summary);
+    if (std::getenv("TRIADCAL_CERES_REPORT")) std::fprintf(stderr, "%s\n", summary.FullReport().c_str());
+    if (summary.termination_type == ceres::FAILURE) {
+      throw std::runtime_error("Ceres failed: " + summary.message);
+    }
+    res.outer_iterations = outer + 1;
+    res.ceres_iterations += static_cast<int>(summary.iterations.size()) - 1;
+    res.final_cost = summary.final_cost;
+    // Convergence of the relinearisation. The cost change of an inner solve is
+    // 0.5 |step|^2 in the metric of the information matrix, so s = sqrt(2
+    // change) is the step in sigma units. Relinearising converges
+    // quadratically, s_k ~ c s_{k-1}^2: the next step is predicted as
+    // (s_k / s_{k-1}^2) s_k^2, and once that is below 0.01 sigma another pass
+    // over the samples would not move the answer.
+    const double change = std::max(0.0, summary.initial_cost - summary.final_cost);
+    const double step = std::sqrt(2.0 * change);
+    const bool small = change < opt.outer_tolerance;
+    const bool predicted_small = last_step > 0.0 && step < 1.0 &&
+                                 (step / (last_step * last_step)) * step * step < 0.01;
+    last_step = step;
+    if (opt.exact_increments || small || predicted_small) {
+      res.converged = summary.termination_type == ceres::CONVERGENCE || small || predicted_small;
+      break;
+    }
+  }
+  res.solve_seconds = Seconds(t_solve);
+
+  // Residuals at the solution.
+  res.estimate.theta = theta;
+  res.epoch_t.resize(E);
+  res.measurement_residual.assign(E, Vec6::Zero());
+  res.process_residual.assign(E, Vec6::Zero());
+  Vec6 mss = Vec6::Zero(), pss = Vec6::Zero();
+  double mw = 0.0, pw = 0.0;
+  for (std::size_t e = 0; e < E; ++e) {
+    res.epoch_t[e] = data.t_s[p.epochs[e]];
+    const Vec6 rm = measurement_costs[e]->Raw(&x[6 * e], theta.data());
+    res.measurement_residual[e] = rm;
+    mss += rm.cwiseAbs2();
+    mw += (LR[e] * rm).squaredNorm();
+    if (e > 0) {
+      const Vec6 rp = process_costs[e - 1]->Raw(&x[6 * (e - 1)], &x[6 * e], theta.data());
+      res.process_residual[e] = rp;
+      pss += rp.cwiseAbs2();
+      pw += (LQ[e - 1] * rp).squaredNorm();
+    }
+  }
+  res.residuals.measurement_rms = (mss / E).cwiseSqrt();
+  res.residuals.process_rms = (pss / (E - 1)).cwiseSqrt();
+  res.residuals.measurement_whitened_rms = std::sqrt(mw / (6.0 * E));
+  res.residuals.process_whitened_rms = std::sqrt(pw / (6.0 * (E - 1)));
+  res.residual_count = static_cast<int>(12 * E - 6 + n + nc);
+  res.degrees_of_freedom = res.residual_count - static_cast<int>(6 * E) - n;
+  res.chi2_per_dof = 2.0 * res.final_cost / std::max(1, res.degrees_of_freedom);
+
+  res.estimate.cov = Eigen::MatrixXd::Zero(n, n);
+  if (opt.compute_covariance) {
+    say("covariance");
+    const auto t_cov = std::chrono::steady_clock::now();
+    const bool use_ceres = opt.covariance_method == "ceres" || !opt.robust_loss.empty();
+    if (!use_ceres && opt.covariance_method != "schur") {
+      throw InputError("--covariance: unknown method '" + opt.covariance_method +
+                       "' (schur, ceres)");
+    }
+    if (use_ceres) {
+      // Ceres's sparse QR on the whole Jacobian (applies the robust loss's
+      // weights). The priors keep the Jacobian full rank.
+      ceres::Covariance::Options co;
+      co.algorithm_type = ceres::SPARSE_QR;
+      co.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
+      co.num_threads = threads;
+      ceres::Covariance cov(co);
+      std::vector<std::pair<const double*, const double*>> blocks = {
+          {theta.data(), theta.data()}};
+      if (!cov.Compute(blocks, problem.get())) {
+        throw std::runtime_error("covariance of theta: Ceres could not factor the Jacobian");
+      }
+      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> C(n, n);
+      cov.GetCovarianceBlock(theta.data(), theta.data(), C.data());
+      res.estimate.cov = C;
+    } else {
+      std::vector<ProcessBlock> pb(E - 1);
+      std::vector<MeasurementBlock> mb(E);
+      ParallelFor(E, threads, [&](std::size_t e) {
+        if (e + 1 < E) {
+          Mat6 D = -Mat6::Identity();
+          D.block<3, 3>(3, 0) = -inc[e].T_s * Eigen::Matrix3d::Identity();
+          pb[e].A = LQ[e] * D;
+          pb[e].B = LQ[e];
+          Eigen::MatrixXd J(6, n);
+          J << inc[e].ddv_dtheta, inc[e].dds_dtheta;
+          pb[e].C = -LQ[e] * J;
+        }
+        const ReferenceSample ref =
+            EvaluateReference(p.cfg, theta, p.series.recorded[p.epochs[e]], true);
+        mb[e].M = LR[e];
+        mb[e].N = -LR[e] * ref.dref_dtheta;
+      });
+      res.estimate.cov = ThetaCovarianceBySchur(pb, mb, A);
+    }
+    res.covariance_seconds = Seconds(t_cov);
+  }
+  return res;
+}
+
+}  // namespace triadcal
