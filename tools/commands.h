@@ -19,5 +19,6 @@ Command AddSimulateCommand(CLI::App& app);
 Command AddInfoCommand(CLI::App& app);
 Command AddFilterCommand(CLI::App& app);
 Command AddFitCommand(CLI::App& app);
+Command AddCompareCommand(CLI::App& app);
 
 }  // namespace triadcal

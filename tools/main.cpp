@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
       triadcal::AddSimulateCommand(app),
       triadcal::AddFilterCommand(app),
       triadcal::AddFitCommand(app),
+      triadcal::AddCompareCommand(app),
       triadcal::AddInfoCommand(app),
   };
 

@@ -1,0 +1,110 @@
+// `triadcal compare RUN.yaml -o OUT.json`: EKF, RTS smoother and batch solution
+// of the same run side by side, with their differences in sigma units.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <set>
+
+#include "core/errors.h"
+#include "solvers/batch_solver.h"
+#include "solvers/estimate_json.h"
+#include "solvers/kalman_smoother.h"
+#include "tools/command_util.h"
+#include "tools/commands.h"
+#include "tools/fit_report.h"
+
+namespace triadcal {
+namespace {
+
+struct CompareArgs {
+  std::string run_yaml, out_json, effects;
+  double epoch_s = 0.2;
+};
+
+double Seconds(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+int RunCompare(const CompareArgs& a) {
+  const LoadedRun run = LoadRunOrThrow(a.run_yaml);
+  const ParameterLayout layout(ParseEffectList(a.effects));
+
+  FilterOptions fo;
+  fo.epoch_s = a.epoch_s;
+  fo.progress = [](int pass, double f) { ShowProgress("compare: filter pass " + std::to_string(pass), f); };
+  auto t0 = std::chrono::steady_clock::now();
+  const FilterResult fr = RunFilterSmoother(run.description, run.data, layout, fo);
+  const double filter_s = Seconds(t0);
+
+  BatchOptions bo;
+  bo.epoch_s = a.epoch_s;
+  bo.init = BatchInit::kGiven;  // start the batch at the smoother's answer
+  bo.init_theta = fr.rts.theta;
+  bo.progress = [](const std::string& s) { ShowProgress("compare: fit " + s, 0.0); };
+  t0 = std::chrono::steady_clock::now();
+  BatchResult br = SolveBatch(run.description, run.data, layout, bo);
+  br.initial = fr.rts;
+  const double fit_s = Seconds(t0);
+  EndProgress();
+  const FitReport rep = MakeFitReport(layout, br);
+
+  nlohmann::json out;
+  out["command"] = "compare";
+  out["run"] = a.run_yaml;
+  out["ekf"] = {{"parameters", ParametersJson(layout, fr.ekf.theta, fr.ekf.cov, rep.not_estimable)}};
+  out["rts"] = {{"parameters", ParametersJson(layout, fr.rts.theta, fr.rts.cov, rep.not_estimable)}};
+  out["batch"] = {{"parameters",
+                   ParametersJson(layout, br.estimate.theta, br.estimate.cov, rep.not_estimable)},
+                  {"verdict", rep.verdict},
+                  {"chi2_per_dof", br.chi2_per_dof}};
+  out["not_estimable"] = std::vector<std::string>(ParametersIn(rep.weak));
+  out["time_s"] = {{"filter", filter_s}, {"fit_from_rts", fit_s}};
+  nlohmann::json diff = nlohmann::json::object();
+  double max_abs = 0.0;
+  std::string max_name;
+  std::printf("%-26s %13s %13s %13s %10s %9s %9s  %s\n", "parameter", "EKF", "RTS", "batch",
+              "sigma", "RTS-EKF", "bat-RTS", "unit");
+  for (int i = 0; i < layout.size(); ++i) {
+    const ParameterInfo& p = layout.info(i);
+    const double f = p.si_per_unit;
+    const double s = std::sqrt(std::max(br.estimate.cov(i, i), 1e-300));
+    const double d_re = (fr.rts.theta[i] - fr.ekf.theta[i]) / s;
+    const double d_br = (br.estimate.theta[i] - fr.rts.theta[i]) / s;
+    const double d_be = (br.estimate.theta[i] - fr.ekf.theta[i]) / s;
+    diff[p.name] = {{"rts_minus_ekf", d_re}, {"batch_minus_rts", d_br}, {"batch_minus_ekf", d_be},
+                    {"unit", "batch sigma"}};
+    if (!rep.not_estimable.count(p.name) && std::abs(d_br) > max_abs) {
+      max_abs = std::abs(d_br);
+      max_name = p.name;
+    }
+    std::printf("%-26s %13.6g %13.6g %13.6g %10.3g %9.3f %9.3f  %s%s\n", p.name.c_str(),
+                fr.ekf.theta[i] / f, fr.rts.theta[i] / f, br.estimate.theta[i] / f, s / f, d_re,
+                d_br, p.unit.c_str(), rep.not_estimable.count(p.name) ? " (not estimable)" : "");
+  }
+  out["differences_in_sigma"] = diff;
+  out["largest_batch_minus_rts"] = {{"parameter", max_name}, {"sigma", max_abs}};
+  WriteJson(out, a.out_json);
+  std::printf("differences in units of the batch sigma; largest |batch - RTS| among estimable: "
+              "%.3f (%s)\n",
+              max_abs, max_name.c_str());
+  std::printf("time: filter %.2f s, batch from the RTS answer %.2f s\nwrote %s\n", filter_s,
+              fit_s, a.out_json.c_str());
+  return 0;
+}
+
+}  // namespace
+
+Command AddCompareCommand(CLI::App& app) {
+  auto a = std::make_shared<CompareArgs>();
+  Command c;
+  c.app = app.add_subcommand("compare", "EKF, RTS smoother and batch side by side");
+  c.app->add_option("run", a->run_yaml, "run description (run.yaml)")->required();
+  c.app->add_option("-o,--output", a->out_json, "output JSON")->required();
+  c.app->add_option("--effects", a->effects, "catalogue effects to estimate too, e.g. a,b");
+  c.app->add_option("--epoch-s", a->epoch_s, "interval between epochs [s]")->capture_default_str();
+  c.run = [a] { return RunCompare(*a); };
+  return c;
+}
+
+}  // namespace triadcal
