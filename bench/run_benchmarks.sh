@@ -13,7 +13,7 @@ mkdir -p "$work"
 echo "| run, command | wall s | peak MB | exit |"
 echo "|---|---|---|---|"
 for run in 90s 40min; do
-  for cmd in ${BENCH_COMMANDS:-filter}; do
+  for cmd in ${BENCH_COMMANDS:-filter fit}; do
     python3 "$here/measure.py" "$run $cmd" -- "$bin" "$cmd" "$work/$run/run.yaml" -o "$work/$run/$cmd.json"
   done
 done
