@@ -12,7 +12,7 @@
 #include "solvers/batch_costs.h"
 #include "solvers/parallel.h"
 #include "solvers/run_problem.h"
-#include "solvers/schur_covariance.h"
+#include "solvers/batch_linearization.h"
 
 namespace triadcal {
 namespace {
@@ -94,43 +94,23 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   }
 
   // Priors and constraints: fixed linear rows over theta.
+  Eigen::MatrixXd A;
+  Eigen::VectorXd b;
+  ThetaRows(p, true, &A, &b);
   const int nc = static_cast<int>(p.constraints.size());
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n + nc, n);
-  Eigen::VectorXd b(n + nc);
-  for (int i = 0; i < n; ++i) {
-    A(i, i) = 1.0 / p.prior.sigma[i];
-    b[i] = p.prior.mean[i] / p.prior.sigma[i];
-  }
-  for (int j = 0; j < nc; ++j) {
-    A.row(n + j) = p.constraints[j].c.transpose() / p.constraints[j].sigma;
-    b[n + j] = p.constraints[j].value / p.constraints[j].sigma;
-  }
 
   const auto t_solve = std::chrono::steady_clock::now();
-  Eigen::VectorXd theta_lin;
-  std::vector<IntervalIncrement> inc(E - 1);
-  std::vector<Mat6> LQ(E - 1), LR(E);
+  BatchLinearization lin;
   std::unique_ptr<ceres::Problem> problem;
   std::vector<ProcessCost*> process_costs(E - 1);
   std::vector<MeasurementCost*> measurement_costs(E);
   double last_step = 0.0;
   for (int outer = 0; outer < opt.max_outer_iterations; ++outer) {
     say("relinearising pass " + std::to_string(outer + 1));
-    theta_lin = theta;
-    ParallelFor(E - 1, threads, [&](std::size_t e) {
-      inc[e] = IntegrateInterval(p.cfg, theta_lin, p.series, p.epochs[e], p.epochs[e + 1],
-                                 !opt.exact_increments);
-      Mat6 Q = Mat6::Zero();
-      const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
-      Q.block<3, 3>(0, 0) = p.accel_var * inc[e].sum_alpha2 * I;
-      Q.block<3, 3>(0, 3) = Q.block<3, 3>(3, 0) = p.accel_var * inc[e].sum_alpha_beta * I;
-      Q.block<3, 3>(3, 3) = p.accel_var * inc[e].sum_beta2 * I;
-      LQ[e] = WhiteningOf(Q);
-    });
-    ParallelFor(E, threads, [&](std::size_t e) {
-      LR[e] = WhiteningOf(ReferenceNoiseCovariance(p.cfg, theta_lin, p.series.recorded[p.epochs[e]],
-                                                   p.sigma_angle, p.sigma_rate));
-    });
+    lin = Linearize(p, theta, !opt.exact_increments, threads);
+    const std::vector<IntervalIncrement>& inc = lin.increments;
+    const std::vector<Mat6>& LQ = lin.LQ;
+    const std::vector<Mat6>& LR = lin.LR;
 
     ceres::Problem::Options po;
     po.cost_function_ownership = ceres::TAKE_OWNERSHIP;
@@ -139,7 +119,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
     for (std::size_t e = 0; e < E; ++e) problem->AddParameterBlock(&x[6 * e], 6);
     problem->AddParameterBlock(theta.data(), n);
     for (std::size_t e = 0; e + 1 < E; ++e) {
-      process_costs[e] = new ProcessCost(&inc[e], &theta_lin, LQ[e],
+      process_costs[e] = new ProcessCost(&inc[e], &lin.theta_lin, LQ[e],
                                          opt.exact_increments ? &p : nullptr, p.epochs[e],
                                          p.epochs[e + 1]);
       problem->AddResidualBlock(process_costs[e], MakeLoss(opt).release(), &x[6 * e],
@@ -213,12 +193,12 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
     const Vec6 rm = measurement_costs[e]->Raw(&x[6 * e], theta.data());
     res.measurement_residual[e] = rm;
     mss += rm.cwiseAbs2();
-    mw += (LR[e] * rm).squaredNorm();
+    mw += (lin.LR[e] * rm).squaredNorm();
     if (e > 0) {
       const Vec6 rp = process_costs[e - 1]->Raw(&x[6 * (e - 1)], &x[6 * e], theta.data());
       res.process_residual[e] = rp;
       pss += rp.cwiseAbs2();
-      pw += (LQ[e - 1] * rp).squaredNorm();
+      pw += (lin.LQ[e - 1] * rp).squaredNorm();
     }
   }
   res.residuals.measurement_rms = (mss / E).cwiseSqrt();
@@ -255,24 +235,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
       cov.GetCovarianceBlock(theta.data(), theta.data(), C.data());
       res.estimate.cov = C;
     } else {
-      std::vector<ProcessBlock> pb(E - 1);
-      std::vector<MeasurementBlock> mb(E);
-      ParallelFor(E, threads, [&](std::size_t e) {
-        if (e + 1 < E) {
-          Mat6 D = -Mat6::Identity();
-          D.block<3, 3>(3, 0) = -inc[e].T_s * Eigen::Matrix3d::Identity();
-          pb[e].A = LQ[e] * D;
-          pb[e].B = LQ[e];
-          Eigen::MatrixXd J(6, n);
-          J << inc[e].ddv_dtheta, inc[e].dds_dtheta;
-          pb[e].C = -LQ[e] * J;
-        }
-        const ReferenceSample ref =
-            EvaluateReference(p.cfg, theta, p.series.recorded[p.epochs[e]], true);
-        mb[e].M = LR[e];
-        mb[e].N = -LR[e] * ref.dref_dtheta;
-      });
-      res.estimate.cov = ThetaCovarianceBySchur(pb, mb, A);
+      res.estimate.cov = ThetaCovariance(p, lin, theta, A, threads);
     }
     res.covariance_seconds = Seconds(t_cov);
   }
