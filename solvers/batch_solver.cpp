@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cmath>
+#include <limits>
 #include <memory>
 
 #include "core/errors.h"
@@ -21,6 +22,13 @@ double Seconds(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// The thinning that brings a run to about rate_hz.
+std::size_t ThinningFactor(const RunData& data, int rate_hz) {
+  const double span = data.t_s.back() - data.t_s.front();
+  const double rate = (data.size() - 1) / std::max(span, 1e-9);
+  return std::max<std::size_t>(1, static_cast<std::size_t>(std::floor(rate / std::max(1, rate_hz))));
+}
+
 // Starting point of theta (and its sigma when an estimator gave one).
 Estimate Initialise(const RunDescription& run, const RunData& data, const ParameterLayout& layout,
                     const RunProblem& p, const BatchOptions& opt) {
@@ -34,11 +42,7 @@ Estimate Initialise(const RunDescription& run, const RunData& data, const Parame
   if (opt.init == BatchInit::kNominal) return e;
   // RTS on samples thinned to about init_decimation_hz: a start within a few
   // sigma of the optimum at a fraction of a full pass.
-  const double span = data.t_s.back() - data.t_s.front();
-  const double rate = (data.size() - 1) / std::max(span, 1e-9);
-  const std::size_t m = std::max<std::size_t>(
-      1, static_cast<std::size_t>(std::floor(rate / std::max(1, opt.init_decimation_hz))));
-  const RunData thin = Decimate(data, m);
+  const RunData thin = Decimate(data, ThinningFactor(data, opt.init_decimation_hz));
   FilterOptions fo;
   fo.epoch_s = std::max(opt.epoch_s, 1.0);  // coarse epochs: the start needs no more
   fo.derivatives = opt.derivatives;
@@ -62,6 +66,45 @@ ceres::LinearSolverType SolverType(const std::string& name) {
                    "' (sparse_normal_cholesky, sparse_schur, dense_qr)");
 }
 
+// The parameters the data determine: pivoted Cholesky of the data information
+// in prior units (cov is the posterior with priors; the prior contributes the
+// identity there). Most informative first, primary parameters preferred among
+// near-equals; stops when what is left is below min_info.
+std::vector<int> SupportedParameters(const Eigen::MatrixXd& cov, const Eigen::VectorXd& prior_sigma,
+                                     double min_info) {
+  const int n = static_cast<int>(cov.rows());
+  const Eigen::MatrixXd Pn =
+      prior_sigma.cwiseInverse().asDiagonal() * cov * prior_sigma.cwiseInverse().asDiagonal();
+  Eigen::MatrixXd S = Pn.ldlt().solve(Eigen::MatrixXd::Identity(n, n));
+  S.diagonal().array() -= 1.0;
+  auto priority = [](int i) {
+    if (i <= kW0z) return 4.0;      // scale factors, zero offsets
+    if (i <= kGammaZ) return 2.0;   // misalignments
+    if (i >= kDx2 && i <= kDz2) return 2.0;
+    return 1.0;                     // K_ij, bench zeros, effects
+  };
+  std::vector<int> kept;
+  std::vector<bool> used(n, false);
+  for (;;) {
+    int best = -1;
+    double best_score = 0.0;
+    for (int j = 0; j < n; ++j) {
+      if (used[j] || S(j, j) < min_info) continue;
+      const double score = S(j, j) * priority(j);
+      if (score > best_score) {
+        best_score = score;
+        best = j;
+      }
+    }
+    if (best < 0) break;
+    used[best] = true;
+    kept.push_back(best);
+    const Eigen::VectorXd col = S.col(best) / std::sqrt(S(best, best));
+    S -= col * col.transpose();
+  }
+  return kept;
+}
+
 }  // namespace
 
 BatchResult SolveBatch(const RunDescription& run, const RunData& data,
@@ -69,7 +112,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   const auto t_start = std::chrono::steady_clock::now();
   const int threads = opt.threads > 0 ? opt.threads : DefaultThreads();
   const ceres::LinearSolverType solver_type = SolverType(opt.linear_solver);
-  const RunProblem p = BuildRunProblem(run, data, layout, opt.epoch_s, opt.derivatives);
+  RunProblem p = BuildRunProblem(run, data, layout, opt.epoch_s, opt.derivatives);
   const int n = p.n;
   const std::size_t E = p.epochs.size();
   auto say = [&](const std::string& s) {
@@ -80,9 +123,50 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   res.prior = p.prior;
   res.epochs = static_cast<int>(E);
   res.linear_solver = opt.linear_solver;
+  // What to hold, decided at the nominal values (where a degenerate direction
+  // has no information at all) on the samples thinned as for the start: the
+  // information scales with the samples, so the threshold is scaled with them.
+  RunDescription run_held = run;
+  if (opt.auto_hold || !opt.hold.empty()) {
+    say("choosing the parameters this run supports");
+    std::vector<bool> held(n, false);
+    if (opt.auto_hold) {
+      const std::size_t m = ThinningFactor(data, opt.init_decimation_hz);
+      const RunData thin = Decimate(data, m);
+      const RunProblem pt = BuildRunProblem(run, thin, layout, opt.epoch_s, opt.derivatives);
+      const BatchLinearization lt = Linearize(pt, pt.prior.mean, true, threads);
+      Eigen::MatrixXd At;
+      Eigen::VectorXd bt;
+      ThetaRows(pt, true, &At, &bt);
+      const Eigen::MatrixXd cov0 = ThetaCovariance(pt, lt, pt.prior.mean, At, threads);
+      held.assign(n, true);
+      for (int i : SupportedParameters(cov0, pt.prior.sigma,
+                                       opt.hold_min_information / static_cast<double>(m))) {
+        held[i] = false;
+      }
+    }
+    auto index_of = [&](const std::string& name) {
+      const int i = layout.IndexOf(name);
+      if (i < 0) throw InputError("--hold/--free: unknown parameter '" + name + "'");
+      return i;
+    };
+    for (const std::string& h : opt.hold) held[index_of(h)] = true;
+    for (const std::string& f : opt.free) held[index_of(f)] = false;
+    for (int i = 0; i < n; ++i) {
+      if (!held[i]) continue;
+      res.held.push_back(layout.info(i).name);
+      // Pinned with a prior a million times tighter, here and in the start.
+      p.prior.sigma[i] *= 1e-6;
+      run_held.prior_sigma[layout.info(i).name] = p.prior.sigma[i] / layout.info(i).si_per_unit;
+    }
+  }
+
   say("initialising (" + std::string(opt.init == BatchInit::kRts ? "RTS smoother" : "nominal") +
       ")");
-  res.initial = Initialise(run, data, layout, p, opt);
+  res.initial = Initialise(run_held, data, layout, p, opt);
+  for (int i = 0; i < n; ++i) {
+    if (p.prior.sigma[i] < res.prior.sigma[i]) res.initial.theta[i] = p.prior.mean[i];
+  }
   res.init_seconds = Seconds(t_start);
 
   // Unknowns: theta and the trajectory, started on the B2 reference motion.
@@ -105,7 +189,13 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   std::vector<ProcessCost*> process_costs(E - 1);
   std::vector<MeasurementCost*> measurement_costs(E);
   double last_step = 0.0;
-  for (int outer = 0; outer < opt.max_outer_iterations; ++outer) {
+  // Backtracking: the cost at a new linearisation point is the true cost
+  // there; if a step made it worse than at the previous point, go half way back.
+  Eigen::VectorXd theta_prev;
+  std::vector<double> x_prev;
+  double cost_prev = std::numeric_limits<double>::infinity();
+  int halvings = 0;
+  for (int outer = 0; outer < opt.max_outer_iterations + halvings; ++outer) {
     say("relinearising pass " + std::to_string(outer + 1));
     lin = Linearize(p, theta, !opt.exact_increments, threads);
     const std::vector<IntervalIncrement>& inc = lin.increments;
@@ -153,6 +243,18 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
       ordering->AddElementToGroup(theta.data(), 1);
       so.linear_solver_ordering = ordering;
     }
+    // The true cost at this point (before solving), to judge the last step.
+    double cost_here = 0.0;
+    problem->Evaluate(ceres::Problem::EvaluateOptions(), &cost_here, nullptr, nullptr, nullptr);
+    if (cost_here > cost_prev * (1.0 + 1e-9) && halvings < 20 && !opt.exact_increments) {
+      ++halvings;
+      theta = 0.5 * (theta + theta_prev);
+      for (std::size_t i = 0; i < x.size(); ++i) x[i] = 0.5 * (x[i] + x_prev[i]);
+      continue;
+    }
+    theta_prev = theta;
+    x_prev = x;
+    cost_prev = cost_here;
     ceres::Solver::Summary summary;
     ceres::Solve(so, problem.get(), &summary);
     if (std::getenv("TRIADCAL_CERES_REPORT")) std::fprintf(stderr, "%s\n", summary.FullReport().c_str());

@@ -70,6 +70,14 @@ struct BatchOptions {
   bool compute_covariance = true;
   std::string covariance_method = "schur";  // | ceres (sparse QR; used with a robust loss)
   int threads = 0;                // 0: all cores
+  // Parameters held at their nominal values. auto_hold holds those the run's
+  // motion does not support: a pivoted Cholesky of the data information (in
+  // units of the prior) at the start keeps, most informative first, every
+  // parameter with at least hold_min_information left once the kept ones are
+  // known, and holds the rest. `hold` adds to the held set, `free` removes.
+  bool auto_hold = true;
+  double hold_min_information = 100.0;  // posterior sigma <~ 0.1 prior sigma
+  std::vector<std::string> hold, free;
   std::function<void(const std::string&)> progress;  // one line per stage
 };
 
@@ -86,6 +94,7 @@ struct ResidualStats {
 struct BatchResult {
   Estimate estimate;            // theta and its covariance (SI)
   Estimate initial;             // the starting point (with the RTS sigma when from RTS)
+  std::vector<std::string> held;  // held at nominal (their sigma is not an estimate)
   Prior prior;
   double final_cost = 0.0;      // 0.5 sum r^2 over all blocks
   int residual_count = 0;

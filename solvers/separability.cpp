@@ -34,11 +34,29 @@ std::vector<WeakDirection> FindWeakDirections(const ParameterLayout& layout,
                                               const Eigen::MatrixXd& posterior_cov,
                                               const Eigen::VectorXd& prior_sigma,
                                               double min_information) {
-  const Eigen::VectorXd dinv = prior_sigma.cwiseInverse();
-  const Eigen::MatrixXd Pn = dinv.asDiagonal() * posterior_cov * dinv.asDiagonal();
+  std::vector<int> all(prior_sigma.size());
+  for (int i = 0; i < static_cast<int>(all.size()); ++i) all[i] = i;
+  return FindWeakDirections(layout, posterior_cov, prior_sigma, all, min_information);
+}
+
+std::vector<WeakDirection> FindWeakDirections(const ParameterLayout& layout,
+                                              const Eigen::MatrixXd& posterior_cov,
+                                              const Eigen::VectorXd& prior_sigma,
+                                              const std::vector<int>& subset,
+                                              double min_information) {
+  const int m = static_cast<int>(subset.size());
+  Eigen::MatrixXd cov(m, m);
+  Eigen::VectorXd sig(m);
+  for (int a = 0; a < m; ++a) {
+    sig[a] = prior_sigma[subset[a]];
+    for (int b = 0; b < m; ++b) cov(a, b) = posterior_cov(subset[a], subset[b]);
+  }
+  // Directions in the subset's coordinates, then renamed through the layout.
+  std::vector<WeakDirection> dirs;
+  const Eigen::VectorXd dinv = sig.cwiseInverse();
+  const Eigen::MatrixXd Pn = dinv.asDiagonal() * cov * dinv.asDiagonal();
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (Pn + Pn.transpose()));
-  std::vector<WeakDirection> out;
-  for (int j = static_cast<int>(Pn.rows()) - 1; j >= 0; --j) {  // largest mu first
+  for (int j = m - 1; j >= 0; --j) {
     const double mu = std::max(es.eigenvalues()[j], 1e-300);
     const double info = 1.0 / mu - 1.0;
     if (info >= min_information) break;
@@ -46,18 +64,22 @@ std::vector<WeakDirection> FindWeakDirections(const ParameterLayout& layout,
     d.data_information = std::max(0.0, info);
     d.sigma_ratio = std::sqrt(mu);
     const Eigen::VectorXd v = es.eigenvectors().col(j);
-    for (int i = 0; i < v.size(); ++i) {
-      if (std::abs(v[i]) >= 0.2) d.weights.push_back({layout.info(i).name, v[i]});
+    for (int a = 0; a < m; ++a) {
+      if (std::abs(v[a]) >= 0.2) d.weights.push_back({layout.info(subset[a]).name, v[a]});
     }
     std::sort(d.weights.begin(), d.weights.end(),
-              [](const auto& a, const auto& b) { return std::abs(a.second) > std::abs(b.second); });
+              [](const auto& x, const auto& y) { return std::abs(x.second) > std::abs(y.second); });
     if (!d.weights.empty() && d.weights.front().second < 0) {
-      for (auto& p : d.weights) p.second = -p.second;
+      for (auto& w : d.weights) w.second = -w.second;
     }
     d.description = Describe(d.weights);
-    out.push_back(std::move(d));
+    dirs.push_back(std::move(d));
   }
-  return out;
+  return dirs;
+}
+
+std::string DescribeDirection(const std::vector<std::pair<std::string, double>>& weights) {
+  return Describe(weights);
 }
 
 std::vector<std::string> ParametersIn(const std::vector<WeakDirection>& dirs) {

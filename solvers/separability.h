@@ -32,7 +32,19 @@ std::vector<WeakDirection> FindWeakDirections(const ParameterLayout& layout,
                                               const Eigen::VectorXd& prior_sigma,
                                               double min_information = 10.0);
 
+// The same over a subset of the parameters (indices into the layout), e.g. all
+// but those held at nominal values; the rest are marginalised out.
+std::vector<WeakDirection> FindWeakDirections(const ParameterLayout& layout,
+                                              const Eigen::MatrixXd& posterior_cov,
+                                              const Eigen::VectorXd& prior_sigma,
+                                              const std::vector<int>& subset,
+                                              double min_information = 10.0);
+
 // Names of the parameters that appear in any of the directions.
 std::vector<std::string> ParametersIn(const std::vector<WeakDirection>& dirs);
+
+// The sentence FindWeakDirections writes for a direction with these weights
+// (also used by observability.h).
+std::string DescribeDirection(const std::vector<std::pair<std::string, double>>& weights);
 
 }  // namespace triadcal

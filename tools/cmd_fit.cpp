@@ -23,7 +23,8 @@ struct FitArgs {
   std::string covariance = "schur";
   double epoch_s = 0.2, rate_window_s = 0.1, robust_scale = 3.0;
   int threads = 0;
-  bool correlations = false;
+  bool correlations = false, no_auto_hold = false;
+  std::string hold, free;
 };
 
 int RunFit(const FitArgs& a) {
@@ -41,6 +42,9 @@ int RunFit(const FitArgs& a) {
   opt.robust_scale = a.robust_scale;
   opt.threads = a.threads;
   opt.covariance_method = a.covariance;
+  opt.auto_hold = !a.no_auto_hold;
+  opt.hold = SplitList(a.hold);
+  opt.free = SplitList(a.free);
   opt.progress = [](const std::string& s) { ShowProgress("fit: " + s, 0.0); };
   const BatchResult r = SolveBatch(run.description, run.data, layout, opt);
   EndProgress();
@@ -102,6 +106,11 @@ Command AddFitCommand(CLI::App& app) {
   c.app->add_option("--threads", a->threads, "threads (0: all cores)")->capture_default_str();
   c.app->add_option("--residuals", a->residuals_csv, "write the residuals per epoch (CSV)");
   c.app->add_flag("--correlations", a->correlations, "add the correlation matrix to OUT");
+  c.app->add_option("--hold", a->hold, "parameters to hold at their nominal values, e.g. dpsi,Kxy");
+  c.app->add_option("--free", a->free, "parameters to estimate even if the run barely supports them");
+  c.app->add_flag("--no-auto-hold", a->no_auto_hold,
+                  "estimate every parameter (by default those the run's motion does not support "
+                  "are held at nominal)");
   c.run = [a] { return RunFit(*a); };
   return c;
 }

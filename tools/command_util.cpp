@@ -20,12 +20,19 @@ LoadedRun LoadRunOrThrow(const std::string& run_yaml) {
   return r;
 }
 
-std::vector<Effect> ParseEffectList(const std::string& list) {
-  std::vector<Effect> out;
+std::vector<std::string> SplitList(const std::string& list) {
+  std::vector<std::string> out;
   std::stringstream ss(list);
   std::string item;
   while (std::getline(ss, item, ',')) {
-    if (item.empty()) continue;
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
+}
+
+std::vector<Effect> ParseEffectList(const std::string& list) {
+  std::vector<Effect> out;
+  for (const std::string& item : SplitList(list)) {
     try {
       out.push_back(EffectFromName(item));
     } catch (const std::invalid_argument& e) {

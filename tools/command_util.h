@@ -22,6 +22,9 @@ struct LoadedRun {
 // "triadcal: warning: ...".
 LoadedRun LoadRunOrThrow(const std::string& run_yaml);
 
+// "a,b" -> {"a", "b"} (empty items dropped).
+std::vector<std::string> SplitList(const std::string& list);
+
 // "a,b" -> effects; throws InputError("--effects: unknown effect ...").
 std::vector<Effect> ParseEffectList(const std::string& list);
 

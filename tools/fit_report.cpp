@@ -11,8 +11,14 @@ namespace triadcal {
 
 FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
   FitReport rep;
-  rep.weak = FindWeakDirections(layout, r.estimate.cov, r.prior.sigma);
+  rep.held.insert(r.held.begin(), r.held.end());
+  std::vector<int> free;
+  for (int i = 0; i < layout.size(); ++i) {
+    if (!rep.held.count(layout.info(i).name)) free.push_back(i);
+  }
+  rep.weak = FindWeakDirections(layout, r.estimate.cov, r.prior.sigma, free);
   for (const std::string& s : ParametersIn(rep.weak)) rep.not_estimable.insert(s);
+  rep.not_estimable.insert(rep.held.begin(), rep.held.end());
   for (int i = 0; i < layout.size(); ++i) {
     const double z = (r.estimate.theta[i] - r.prior.mean[i]) / r.prior.sigma[i];
     if (std::abs(z) > 3.0) rep.at_prior_bound.push_back(layout.info(i).name);
@@ -27,8 +33,12 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
     v << "; beyond 3 prior sigma (check the nominal values or priors):";
     for (const std::string& s : rep.at_prior_bound) v << " " << s;
   }
-  if (rep.not_estimable.empty()) {
-    v << "; every parameter estimable";
+  if (!rep.held.empty()) {
+    v << "; held at nominal (this run's motion does not determine them):";
+    for (const std::string& s : r.held) v << " " << s;
+  }
+  if (rep.weak.empty()) {
+    v << "; every other parameter estimable";
   } else {
     v << "; NOT SEPARABLE in this run (values are the prior's):";
     for (const std::string& s : ParametersIn(rep.weak)) v << " " << s;
@@ -44,7 +54,8 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
   out["initial"] = {{"parameters", ParametersJson(layout, r.initial.theta, r.initial.cov, {})}};
   if (correlations) out["correlation"] = CorrelationJson(layout, r.estimate.cov);
   out["unobservable"] = WeakDirectionsJson(rep.weak);
-  out["not_estimable"] = std::vector<std::string>(ParametersIn(rep.weak));
+  out["not_estimable"] = std::vector<std::string>(rep.not_estimable.begin(), rep.not_estimable.end());
+  out["held"] = r.held;
   out["at_prior_bound"] = rep.at_prior_bound;
   out["verdict"] = rep.verdict;
   out["converged"] = r.converged;
@@ -78,7 +89,9 @@ void PrintParameterTable(const ParameterLayout& layout, const BatchResult& r,
     std::printf("%-26s %14.6g %10.3g %10.5g  %s%s\n", pi.name.c_str(), r.estimate.theta[i] / f,
                 std::sqrt(std::max(0.0, r.estimate.cov(i, i))) / f, r.initial.theta[i] / f,
                 pi.unit.c_str(),
-                rep.not_estimable.count(pi.name) ? "  (not estimable: prior value)" : "");
+                rep.held.count(pi.name)            ? "  (held at nominal)"
+                : rep.not_estimable.count(pi.name) ? "  (not estimable: prior value)"
+                                                   : "");
   }
   for (const WeakDirection& d : rep.weak) {
     std::printf("NOT SEPARABLE: %s (sigma %.0f%% of the prior along it)\n", d.description.c_str(),

@@ -16,7 +16,8 @@ namespace triadcal {
 
 struct FitReport {
   std::vector<WeakDirection> weak;
-  std::set<std::string> not_estimable;
+  std::set<std::string> not_estimable;      // held, or in a weak direction
+  std::set<std::string> held;
   std::vector<std::string> at_prior_bound;  // > 3 prior sigma from the nominal value
   std::string verdict;
 };
