@@ -71,7 +71,7 @@ ceres::LinearSolverType SolverType(const std::string& name) {
 // identity there). Most informative first, primary parameters preferred among
 // near-equals; stops when what is left is below min_info.
 std::vector<int> SupportedParameters(const Eigen::MatrixXd& cov, const Eigen::VectorXd& prior_sigma,
-                                     double min_info) {
+                                     const Eigen::VectorXd& min_info) {
   const int n = static_cast<int>(cov.rows());
   const Eigen::MatrixXd Pn =
       prior_sigma.cwiseInverse().asDiagonal() * cov * prior_sigma.cwiseInverse().asDiagonal();
@@ -89,7 +89,7 @@ std::vector<int> SupportedParameters(const Eigen::MatrixXd& cov, const Eigen::Ve
     int best = -1;
     double best_score = 0.0;
     for (int j = 0; j < n; ++j) {
-      if (used[j] || S(j, j) < min_info) continue;
+      if (used[j] || S(j, j) < min_info[j]) continue;
       const double score = S(j, j) * priority(j);
       if (score > best_score) {
         best_score = score;
@@ -140,8 +140,13 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
       ThetaRows(pt, true, &At, &bt);
       const Eigen::MatrixXd cov0 = ThetaCovariance(pt, lt, pt.prior.mean, At, threads);
       held.assign(n, true);
-      for (int i : SupportedParameters(cov0, pt.prior.sigma,
-                                       opt.hold_min_information / static_cast<double>(m))) {
+      Eigen::VectorXd min_info(n);
+      for (int i = 0; i < n; ++i) {
+        min_info[i] = (i < kNumBaseParams ? opt.hold_min_information
+                                          : opt.hold_min_information_effects) /
+                      static_cast<double>(m);
+      }
+      for (int i : SupportedParameters(cov0, pt.prior.sigma, min_info)) {
         held[i] = false;
       }
     }
@@ -286,8 +291,11 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   // Residuals at the solution.
   res.estimate.theta = theta;
   res.epoch_t.resize(E);
+  res.epoch_samples = p.epochs;
   res.measurement_residual.assign(E, Vec6::Zero());
   res.process_residual.assign(E, Vec6::Zero());
+  res.measurement_whitened.assign(E, Vec6::Zero());
+  res.process_whitened.assign(E, Vec6::Zero());
   Vec6 mss = Vec6::Zero(), pss = Vec6::Zero();
   double mw = 0.0, pw = 0.0;
   for (std::size_t e = 0; e < E; ++e) {
@@ -295,12 +303,14 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
     const Vec6 rm = measurement_costs[e]->Raw(&x[6 * e], theta.data());
     res.measurement_residual[e] = rm;
     mss += rm.cwiseAbs2();
-    mw += (lin.LR[e] * rm).squaredNorm();
+    res.measurement_whitened[e] = lin.LR[e] * rm;
+    mw += res.measurement_whitened[e].squaredNorm();
     if (e > 0) {
       const Vec6 rp = process_costs[e - 1]->Raw(&x[6 * (e - 1)], &x[6 * e], theta.data());
       res.process_residual[e] = rp;
       pss += rp.cwiseAbs2();
-      pw += (lin.LQ[e - 1] * rp).squaredNorm();
+      res.process_whitened[e] = lin.LQ[e - 1] * rp;
+      pw += res.process_whitened[e].squaredNorm();
     }
   }
   res.residuals.measurement_rms = (mss / E).cwiseSqrt();

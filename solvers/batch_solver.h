@@ -76,7 +76,12 @@ struct BatchOptions {
   // parameter with at least hold_min_information left once the kept ones are
   // known, and holds the rest. `hold` adds to the held set, `free` removes.
   bool auto_hold = true;
-  double hold_min_information = 100.0;  // posterior sigma <~ 0.1 prior sigma
+  // Base parameters need 100 (posterior sigma <~ 0.1 prior sigma): below that
+  // a nearly flat direction lets the nonlinear fit wander (a single-axis run's
+  // dpsi trades against W0y and the scale factors). Effect parameters, whose
+  // priors are only a size scale, need 10 (<~ 0.3 prior sigma).
+  double hold_min_information = 100.0;
+  double hold_min_information_effects = 10.0;
   std::vector<std::string> hold, free;
   std::function<void(const std::string&)> progress;  // one line per stage
 };
@@ -110,7 +115,9 @@ struct BatchResult {
   // V m/s then S m; the process residual of the interval ending at the epoch,
   // zero at the first), and their whitening.
   std::vector<double> epoch_t;
+  std::vector<std::size_t> epoch_samples;  // sample index of each epoch
   std::vector<Eigen::Matrix<double, 6, 1>> measurement_residual, process_residual;
+  std::vector<Eigen::Matrix<double, 6, 1>> measurement_whitened, process_whitened;
   double init_seconds = 0.0, solve_seconds = 0.0, covariance_seconds = 0.0;
   int epochs = 0;
 };

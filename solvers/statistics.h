@@ -1,0 +1,37 @@
+// Small statistics for residual diagnosis: chi-square tail probabilities, the
+// Ljung-Box portmanteau test of whiteness, correlation, and the periodogram.
+#pragma once
+
+#include <vector>
+
+namespace triadcal {
+
+// P(X > x) for X ~ chi-square with k degrees of freedom.
+double ChiSquareSurvival(double x, double k);
+
+// Sample autocorrelation at lag (mean removed).
+double Autocorrelation(const std::vector<double>& x, int lag);
+
+// Ljung-Box: Q = N (N + 2) sum_{k=1..h} rho_k^2 / (N - k) ~ chi2(h) for white x.
+struct WhitenessTest {
+  int lags = 0;
+  double q = 0.0;
+  double p_value = 1.0;
+  double rho1 = 0.0;  // lag-1 autocorrelation
+};
+WhitenessTest LjungBox(const std::vector<double>& x, int lags);
+
+// Pearson correlation of two equally long series.
+double Correlation(const std::vector<double>& a, const std::vector<double>& b);
+
+// One-sided periodogram of a uniformly sampled series (mean removed): power at
+// frequencies k / (N dt), k = 0 .. N/2. Power is |X_k|^2 / N (same units^2).
+struct Spectrum {
+  std::vector<double> freq_hz, power;
+};
+Spectrum Periodogram(const std::vector<double>& x, double dt_s);
+
+// Dominant frequency of a series (the periodogram peak above 0 Hz) [Hz].
+double DominantFrequency(const std::vector<double>& x, double dt_s);
+
+}  // namespace triadcal
