@@ -66,6 +66,20 @@ ColumnSource ParseOneColumn(const ChannelInfo& ch, const YAML::Node& node, const
   return c;
 }
 
+// columns.label: a column name, or {source: NAME} (no unit, scale or offset).
+ColumnSource ParseLabelColumn(const YAML::Node& node, const YamlPlace& at) {
+  ColumnSource c;
+  if (node.IsMap()) {
+    CheckKeys(node, at, {"source"});
+    if (!node["source"]) at.Fail("expected {source: NAME}");
+    c.source = ReadString(node["source"], at.Child("source"));
+  } else {
+    c.source = ReadString(node, at);
+  }
+  if (c.source.empty()) at.Fail("empty column name");
+  return c;
+}
+
 }  // namespace
 
 const std::vector<ChannelInfo>& Channels() {
@@ -135,12 +149,72 @@ std::map<std::string, ColumnSource> ParseColumns(const YAML::Node& node, const Y
   if (node.IsNull()) return out;
   std::vector<std::string> names;
   for (const ChannelInfo& c : Channels()) names.push_back(c.name);
+  names.push_back(kLabelChannel);
   CheckKeys(node, at, names);
   for (const auto& kv : node) {
     const std::string name = kv.first.Scalar();
+    if (name == kLabelChannel) {
+      out[name] = ParseLabelColumn(kv.second, at.Child(name));
+      continue;
+    }
     out[name] = ParseOneColumn(*FindChannel(name), kv.second, at.Child(name));
   }
   return out;
+}
+
+std::string LabelSource(const RunDescription& run) {
+  auto it = run.columns.find(kLabelChannel);
+  return it == run.columns.end() ? "" : it->second.source;
+}
+
+std::map<std::string, Eigen::Vector3d> ParsePositions(const YAML::Node& node,
+                                                      const YamlPlace& at) {
+  if (!node.IsMap() || node.size() == 0) {
+    at.Fail("expected a map {LABEL: \"+x\" or [x, y, z]} of the direction that points up");
+  }
+  std::map<std::string, Eigen::Vector3d> out;
+  for (const auto& kv : node) {
+    const std::string label = kv.first.Scalar();
+    const YamlPlace p = at.Child(label);
+    if (out.count(label)) p.Fail("given twice");
+    Eigen::Vector3d v;
+    if (kv.second.IsSequence()) {
+      v = ReadVector3(kv.second, p);
+      if (!(v.norm() > 0.0)) p.Fail("the up direction must not be [0, 0, 0]");
+      v.normalize();
+    } else {
+      const std::string s = ReadString(kv.second, p);
+      const int axis = s.size() == 2 && (s[0] == '+' || s[0] == '-')
+                           ? static_cast<int>(std::string("xyz").find(s[1]))
+                           : -1;
+      if (axis < 0 || axis > 2) {
+        p.Fail("expected +x, -x, +y, -y, +z, -z or a list [x, y, z], got '" + s + "'");
+      }
+      v.setZero();
+      v[axis] = s[0] == '-' ? -1.0 : 1.0;
+    }
+    out[label] = v;
+  }
+  return out;
+}
+
+const std::map<std::string, Eigen::Vector3d>& DefaultLabelPositions() {
+  static const std::map<std::string, Eigen::Vector3d> positions = {
+      {"x_p", Eigen::Vector3d::UnitX()},  {"x_a", -Eigen::Vector3d::UnitX()},
+      {"y_p", Eigen::Vector3d::UnitY()},  {"y_a", -Eigen::Vector3d::UnitY()},
+      {"z_p", Eigen::Vector3d::UnitZ()},  {"z_a", -Eigen::Vector3d::UnitZ()},
+  };
+  return positions;
+}
+
+const std::map<std::string, Eigen::Vector3d>& PositionsOf(const RunDescription& run) {
+  return run.positions.empty() ? DefaultLabelPositions() : run.positions;
+}
+
+Eigen::Vector3d ImuToPlatform(const RunDescription& run, const Eigen::Vector3d& v_imu) {
+  Eigen::Vector3d v;
+  for (int i = 0; i < 3; ++i) v[i] = run.axis_sign[i] * v_imu[run.axis_source[i]];
+  return v;
 }
 
 void ParseMounting(const YAML::Node& node, const YamlPlace& at, RunDescription* run) {
@@ -210,6 +284,9 @@ std::string MountingAxisText(const RunDescription& run, int i) {
 
 void EmitColumns(const std::map<std::string, ColumnSource>& columns, YAML::Emitter* out) {
   *out << YAML::BeginMap;
+  if (auto it = columns.find(kLabelChannel); it != columns.end()) {
+    *out << YAML::Key << kLabelChannel << YAML::Value << YAML::DoubleQuoted << it->second.source;
+  }
   for (const ChannelInfo& ch : Channels()) {
     auto it = columns.find(ch.name);
     if (it == columns.end()) continue;

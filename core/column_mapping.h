@@ -6,8 +6,12 @@
 //     lambda1: {source: enc, unit: deg, scale: -1, offset: 12.5}
 //     lambda2: {value: 0}                  # held constant (in the source unit)
 //     wx: {var: acc_x, unit: g}            # `var` is a synonym of `source`
+//     label: part                          # optional text column: position label
 //   mounting:
 //     axes: ["+y", "-z", "+x"]  # platform x = +IMU y, platform y = -IMU z, z = +IMU x
+//   positions:                  # optional, with label: which IMU direction points up
+//     x_p: "+x"                 # (default: the Ferraris convention, see below)
+//     tilted: [0.7071, 0, 0.7071]
 //
 // A channel value is  our = source * unit_factor * scale + offset, in our units
 // (t: s, angles: deg, rates: deg/s, readings: mV, temp_C: degC), then SI.
@@ -50,8 +54,24 @@ double OurUnitsPerSourceUnit(ChannelKind kind, const std::string& unit);
 // SI per our unit: kDegToRad for angles and rates, 1 otherwise.
 double SiPerOurUnit(ChannelKind kind);
 
+// The optional text channel `label` (a position label per sample) is kept in
+// the same map under kLabelChannel, with only `source` set.
 std::map<std::string, ColumnSource> ParseColumns(const YAML::Node& node, const YamlPlace& at);
 void ParseMounting(const YAML::Node& node, const YamlPlace& at, RunDescription* run);
+
+constexpr const char* kLabelChannel = "label";
+// The source column of the label channel, or "" when the run has none.
+std::string LabelSource(const RunDescription& run);
+
+// positions: {LABEL: "+x" | [x, y, z]} -> unit vectors in IMU axes.
+std::map<std::string, Eigen::Vector3d> ParsePositions(const YAML::Node& node, const YamlPlace& at);
+// The Ferraris convention (imucal): x_p means +x points up and reads +1 g,
+// x_a that it points down; the same for y and z. Other labels are not positions.
+const std::map<std::string, Eigen::Vector3d>& DefaultLabelPositions();
+// run.positions, or the default when it is empty.
+const std::map<std::string, Eigen::Vector3d>& PositionsOf(const RunDescription& run);
+// An IMU-axes vector in the platform frame, through run.mounting (as the readings).
+Eigen::Vector3d ImuToPlatform(const RunDescription& run, const Eigen::Vector3d& v_imu);
 
 // Where channel `name` comes from: the `columns` entry or the contract name.
 ColumnSource SourceOf(const RunDescription& run, const std::string& name);

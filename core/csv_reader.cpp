@@ -101,6 +101,11 @@ std::string DataTable::Where(std::size_t row) const {
 }
 
 DataTable ReadTextTable(const std::string& path, const std::vector<std::string>& wanted) {
+  return ReadTextTable(path, wanted, TextTableOptions{});
+}
+
+DataTable ReadTextTable(const std::string& path, const std::vector<std::string>& wanted,
+                        const TextTableOptions& options) {
   const std::string data = ReadWholeFile(path);
   DataTable table;
   table.path = path;
@@ -110,9 +115,42 @@ DataTable ReadTextTable(const std::string& path, const std::vector<std::string>&
 
   int line_no = 0;
   bool comma = true;
+  bool have_names = false;
   std::vector<std::vector<double>*> target;  // per field: where its value goes
+  std::vector<std::vector<std::string>*> text_target;  // per field, for text columns
   std::size_t fields_needed = 0;
   const std::size_t rows_estimate = static_cast<std::size_t>(std::count(p, end, '\n')) + 1;
+
+  // Once the column names are known: which field feeds which wanted column.
+  auto assign_targets = [&]() {
+    target.assign(table.names.size(), nullptr);
+    text_target.assign(table.names.size(), nullptr);
+    auto field_of = [&](const std::string& w) -> std::ptrdiff_t {
+      auto it = std::find(table.names.begin(), table.names.end(), w);
+      if (it == table.names.end()) return -1;
+      const std::size_t idx = static_cast<std::size_t>(it - table.names.begin());
+      if (target[idx] || text_target[idx]) return -1;  // asked for twice
+      return static_cast<std::ptrdiff_t>(idx);
+    };
+    for (const std::string& w : options.wanted_text) {
+      const std::ptrdiff_t idx = field_of(w);
+      if (idx < 0) continue;
+      std::vector<std::string>& col = table.text_columns[w];
+      col.reserve(rows_estimate);
+      text_target[idx] = &col;
+      fields_needed = std::max(fields_needed, static_cast<std::size_t>(idx) + 1);
+    }
+    for (const std::string& w : wanted) {
+      const std::ptrdiff_t idx = field_of(w);
+      if (idx < 0) continue;
+      std::vector<double>& col = table.columns[w];
+      col.reserve(rows_estimate);
+      target[idx] = &col;
+      fields_needed = std::max(fields_needed, static_cast<std::size_t>(idx) + 1);
+    }
+    table.line.reserve(rows_estimate);
+    have_names = true;
+  };
 
   while (p < end) {
     const char* eol = static_cast<const char*>(std::memchr(p, '\n', end - p));
@@ -122,30 +160,28 @@ DataTable ReadTextTable(const std::string& path, const std::vector<std::string>&
     ++line_no;
     if (IsSkippedLine(line_begin, line_end)) continue;
 
-    if (table.header_line == 0) {  // the header
-      table.header_line = line_no;
+    if (!have_names) {
       comma = std::memchr(line_begin, ',', line_end - line_begin) != nullptr;
-      LineSplitter split(line_begin, line_end, comma);
-      Field f;
-      while (split.Next(&f)) table.names.push_back(HeaderName(f));
-      target.assign(table.names.size(), nullptr);
-      for (const std::string& w : wanted) {
-        auto it = std::find(table.names.begin(), table.names.end(), w);
-        if (it == table.names.end() || table.columns.count(w)) continue;
-        const std::size_t idx = static_cast<std::size_t>(it - table.names.begin());
-        std::vector<double>& col = table.columns[w];
-        col.reserve(rows_estimate);
-        target[idx] = &col;
-        fields_needed = std::max(fields_needed, idx + 1);
+      table.header_line = line_no;
+      if (options.header.empty()) {  // this line is the header
+        LineSplitter split(line_begin, line_end, comma);
+        Field f;
+        while (split.Next(&f)) table.names.push_back(HeaderName(f));
+        assign_targets();
+        continue;
       }
-      table.line.reserve(rows_estimate);
-      continue;
+      table.names = options.header;  // no header line: this line is data
+      assign_targets();
     }
 
     LineSplitter split(line_begin, line_end, comma);
     Field f;
     std::size_t idx = 0;
     for (; idx < fields_needed && split.Next(&f); ++idx) {
+      if (text_target[idx]) {
+        text_target[idx]->push_back(HeaderName(f));  // unquoted like a header name
+        continue;
+      }
       if (!target[idx]) continue;
       const char* b = f.begin;
       if (b != f.end && *b == '+') ++b;
@@ -161,14 +197,18 @@ DataTable ReadTextTable(const std::string& path, const std::vector<std::string>&
     }
     if (idx < fields_needed) {
       std::size_t missing = idx;
-      while (!target[missing]) ++missing;
+      while (!target[missing] && !text_target[missing]) ++missing;
       throw InputError(path + ":" + std::to_string(line_no) + ": " + std::to_string(idx) +
                        " fields, but column '" + table.names[missing] + "' is field " +
-                       std::to_string(missing + 1) + " of the header");
+                       std::to_string(missing + 1) +
+                       (options.header.empty() ? " of the header" : " of data_format.header"));
     }
     table.line.push_back(line_no);
   }
-  if (table.header_line == 0) throw InputError(path + ": no header line (the file is empty)");
+  if (!have_names) {
+    throw InputError(path + (options.header.empty() ? ": no header line (the file is empty)"
+                                                    : ": no data lines (the file is empty)"));
+  }
   table.rows = table.line.size();
   return table;
 }

@@ -15,6 +15,8 @@ struct DataTable {
   std::vector<std::string> names;  // every column (header) or variable in the file
   int header_line = 0;             // text: 1-based line of the header
   std::map<std::string, std::vector<double>> columns;  // the wanted ones found
+  // Text columns asked for with TextTableOptions::wanted_text (e.g. position labels).
+  std::map<std::string, std::vector<std::string>> text_columns;
   std::vector<int> line;                               // text: 1-based file line of each row
   std::size_t rows = 0;
 
@@ -29,6 +31,18 @@ struct DataTable {
 // ("FILE:LINE: column 'X': not a number: 'abc'", too few fields, no header).
 // NaN and Inf are read as such (the caller decides).
 DataTable ReadTextTable(const std::string& path, const std::vector<std::string>& wanted);
+
+// What a text file may need beyond the CSV contract (run.yaml `data_format`
+// and `columns.label`).
+struct TextTableOptions {
+  // The column names, in order, of a file without a header line: every
+  // non-comment line is then data. Empty: the first such line is the header.
+  std::vector<std::string> header;
+  // Columns kept as text instead of parsed as numbers (a position label).
+  std::vector<std::string> wanted_text;
+};
+DataTable ReadTextTable(const std::string& path, const std::vector<std::string>& wanted,
+                        const TextTableOptions& options);
 
 // Reads the wanted variables of a MATLAB file (matio: v5, and v7.3 when matio
 // has HDF5). Each must be a real numeric vector (row or column) with the

@@ -18,10 +18,12 @@ struct RunData {
   std::vector<double> rate_rad_s[2];    // recorded rates, empty when not in the file
   std::vector<double> w_mV[3];          // readings wx, wy, wz
   std::vector<double> temp_C;           // empty when not in the file
+  std::vector<std::string> label;       // per-sample position label (columns.label), or empty
 
   std::size_t size() const { return t_s.size(); }
   bool has_rates() const { return !rate_rad_s[0].empty(); }
   bool has_temp() const { return !temp_C.empty(); }
+  bool has_label() const { return !label.empty(); }
   Eigen::Vector3d readings_mV(std::size_t k) const {
     return {w_mV[0][k], w_mV[1][k], w_mV[2][k]};
   }

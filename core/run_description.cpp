@@ -71,6 +71,34 @@ void ParsePriors(const YAML::Node& node, const YamlPlace& at, RunDescription* ru
   }
 }
 
+// data_format: {header: [names...], sort_by_time: bool}, for text files.
+void ParseDataFormat(const YAML::Node& node, const YamlPlace& at, RunDescription* run) {
+  CheckKeys(node, at, {"header", "sort_by_time"});
+  if (node["header"]) {
+    const YamlPlace p = at.Child("header");
+    const YAML::Node h = node["header"];
+    if (!h.IsSequence() || h.size() == 0) {
+      p.Fail("expected the list of column names of a file without a header line, got " +
+             DescribeNode(h));
+    }
+    for (std::size_t i = 0; i < h.size(); ++i) {
+      const std::string name = ReadString(h[i], p.Index(i));
+      if (name.empty()) p.Index(i).Fail("empty column name");
+      for (const std::string& seen : run->data_header) {
+        if (seen == name) p.Index(i).Fail("column name '" + name + "' given twice");
+      }
+      run->data_header.push_back(name);
+    }
+  }
+  if (node["sort_by_time"]) {
+    const YamlPlace p = at.Child("sort_by_time");
+    if (!node["sort_by_time"].IsScalar() ||
+        !YAML::convert<bool>::decode(node["sort_by_time"], run->sort_by_time)) {
+      p.Fail("expected true or false, got " + DescribeNode(node["sort_by_time"]));
+    }
+  }
+}
+
 }  // namespace
 
 RunDescription LoadRunDescription(const std::string& yaml_path) {
@@ -91,7 +119,8 @@ RunDescription ParseRunDescription(const YAML::Node& node, const std::string& ya
   const YamlPlace at{where, ""};
   if (!node.IsDefined() || node.IsNull()) return run;
   CheckKeys(node, at,
-            {"data", "bench", "triad", "constraints", "columns", "mounting", "priors"});
+            {"data", "bench", "triad", "constraints", "columns", "mounting", "priors",
+             "data_format", "positions"});
   if (node["data"]) {
     const std::string data = ReadString(node["data"], at.Child("data"));
     if (data.empty()) at.Child("data").Fail("empty file name");
@@ -109,6 +138,8 @@ RunDescription ParseRunDescription(const YAML::Node& node, const std::string& ya
   if (node["columns"]) run.columns = ParseColumns(node["columns"], at.Child("columns"));
   if (node["mounting"]) ParseMounting(node["mounting"], at.Child("mounting"), &run);
   if (node["priors"]) ParsePriors(node["priors"], at.Child("priors"), &run);
+  if (node["data_format"]) ParseDataFormat(node["data_format"], at.Child("data_format"), &run);
+  if (node["positions"]) run.positions = ParsePositions(node["positions"], at.Child("positions"));
   DefaultTriadForGReadings(node["triad"], &run);
   return run;
 }
@@ -154,6 +185,22 @@ std::string RunDescriptionToYaml(const RunDescription& run, const std::string& d
     out << YAML::Key << "priors" << YAML::Value << YAML::BeginMap;
     for (const auto& [name, sigma] : run.prior_sigma) {
       out << YAML::Key << name << YAML::Value << FormatDouble(sigma);
+    }
+    out << YAML::EndMap;
+  }
+  if (!run.data_header.empty() || run.sort_by_time) {
+    out << YAML::Key << "data_format" << YAML::Value << YAML::BeginMap;
+    if (!run.data_header.empty()) {
+      out << YAML::Key << "header" << YAML::Value << YAML::Flow << run.data_header;
+    }
+    if (run.sort_by_time) out << YAML::Key << "sort_by_time" << YAML::Value << true;
+    out << YAML::EndMap;
+  }
+  if (!run.positions.empty()) {
+    out << YAML::Key << "positions" << YAML::Value << YAML::BeginMap;
+    for (const auto& [label, up] : run.positions) {
+      out << YAML::Key << label << YAML::Value;
+      EmitVector(out, up);
     }
     out << YAML::EndMap;
   }

@@ -71,6 +71,18 @@ struct RunDescription {
   int axis_source[3] = {0, 1, 2};
   double axis_sign[3] = {1.0, 1.0, 1.0};
 
+  // data_format (optional, text files beyond the CSV contract):
+  //   header: [time, ax, ay, az]   the file has no header line; its columns, in order
+  //   sort_by_time: true           rows stored out of time order (e.g. grouped by
+  //                                label): sorted by t (stable) before the checks
+  std::vector<std::string> data_header;
+  bool sort_by_time = false;
+  // positions (optional, used by `static` with columns.label): position label ->
+  // the direction that points up, in the IMU's own axes (before mounting), as a
+  // unit vector; "+x" is (1, 0, 0). Labels not listed (e.g. x_rot) are not
+  // static positions. Empty: the Ferraris convention DefaultLabelPositions().
+  std::map<std::string, Eigen::Vector3d> positions;
+
   // priors: {NAME: SIGMA} in file units: the 1 sigma of the weak prior on a
   // parameter around its nominal value; absent names use the defaults of
   // solvers/priors.h. (Parsed from the optional `priors:` key.)

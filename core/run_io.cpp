@@ -79,10 +79,17 @@ ChannelValues ReadChannel(const DataTable& table, const RunDescription& run,
   return out;
 }
 
+// Keeps rows keep[0], keep[1], ... in that order (a selection or a permutation).
+template <typename V>
+void KeepRows(const std::vector<std::size_t>& keep, std::vector<V>* values) {
+  if (values->empty()) return;
+  std::vector<V> out(keep.size());
+  for (std::size_t j = 0; j < keep.size(); ++j) out[j] = std::move((*values)[keep[j]]);
+  values->swap(out);
+}
+
 void KeepRows(const std::vector<std::size_t>& keep, ChannelValues* c) {
-  if (!c->present()) return;
-  for (std::size_t j = 0; j < keep.size(); ++j) c->values[j] = c->values[keep[j]];
-  c->values.resize(keep.size());
+  KeepRows(keep, &c->values);
 }
 
 void Warn(RunWarnings* warnings, const std::optional<std::string>& line) {
@@ -116,8 +123,28 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
     const ColumnSource src = SourceOf(run, ch.name);
     if (!src.constant) wanted.push_back(src.source);
   }
-  const DataTable table = IsMatFile(run.data_path) ? ReadMatTable(run.data_path, wanted)
-                                                   : ReadTextTable(run.data_path, wanted);
+  const std::string label_source = LabelSource(run);
+  if (IsMatFile(run.data_path) && (!label_source.empty() || !run.data_header.empty())) {
+    throw InputError(run.yaml_path + ": " +
+                     (label_source.empty() ? "data_format.header" : "columns.label") +
+                     ": only for text data files, not MATLAB");
+  }
+  TextTableOptions text_options;
+  text_options.header = run.data_header;
+  if (!label_source.empty()) text_options.wanted_text.push_back(label_source);
+  const DataTable table = IsMatFile(run.data_path)
+                              ? ReadMatTable(run.data_path, wanted)
+                              : ReadTextTable(run.data_path, wanted, text_options);
+  std::vector<std::string> labels;
+  if (!label_source.empty()) {
+    auto it = table.text_columns.find(label_source);
+    if (it == table.text_columns.end()) {
+      ColumnSource src;
+      src.source = label_source;
+      MissingColumn(table, kLabelChannel, src);
+    }
+    labels = it->second;
+  }
   const std::vector<ChannelInfo>& chs = Channels();  // t, l1, l2, wx, wy, wz, r1, r2, temp
   ChannelValues t = ReadChannel(table, run, chs[0]);
   ChannelValues lambda[2] = {ReadChannel(table, run, chs[1]), ReadChannel(table, run, chs[2])};
@@ -137,12 +164,21 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
   // Fatal checks on the samples as recorded.
   CheckSampleCount(table, table.rows, "samples");
   CheckFinite(table, {all.begin(), all.end()});
+  if (run.sort_by_time) {  // data_format.sort_by_time: rows stored in another order
+    std::vector<std::size_t> order(table.rows);
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return t.values[a] < t.values[b]; });
+    for (ChannelValues* c : all) KeepRows(order, c);
+    KeepRows(order, &labels);
+  }
   CheckTimeNotDecreasing(table, t);
 
   // Repeated time stamps: keep the first sample of each.
   const std::vector<std::size_t> keep = FirstOfEqualTimes(t.values);
   if (keep.size() < table.rows) {
     for (ChannelValues* c : all) KeepRows(keep, c);
+    KeepRows(keep, &labels);
     Warn(warnings, DuplicateWarning(table.rows - keep.size()));
     CheckSampleCount(table, keep.size(), "distinct time stamps");
   }
@@ -163,7 +199,11 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
       CheckReadingsInMillivolts(table, w[j], range_of_imu_axis[j]);
     }
   }
-  CheckAnglesInDegrees(table, lambda, w, scale_of_imu_axis);
+  // Both angles held constant (a run without a bench: static positions by label
+  // or by gravity only): there is nothing to judge the angle unit by.
+  if (!SourceOf(run, "lambda1").constant || !SourceOf(run, "lambda2").constant) {
+    CheckAnglesInDegrees(table, lambda, w, scale_of_imu_axis);
+  }
   for (const ChannelValues& c : w) Warn(warnings, SaturationWarning(c));
 
   RunData data;
@@ -177,6 +217,7 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
                                            : Scaled(w[run.axis_source[i]].values, -1.0);
   }
   data.temp_C = std::move(temp.values);
+  data.label = std::move(labels);
   if (MountingDeterminant(run) < 0) {
     Warn(warnings, std::string("mounting.axes [") + MountingAxisText(run, 0) + ", " +
                        MountingAxisText(run, 1) + ", " + MountingAxisText(run, 2) +

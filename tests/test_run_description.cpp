@@ -229,7 +229,7 @@ TEST_F(RunDescriptionTest, ErrorsNameTheKey) {
   const std::string f = Path();
   EXPECT_EQ(ErrorOf("data: run.csv\ntrid: {}\n"),
             f + ": trid: unknown key (allowed: data, bench, triad, constraints, columns, "
-                "mounting, priors)");
+                "mounting, priors, data_format, positions)");
   EXPECT_EQ(ErrorOf("data: run.csv\ntriad: {scale_mV_per_g: [174, 174]}\n"),
             f + ": triad.scale_mV_per_g: expected a list of 3 numbers, got 2");
   EXPECT_EQ(ErrorOf("data: run.csv\ntriad: {scale_mV_per_g: [174, x, 174]}\n"),
@@ -259,7 +259,7 @@ TEST_F(RunDescriptionTest, ErrorsNameTheKey) {
             f + ": columns.wx.unit: unknown unit 'volts' for wx (allowed: mV, V, g, mg)");
   EXPECT_EQ(ErrorOf("data: run.csv\ncolumns: {w_x: a}\n"),
             f + ": columns.w_x: unknown key (allowed: t, lambda1, lambda2, wx, wy, wz, "
-                "lambda1_rate, lambda2_rate, temp_C)");
+                "lambda1_rate, lambda2_rate, temp_C, label)");
   EXPECT_EQ(ErrorOf("data: run.csv\ncolumns: {lambda2: {source: a, value: 0}}\n"),
             f + ": columns.lambda2: give exactly one of source, var or value");
   EXPECT_EQ(ErrorOf("data: run.csv\ncolumns: {lambda2: 0}\n"),

@@ -1,0 +1,269 @@
+// `triadcal static RUN.yaml -o OUT.json`: the standard static method
+// (solvers/static_method.h): still intervals, averaged positions, and the
+// readings model fitted to them with the angles, the position labels, or the
+// gravity norm as the reference.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <set>
+#include <sstream>
+
+#include "core/column_mapping.h"
+#include "core/errors.h"
+#include "core/units.h"
+#include "solvers/estimate_json.h"
+#include "solvers/static_method.h"
+#include "tools/command_util.h"
+#include "tools/commands.h"
+
+namespace triadcal {
+namespace {
+
+struct StaticArgs {
+  std::string run_yaml, out_json, reference = "auto", fix;
+  double placement_sigma_deg = 0.0;
+  StaticOptions options;
+};
+
+std::vector<std::string> SplitList(const std::string& list) {
+  std::vector<std::string> out;
+  std::stringstream ss(list);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
+}
+
+nlohmann::json Vec(const Eigen::Vector3d& v) { return {v[0], v[1], v[2]}; }
+
+nlohmann::json StillJson(const StaticResult& r, const StillOptions& o) {
+  nlohmann::json j;
+  const bool rates = r.still.test == StillTest::kAngleRates;
+  j["test"] = rates ? "angle rates" : "reading variance";
+  j["threshold"] = r.still.threshold;
+  j["threshold_unit"] = rates ? "deg/s" : "mV (moving standard deviation)";
+  if (!rates) j["window_samples"] = r.still.window_samples;
+  j["count"] = r.still.intervals.size();
+  nlohmann::json d = nlohmann::json::array();
+  double total = 0.0;
+  for (const StillInterval& iv : r.still.intervals) {
+    d.push_back(iv.duration_s());
+    total += iv.duration_s();
+  }
+  j["durations_s"] = d;
+  j["total_s"] = total;
+  j["dropped_short"] = r.still.dropped_short;
+  j["options"] = {{"min_still_s", o.min_still_s},   {"edge_s", o.edge_s},
+                  {"merge_gap_s", o.merge_gap_s},   {"window_s", o.window_s},
+                  {"noise_factor", o.noise_factor}, {"still_rate_deg_s", o.rate_threshold_deg_s}};
+  return j;
+}
+
+nlohmann::json PositionsJson(const StaticResult& r) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const StaticPosition& p : r.positions) {
+    nlohmann::json j;
+    j["name"] = p.name;
+    j["samples"] = p.samples;
+    j["duration_s"] = p.duration_s;
+    j["t_begin_s"] = p.intervals.front().t_begin_s;
+    j["t_end_s"] = p.intervals.back().t_end_s;
+    j["intervals"] = p.intervals.size();
+    j["mean_mV"] = Vec(p.mean_mV);
+    j["std_mV"] = Vec(p.std_mV);
+    j["W_g"] = Vec(p.W_g);
+    j["norm_residual_mg"] = p.norm_residual_mg;
+    if (r.reference == StaticReference::kAngles) {
+      j["lambda_deg"] = {p.lambda_rad[0] / kDegToRad, p.lambda_rad[1] / kDegToRad};
+    }
+    if (r.reference == StaticReference::kLabels) j["up"] = Vec(p.up);
+    if (r.reference != StaticReference::kNone) {
+      j["predicted_mV"] = Vec(p.predicted_mV);
+      j["residual_mV"] = Vec(p.residual_mV);
+      j["residual_mg"] = Vec(p.residual_mg);
+    }
+    out.push_back(j);
+  }
+  return out;
+}
+
+nlohmann::json StaticJson(const StaticArgs& a, const StaticResult& r, std::size_t samples) {
+  const ParameterLayout& layout = r.layout;
+  std::set<std::string> not_estimable(r.not_separable.begin(), r.not_separable.end());
+  for (const HeldParameter& h : r.held) not_estimable.insert(h.name);
+  nlohmann::json params = ParametersJson(layout, r.theta, r.cov, not_estimable);
+  const double scatter = r.dof >= 0.5 ? std::sqrt(r.chi2_per_dof) : 0.0;
+  for (int i = 0; i < layout.size(); ++i) {
+    const ParameterInfo& info = layout.info(i);
+    nlohmann::json& p = params[info.name];
+    const double declared = std::sqrt(std::max(0.0, r.cov_declared(i, i))) / info.si_per_unit;
+    p["sigma_declared"] = declared;
+    if (r.dof >= 0.5) p["sigma_scatter"] = declared * scatter;
+    for (const HeldParameter& h : r.held) {
+      if (h.name == info.name) p["held"] = h.reason;
+    }
+  }
+  nlohmann::json out;
+  out["command"] = "static";
+  out["run"] = a.run_yaml;
+  out["samples"] = samples;
+  out["reference"] = ReferenceName(r.reference);
+  out["model"] =
+      "readings_i = K_i (sum_j M_ij W_j + W_i sum_j K_ij W_j) + W0_i (paper eq. 1), W in g in the "
+      "triad frame; at rest W is gravity: from the bench angles (C_L2^T e_up), from the "
+      "position label, or only |W| = 1 (gravity-norm fit)";
+  out["parameters"] = params;
+  nlohmann::json held = nlohmann::json::object();
+  for (const HeldParameter& h : r.held) held[h.name] = h.reason;
+  out["held"] = held;
+  out["unobservable"] = WeakDirectionsJson(r.weak);
+  out["not_estimable"] = std::vector<std::string>(not_estimable.begin(), not_estimable.end());
+  out["constraints_used"] = r.constraints_used;
+  out["constraints_ignored"] = r.constraints_ignored;
+  out["sigma"] = {{"source", r.sigma_source},
+                  {"scale", r.sigma_scale},
+                  {"chi2", r.chi2},
+                  {"dof", r.dof},
+                  {"chi2_per_dof", r.chi2_per_dof},
+                  {"data_residuals", r.data_residuals},
+                  {"effective_parameters", r.effective_parameters},
+                  {"rule",
+                   "sigma = sigma_declared x max(1, sqrt(chi2/dof)): the larger of the declared "
+                   "noise and the residual scatter"}};
+  out["still_intervals"] = StillJson(r, a.options.still);
+  out["positions"] = PositionsJson(r);
+  out["residual_rms_mg"] = r.residual_rms_mg;
+  out["converged"] = r.converged;
+  out["iterations"] = r.iterations;
+  out["settings"] = {{"reference_requested", a.reference},
+                     {"fix", a.fix},
+                     {"placement_sigma_deg", a.placement_sigma_deg}};
+  return out;
+}
+
+void PrintReport(const LoadedRun& run, const StaticResult& r) {
+  const bool rates = r.still.test == StillTest::kAngleRates;
+  std::printf("static: %zu samples, reference: %s", run.data.size(), ReferenceName(r.reference));
+  if (r.reference == StaticReference::kLabels) {
+    std::printf(" (column '%s')", LabelSource(run.description).c_str());
+  }
+  std::printf("\n");
+  double lo = 1e300, hi = 0.0, total = 0.0;
+  for (const StillInterval& iv : r.still.intervals) {
+    lo = std::min(lo, iv.duration_s());
+    hi = std::max(hi, iv.duration_s());
+    total += iv.duration_s();
+  }
+  std::printf(
+      "still intervals: %zu (%s %.3g %s), durations %.3g-%.3g s, %.4g s in all; %zu shorter runs "
+      "dropped\n",
+      r.still.intervals.size(), rates ? "angle rates below" : "moving std below",
+      r.still.threshold, rates ? "deg/s" : "mV", lo, hi, total, r.still.dropped_short);
+  std::printf("positions: %zu; fit %s after %d iterations\n", r.positions.size(),
+              r.converged ? "converged" : "NOT converged", r.iterations);
+  std::printf("%-10s %14s %11s %11s %11s  %s\n", "parameter", "value", "sigma", "sigma_decl",
+              "sigma_scat", "unit");
+  const double scatter = r.dof >= 0.5 ? std::sqrt(r.chi2_per_dof) : 0.0;
+  std::set<std::string> weak(r.not_separable.begin(), r.not_separable.end());
+  for (int i = 0; i < r.layout.size(); ++i) {
+    const ParameterInfo& p = r.layout.info(i);
+    const double f = p.si_per_unit;
+    bool held = false;
+    for (const HeldParameter& h : r.held) held = held || h.name == p.name;
+    if (held) {
+      std::printf("%-10s %14.6g %11s %11s %11s  %-6s (held)\n", p.name.c_str(), r.theta[i] / f,
+                  "-", "-", "-", p.unit.c_str());
+      continue;
+    }
+    const double decl = std::sqrt(r.cov_declared(i, i)) / f;
+    std::printf("%-10s %14.6g %11.3g %11.3g %11.3g  %-6s%s\n", p.name.c_str(), r.theta[i] / f,
+                std::sqrt(r.cov(i, i)) / f, decl, decl * scatter, p.unit.c_str(),
+                weak.count(p.name) ? " NOT SEPARABLE (prior value)" : "");
+  }
+  std::printf("sigma: %s (chi2/dof = %.3g on %.3g dof; reported = declared x %.3g)\n",
+              r.sigma_source.c_str(), r.chi2_per_dof, r.dof, r.sigma_scale);
+  for (const WeakDirection& d : r.weak) {
+    std::string names;
+    for (const auto& w : d.weights) names += (names.empty() ? "" : ", ") + w.first;
+    std::printf("NOT SEPARABLE by these positions: %s -- %s\n", names.c_str(),
+                d.description.c_str());
+  }
+  if (r.reference == StaticReference::kNone) {
+    std::printf("%-6s %7s %7s %12s\n", "pose", "samples", "s", "|W|-1 [mg]");
+    for (const StaticPosition& p : r.positions) {
+      std::printf("%-6s %7zu %7.2f %12.3f\n", p.name.c_str(), p.samples, p.duration_s,
+                  p.norm_residual_mg);
+    }
+  } else {
+    std::printf("%-8s %7s %7s %27s %10s\n", "position", "samples", "s", "residual x y z [mg]",
+                "|W|-1 [mg]");
+    for (const StaticPosition& p : r.positions) {
+      std::printf("%-8s %7zu %7.2f %9.3f %8.3f %8.3f %10.3f\n", p.name.c_str(), p.samples,
+                  p.duration_s, p.residual_mg[0], p.residual_mg[1], p.residual_mg[2],
+                  p.norm_residual_mg);
+    }
+  }
+  std::printf("residual RMS over positions: %.3g mg\n", r.residual_rms_mg);
+}
+
+int RunStatic(const StaticArgs& a) {
+  StaticOptions opt = a.options;
+  opt.fixed = SplitList(a.fix);
+  if (!(a.placement_sigma_deg >= 0.0)) throw InputError("--placement-sigma-deg: must be >= 0");
+  opt.placement_sigma_rad = a.placement_sigma_deg * kDegToRad;
+  const LoadedRun run = LoadRunOrThrow(a.run_yaml);
+  const StaticReference ref = ChooseReference(run.description, run.data, a.reference);
+  const StaticResult r = SolveStatic(run.description, run.data, ref, opt);
+  WriteJson(StaticJson(a, r, run.data.size()), a.out_json);
+  PrintReport(run, r);
+  std::printf("wrote %s\n", a.out_json.c_str());
+  return 0;
+}
+
+}  // namespace
+
+Command AddStaticCommand(CLI::App& app) {
+  auto a = std::make_shared<StaticArgs>();
+  Command c;
+  c.app = app.add_subcommand(
+      "static", "Standard static method: still positions averaged, readings model fitted");
+  c.app->add_option("run", a->run_yaml, "run description (run.yaml)")->required();
+  c.app->add_option("-o,--output", a->out_json, "output JSON")->required();
+  c.app->add_option("--reference", a->reference,
+                    "orientation of the positions: auto (angles, else labels, else none), "
+                    "angles, labels, or none (gravity-norm fit)")
+      ->capture_default_str();
+  c.app->add_option("--fix", a->fix,
+                    "parameters held at their nominal value, e.g. Kxy,Kyx or K_ij (all nine)");
+  c.app->add_option("--placement-sigma-deg", a->placement_sigma_deg,
+                    "1 sigma orientation error of each position that does not average out "
+                    "(hand placement, table tilt, bench positioning) [deg]; angles, labels")
+      ->capture_default_str();
+  StillOptions& s = a->options.still;
+  c.app->add_option("--min-still-s", s.min_still_s, "shortest still interval kept [s]")
+      ->capture_default_str();
+  c.app->add_option("--edge-s", s.edge_s, "dropped at each end of a still interval [s]")
+      ->capture_default_str();
+  c.app->add_option("--merge-gap-s", s.merge_gap_s,
+                    "still runs closer than this are merged [s]")
+      ->capture_default_str();
+  c.app->add_option("--window-s", s.window_s,
+                    "without angles: window of the moving standard deviation [s]")
+      ->capture_default_str();
+  c.app->add_option("--noise-factor", s.noise_factor,
+                    "without angles: still when the moving std < factor x triad.noise_mV")
+      ->capture_default_str();
+  c.app->add_option("--still-rate-deg-s", s.rate_threshold_deg_s,
+                    "with angles: still when |lambda'| is below this [deg/s]; 0: max(0.05, "
+                    "5 sigma of the estimated rate)")
+      ->capture_default_str();
+  c.app->add_option("--rate-window-s", s.rate_half_window_s,
+                    "with angles: half window of the local cubic fit giving lambda' [s]")
+      ->capture_default_str();
+  c.run = [a] { return RunStatic(*a); };
+  return c;
+}
+
+}  // namespace triadcal
