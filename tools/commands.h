@@ -20,5 +20,11 @@ Command AddInfoCommand(CLI::App& app);
 Command AddFilterCommand(CLI::App& app);
 Command AddFitCommand(CLI::App& app);
 Command AddCompareCommand(CLI::App& app);
+Command AddDiagnoseCommand(CLI::App& app);
+Command AddStaticCommand(CLI::App& app);  // standard static method (cmd_static.cpp)
+Command AddApplyCommand(CLI::App& app);   // calibration -> specific force (cmd_apply.cpp)
+Command AddObservabilityCommand(CLI::App& app);  // CRB, unobservable directions (cmd_observability.cpp)
+Command AddDesignCommand(CLI::App& app);  // experiment design from the CRB (cmd_design.cpp)
+Command AddMonteCarloCommand(CLI::App& app);  // Monte Carlo against the CRB (cmd_montecarlo.cpp)
 
 }  // namespace triadcal

@@ -19,6 +19,12 @@ int main(int argc, char** argv) {
       triadcal::AddFilterCommand(app),
       triadcal::AddFitCommand(app),
       triadcal::AddCompareCommand(app),
+      triadcal::AddDiagnoseCommand(app),
+      triadcal::AddStaticCommand(app),
+      triadcal::AddApplyCommand(app),
+      triadcal::AddObservabilityCommand(app),
+      triadcal::AddDesignCommand(app),
+      triadcal::AddMonteCarloCommand(app),
       triadcal::AddInfoCommand(app),
   };
 

@@ -1,0 +1,166 @@
+// `triadcal observability RUN.yaml|SCENARIO.yaml -o OUT.json`: Cramer-Rao sigma
+// per parameter and the directions the run cannot determine, with and without
+// the constraints (solvers/observability.h).
+//
+// RUN.yaml: the recorded motion and timing of the run, evaluated at the nominal
+// values or at --at FILE (a fit/filter OUT or a truth.json; better for a real
+// run). SCENARIO.yaml (recognised by its `profile` key): the scenario's profile
+// simulated without noise (the declared noise kept), evaluated at its truth.
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include <nlohmann/json.hpp>
+
+#include "core/errors.h"
+#include "core/file_util.h"
+#include "core/simulator.h"
+#include "core/yaml_fields.h"
+#include "solvers/experiment_design.h"
+#include "solvers/observability.h"
+#include "tools/command_util.h"
+#include "tools/commands.h"
+#include "tools/observability_report.h"
+
+namespace triadcal {
+namespace {
+
+struct ObservabilityArgs {
+  std::string input, out_json, at, effects;
+  double epoch_s = 0.2, rate_window_s = 0.1;
+  double unobservable_below = ObservabilityThresholds{}.unobservable;
+  double weak_below = ObservabilityThresholds{}.weak;
+  int threads = 0;
+};
+
+// "parameters" of a fit/filter OUT ({"Kx": {"value": ...}}), of its "rts"
+// section, or of a truth.json ({"Kx": 171.5}). Unknown names are ignored.
+NamedValues ReadParameterValues(const std::string& path) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(ReadFile(path));
+  } catch (const nlohmann::json::parse_error& e) {
+    throw InputError(path + ": not valid JSON (" + std::string(e.what()) + ")");
+  }
+  const nlohmann::json* params = nullptr;
+  if (j.is_object() && j.contains("parameters")) {
+    params = &j["parameters"];
+  } else if (j.is_object() && j.contains("rts") && j["rts"].contains("parameters")) {
+    params = &j["rts"]["parameters"];
+  }
+  if (!params || !params->is_object()) {
+    throw InputError(path + ": parameters: missing (expected a fit or filter OUT, or truth.json)");
+  }
+  NamedValues out;
+  for (const auto& [name, v] : params->items()) {
+    if (v.is_number()) {
+      out[name] = v.get<double>();
+    } else if (v.is_object() && v.contains("value") && v["value"].is_number()) {
+      out[name] = v["value"].get<double>();
+    } else {
+      throw InputError(path + ": parameters." + name +
+                       ": expected a number or {\"value\": number}");
+    }
+  }
+  return out;
+}
+
+bool IsScenario(const std::string& path) {
+  const YAML::Node root = LoadYamlFile(path);
+  return root.IsMap() && root["profile"];
+}
+
+int RunObservability(const ObservabilityArgs& a) {
+  if (!(a.unobservable_below > 0.0) || !(a.weak_below >= a.unobservable_below)) {
+    throw InputError("--unobservable-below, --weak-below: expected 0 < unobservable <= weak");
+  }
+  const ParameterLayout layout(ParseEffectList(a.effects));
+  ObservabilityOptions oo;
+  oo.threads = a.threads;
+  oo.thresholds = {a.unobservable_below, a.weak_below};
+  AngleDerivativeOptions derivatives;
+  derivatives.half_window_s = a.rate_window_s;
+
+  // The run (recorded or simulated), its description and the point of evaluation.
+  RunDescription run;
+  RunData data;
+  Eigen::VectorXd theta;
+  std::string source, at;
+  if (IsScenario(a.input)) {
+    const Scenario s = NoiseFreeScenario(LoadScenario(a.input));
+    data = Simulate(s);
+    run = s.run;
+    theta = TruthInLayout(s, layout);
+    source = "scenario (simulated without noise)";
+    at = "truth";
+  } else {
+    LoadedRun loaded = LoadRunOrThrow(a.input);
+    run = loaded.description;
+    data = std::move(loaded.data);
+    theta = NominalTheta(run, layout);
+    source = "run";
+    at = "nominal";
+  }
+  if (!a.at.empty()) {
+    SetFromFileUnits(layout, ReadParameterValues(a.at), &theta);
+    at = a.at;
+  }
+  const RunProblem p = BuildRunProblem(run, data, layout, a.epoch_s, derivatives);
+  ShowProgress("observability: Fisher information", 0.0);
+  const ObservabilityResult r = AnalyseObservability(run, p, theta, oo);
+  EndProgress();
+
+  nlohmann::json out = ObservabilityJson(r);
+  out["command"] = "observability";
+  out["input"] = a.input;
+  out["source"] = source;
+  out["evaluated_at"] = at;
+  out["settings"] = {{"epoch_s", a.epoch_s},
+                     {"rate_window_half_s", a.rate_window_s},
+                     {"effects", a.effects},
+                     {"unobservable_below", a.unobservable_below},
+                     {"weak_below", a.weak_below},
+                     {"declared_noise_mV", run.noise_mV},
+                     {"declared_angle_noise_arcsec", run.angle_noise_rad / kArcsecToRad}};
+  WriteJson(out, a.out_json);
+
+  std::printf("observability: %s, %zu samples over %.4g s, %zu epochs; evaluated at %s; %.2f s\n",
+              source.c_str(), r.samples, r.duration_s, r.epochs, at.c_str(), r.seconds);
+  PrintObservability(r);
+  std::printf("wrote %s\n", a.out_json.c_str());
+  return 0;
+}
+
+}  // namespace
+
+Command AddObservabilityCommand(CLI::App& app) {
+  auto a = std::make_shared<ObservabilityArgs>();
+  Command c;
+  c.app = app.add_subcommand(
+      "observability",
+      "Cramer-Rao sigma and unobservable directions of a run or a scenario's profile");
+  c.app->add_option("input", a->input, "RUN.yaml (recorded motion) or SCENARIO.yaml (profile)")
+      ->required();
+  c.app->add_option("-o,--output", a->out_json, "output JSON")->required();
+  c.app->add_option("--at", a->at,
+                    "evaluate at these parameters (fit/filter OUT or truth.json) instead of the "
+                    "nominal values (run) or the truth (scenario)");
+  c.app->add_option("--effects", a->effects, "catalogue effects to include, e.g. a,b");
+  c.app->add_option("--epoch-s", a->epoch_s, "interval between trajectory epochs [s]")
+      ->capture_default_str();
+  c.app->add_option("--rate-window-s", a->rate_window_s,
+                    "half window of the local cubic fit giving lambda' from the angles [s]")
+      ->capture_default_str();
+  c.app->add_option("--unobservable-below", a->unobservable_below,
+                    "information along a direction, in prior units, below which it is "
+                    "unobservable")
+      ->capture_default_str();
+  c.app->add_option("--weak-below", a->weak_below,
+                    "information in prior units below which a direction is weakly observable")
+      ->capture_default_str();
+  c.app->add_option("--threads", a->threads, "threads (0: all cores)")->capture_default_str();
+  c.run = [a] { return RunObservability(*a); };
+  return c;
+}
+
+}  // namespace triadcal
