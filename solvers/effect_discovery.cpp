@@ -58,15 +58,25 @@ DiagnosisResult Diagnose(const RunDescription& run, const RunData& data,
   auto say = [&](const std::string& s) {
     if (opt.progress) opt.progress(s);
   };
+  DiagnosisResult res;
   std::vector<Effect> candidates = opt.candidates;
   if (candidates.empty()) {
+    // With temp_C recorded and (nearly) linear in time, a drift in time and a
+    // drift in temperature are the same function of the samples: test the
+    // temperature form only (SPEC section 8 lists them as one effect).
+    const bool temp_linear_in_time =
+        data.has_temp() && std::abs(Correlation(data.t_s, data.temp_C)) > 0.99;
     for (const EffectSpec& e : EffectCatalogue()) {
       if (e.id == Effect::kThermalDriftTemp && !data.has_temp()) continue;
+      if (e.id == Effect::kThermalDrift && temp_linear_in_time) {
+        res.notes.push_back("thermal_drift not tested apart from thermal_drift_temp: temp_C is "
+                            "linear in time in this run, so the two are the same");
+        continue;
+      }
       candidates.push_back(e.id);
     }
   }
 
-  DiagnosisResult res;
   say("fitting the declared model");
   BatchOptions first = opt.fit;
   res.before_layout = ParameterLayout();

@@ -59,6 +59,7 @@ struct DiagnosisResult {
   std::vector<CandidateTest> tests;    // every test of every round
   std::vector<Effect> selected;
   bool unexplained = false;            // structure remains after the selection
+  std::vector<std::string> notes;      // e.g. candidates merged or skipped, and why
   std::string verdict;
 };
 

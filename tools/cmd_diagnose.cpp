@@ -139,11 +139,14 @@ int RunDiagnose(const DiagnoseArgs& a) {
   out["after"] = StateJson(d.after_layout, d.after, d.after_residuals, tp);
   out["parameters"] = out["after"]["parameters"];
   out["unexplained_structure"] = d.unexplained;
+  out["notes"] = d.notes;
   out["verdict"] = d.verdict;
   WriteJson(out, a.out_json);
 
   // The readable report.
-  std::printf("diagnose: %s\n\n", d.verdict.c_str());
+  std::printf("diagnose: %s\n", d.verdict.c_str());
+  for (const std::string& n : d.notes) std::printf("note: %s\n", n.c_str());
+  std::printf("\n");
   std::printf("candidates, round 1 (likelihood ratio, scaled; selected when p < %.2g):\n",
               d.ranking.empty() ? 0.0 : d.ranking.front().threshold);
   for (const CandidateTest& t : d.ranking) {
