@@ -12,23 +12,6 @@
 namespace triadcal {
 namespace {
 
-std::vector<ConstraintRow> ConstraintRows(const RunDescription& run, const ParameterLayout& layout) {
-  std::vector<ConstraintRow> rows;
-  for (const Constraint& k : run.constraints) {
-    ConstraintRow row{Eigen::VectorXd::Zero(layout.size()), k.value_si, k.sigma_si};
-    for (const auto& [name, coef] : k.terms) {
-      const int i = layout.IndexOf(name);
-      if (i < 0) {
-        throw InputError(run.yaml_path + ": constraints: '" + k.expr + "' names '" + name +
-                         "', which is not estimated in this run (add it with --effects)");
-      }
-      row.c[i] += coef;
-    }
-    rows.push_back(row);
-  }
-  return rows;
-}
-
 std::vector<std::string> ConstraintExprs(const RunDescription& run) {
   std::vector<std::string> out;
   for (const Constraint& c : run.constraints) out.push_back(c.expr);
@@ -184,7 +167,7 @@ DesignPoint EvaluateStatic(const Scenario& s, const ParameterLayout& layout,
   const Eigen::MatrixXd I = StaticTestInformation(s.run, layout, TruthInLayout(s, layout),
                                                   positions, duration_s, s.profile.rate_hz);
   const ObservabilityVariant v =
-      MakeVariant(layout, I, MakePrior(s.run, layout), ConstraintRows(s.run, layout),
+      MakeVariant(layout, I, MakePrior(s.run, layout), ResolveConstraints(s.run, layout),
                   ConstraintExprs(s.run), "static", t);
   return PointFromVariant(v, duration_s);
 }

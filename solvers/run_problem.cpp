@@ -45,6 +45,24 @@ RunData Decimate(const RunData& d, std::size_t m) {
   return out;
 }
 
+std::vector<ConstraintRow> ResolveConstraints(const RunDescription& run,
+                                              const ParameterLayout& layout) {
+  std::vector<ConstraintRow> rows;
+  for (const Constraint& k : run.constraints) {
+    ConstraintRow row{Eigen::VectorXd::Zero(layout.size()), k.value_si, k.sigma_si};
+    for (const auto& [name, coef] : k.terms) {
+      const int i = layout.IndexOf(name);
+      if (i < 0) {
+        throw InputError(run.yaml_path + ": constraints: '" + k.expr + "' names '" + name +
+                         "', which is not estimated in this run (add it with --effects)");
+      }
+      row.c[i] += coef;
+    }
+    rows.push_back(row);
+  }
+  return rows;
+}
+
 RunProblem BuildRunProblem(const RunDescription& run, const RunData& data,
                            const ParameterLayout& layout, double epoch_s,
                            const AngleDerivativeOptions& derivatives) {
@@ -62,18 +80,7 @@ RunProblem BuildRunProblem(const RunDescription& run, const RunData& data,
       data, derivatives, NeedsRatesAtEverySample(layout) ? nullptr : &p.epochs);
   p.prior = MakePrior(run, layout);
   p.n = layout.size();
-  for (const Constraint& k : run.constraints) {
-    ConstraintRow row{Eigen::VectorXd::Zero(p.n), k.value_si, k.sigma_si};
-    for (const auto& [name, coef] : k.terms) {
-      const int i = layout.IndexOf(name);
-      if (i < 0) {
-        throw InputError(run.yaml_path + ": constraints: '" + k.expr + "' names '" + name +
-                         "', which is not estimated in this run (add it with --effects)");
-      }
-      row.c[i] += coef;
-    }
-    p.constraints.push_back(row);
-  }
+  p.constraints = ResolveConstraints(run, layout);
   const double min_scale = run.scale_mV_per_g.cwiseAbs().minCoeff();
   p.accel_var = AccelSampleVariance(run.noise_mV, min_scale, run.angle_noise_rad, run.g_mps2);
   p.sigma_angle = run.angle_noise_rad;

@@ -35,6 +35,11 @@ struct RunProblem {
   int n = 0;                  // parameters
 };
 
+// The run's constraints as rows over the layout's theta. Throws InputError
+// when a constraint names a parameter that is not in the layout.
+std::vector<ConstraintRow> ResolveConstraints(const RunDescription& run,
+                                              const ParameterLayout& layout);
+
 // Throws InputError for a run too short for epoch_s, or a constraint naming a
 // parameter that is not in the layout.
 RunProblem BuildRunProblem(const RunDescription& run, const RunData& data,

@@ -26,16 +26,6 @@ struct StaticArgs {
   StaticOptions options;
 };
 
-std::vector<std::string> SplitList(const std::string& list) {
-  std::vector<std::string> out;
-  std::stringstream ss(list);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    if (!item.empty()) out.push_back(item);
-  }
-  return out;
-}
-
 nlohmann::json Vec(const Eigen::Vector3d& v) { return {v[0], v[1], v[2]}; }
 
 nlohmann::json StillJson(const StaticResult& r, const StillOptions& o) {
