@@ -42,7 +42,17 @@ EFFECTS = {
     "thermal_drift": "{rate_x_mV_per_min: 0.18, rate_y_mV_per_min: -0.12, rate_z_mV_per_min: 0.15}",
     "thermal_drift_temp": "{coef_x_mV_per_degC: 0.24, coef_y_mV_per_degC: -0.2, coef_z_mV_per_degC: 0.16}",
     "scale_asymmetry": "{dKx_mV_per_g: 0.3, dKy_mV_per_g: -0.3, dKz_mV_per_g: 0.3}",
+    # The same effects larger: the 4-sigma sizes above leave scale_asymmetry
+    # (|u| is nearly a + b u^2, i.e. zero offset plus K_ii) and size_effect
+    # with too little that the declared model cannot absorb; these sizes give
+    # a noise-free likelihood ratio of ~35-40, enough for 95 % detection.
+    "scale_asymmetry~x2.8": "{dKx_mV_per_g: 0.84, dKy_mV_per_g: -0.84, dKz_mV_per_g: 0.84}",
+    "size_effect~x1.3": "{ry_x_mm: 29.0, rz_y_mm: -29.0}",
 }
+
+# Effects counted as the same finding: a temperature that is linear in time
+# makes a drift in time and a drift in temperature one function of the data.
+SAME = {"thermal_drift_temp": {"thermal_drift_temp", "thermal_drift"}}
 
 
 def scenario(effect, noise_free=False):
@@ -52,7 +62,7 @@ def scenario(effect, noise_free=False):
         s = s.replace("    # noise_mV: taken from noise.accel_mV", "    noise_mV: 2.0")
         s = s.replace('    # angle_noise_arcsec: taken from noise.angle_arcsec (15")', "    angle_noise_arcsec: 15")
     if effect:
-        s += f"\neffects:\n  {effect}: {EFFECTS[effect]}\n"
+        s += f"\neffects:\n  {effect.split('~')[0]}: {EFFECTS[effect]}\n"
         if effect == "thermal_drift_temp":
             s += "temperature: {start_C: 20, rate_C_per_h: 60}\n"
     return s
@@ -107,9 +117,11 @@ def main():
         with cf.ThreadPoolExecutor(a.jobs) as ex:
             res = list(ex.map(lambda s: one(effect, s, work), range(1, a.seeds + 1)))
         n = len(res)
-        first = sum(r["first"] == effect for r in res) / n if effect else float("nan")
-        chosen = sum(effect in r["selected"] for r in res) / n if effect else float("nan")
-        false = sum(any(s != effect for s in r["selected"]) for r in res) / n
+        name = effect.split("~")[0]
+        ok_names = SAME.get(name, {name})
+        first = sum(r["first"] in ok_names for r in res) / n if effect else float("nan")
+        chosen = sum(bool(ok_names & set(r["selected"])) for r in res) / n if effect else float("nan")
+        false = sum(any(s not in ok_names for s in r["selected"]) for r in res) / n
         within = sum(r["worst_after"] <= 3.0 for r in res) / n
         print(f"{case:26s} {b:6.1f} {first:6.0%} {chosen:7.0%} {false:6.0%} {within:8.0%}")
         sys.stdout.flush()
