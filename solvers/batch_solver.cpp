@@ -14,6 +14,7 @@
 #include "solvers/parallel.h"
 #include "solvers/run_problem.h"
 #include "solvers/batch_linearization.h"
+#include "solvers/observability.h"
 
 namespace triadcal {
 namespace {
@@ -139,6 +140,10 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
       Eigen::VectorXd bt;
       ThetaRows(pt, true, &At, &bt);
       const Eigen::MatrixXd cov0 = ThetaCovariance(pt, lt, pt.prior.mean, At, threads);
+      ObservabilityThresholds th;
+      th.unobservable /= static_cast<double>(m);  // information scales with the samples
+      th.weak /= static_cast<double>(m);
+      res.unsupported_at_start = UnsupportedDirections(layout, cov0, pt.prior.sigma, th);
       held.assign(n, true);
       Eigen::VectorXd min_info(n);
       for (int i = 0; i < n; ++i) {

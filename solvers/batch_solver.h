@@ -49,6 +49,7 @@
 #include "core/run_description.h"
 #include "solvers/kalman_smoother.h"
 #include "solvers/priors.h"
+#include "solvers/separability.h"
 
 namespace triadcal {
 
@@ -100,6 +101,9 @@ struct BatchResult {
   Estimate estimate;            // theta and its covariance (SI)
   Estimate initial;             // the starting point (with the RTS sigma when from RTS)
   std::vector<std::string> held;  // held at nominal (their sigma is not an estimate)
+  // The directions the run cannot determine, found at the nominal values
+  // before holding (what the held parameters stand for).
+  std::vector<WeakDirection> unsupported_at_start;
   Prior prior;
   double final_cost = 0.0;      // 0.5 sum r^2 over all blocks
   int residual_count = 0;

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "solvers/observability.h"
 #include "solvers/kalman_smoother.h"
 #include "solvers/separability.h"
 #include "tests/sim_fixtures.h"
@@ -83,7 +84,7 @@ TEST(KalmanSmoother, UnseparableWithoutConstraint) {
   s.run.constraints.clear();
   const FilterResult r = Filter(s, data);
   const std::vector<WeakDirection> weak =
-      FindWeakDirections(ParameterLayout(), r.rts.cov, r.prior.sigma);
+      UnsupportedDirections(ParameterLayout(), r.rts.cov, r.prior.sigma);
   ASSERT_EQ(weak.size(), 1u);
   std::vector<std::string> names = ParametersIn(weak);
   std::sort(names.begin(), names.end());
@@ -92,7 +93,7 @@ TEST(KalmanSmoother, UnseparableWithoutConstraint) {
   // With the constraint nothing is unseparable.
   s.run.constraints = PaperScenario(20.0, 90.0, 2.0, 15.0, 5).run.constraints;
   const FilterResult rc = Filter(s, data);
-  EXPECT_TRUE(FindWeakDirections(ParameterLayout(), rc.rts.cov, rc.prior.sigma).empty());
+  EXPECT_TRUE(UnsupportedDirections(ParameterLayout(), rc.rts.cov, rc.prior.sigma).empty());
 }
 
 // Memory: what the smoother stores grows with the epochs, not the samples.

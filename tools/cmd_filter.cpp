@@ -10,6 +10,7 @@
 #include "core/errors.h"
 #include "core/file_util.h"
 #include "core/units.h"
+#include "solvers/observability.h"
 #include "solvers/estimate_json.h"
 #include "solvers/kalman_smoother.h"
 #include "solvers/separability.h"
@@ -75,7 +76,7 @@ int RunFilter(const FilterArgs& a) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   const std::vector<WeakDirection> weak =
-      FindWeakDirections(layout, r.rts.cov, r.prior.sigma);
+      UnsupportedDirections(layout, r.rts.cov, r.prior.sigma);
   const std::vector<std::string> held = ParametersIn(weak);
   const std::set<std::string> held_set(held.begin(), held.end());
 

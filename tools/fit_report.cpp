@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "core/file_util.h"
+#include "solvers/observability.h"
 #include "solvers/estimate_json.h"
 
 namespace triadcal {
@@ -12,11 +13,10 @@ namespace triadcal {
 FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
   FitReport rep;
   rep.held.insert(r.held.begin(), r.held.end());
-  std::vector<int> free;
-  for (int i = 0; i < layout.size(); ++i) {
-    if (!rep.held.count(layout.info(i).name)) free.push_back(i);
-  }
-  rep.weak = FindWeakDirections(layout, r.estimate.cov, r.prior.sigma, free);
+  // The same analysis as `observability`, on the fit's own covariance. Held
+  // parameters are pinned far below their (original) prior sigma, so they
+  // come out determined and are reported as held instead.
+  rep.weak = UnsupportedDirections(layout, r.estimate.cov, r.prior.sigma);
   for (const std::string& s : ParametersIn(rep.weak)) rep.not_estimable.insert(s);
   rep.not_estimable.insert(rep.held.begin(), rep.held.end());
   for (int i = 0; i < layout.size(); ++i) {
@@ -36,6 +36,13 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
   if (!rep.held.empty()) {
     v << "; held at nominal (this run's motion does not determine them):";
     for (const std::string& s : r.held) v << " " << s;
+    if (!r.unsupported_at_start.empty()) {
+      v << " (undetermined:";
+      for (std::size_t k = 0; k < r.unsupported_at_start.size(); ++k) {
+        v << (k ? "; " : " ") << r.unsupported_at_start[k].description;
+      }
+      v << "; the other parameters of these directions are estimated relative to the held ones)";
+    }
   }
   if (rep.weak.empty()) {
     v << "; every other parameter estimable";
@@ -56,6 +63,7 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
   out["unobservable"] = WeakDirectionsJson(rep.weak);
   out["not_estimable"] = std::vector<std::string>(rep.not_estimable.begin(), rep.not_estimable.end());
   out["held"] = r.held;
+  out["unobservable_at_nominal"] = WeakDirectionsJson(r.unsupported_at_start);
   out["at_prior_bound"] = rep.at_prior_bound;
   out["verdict"] = rep.verdict;
   out["converged"] = r.converged;
