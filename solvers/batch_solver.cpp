@@ -108,6 +108,49 @@ std::vector<int> SupportedParameters(const Eigen::MatrixXd& cov, const Eigen::Ve
 
 }  // namespace
 
+HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data,
+                                  const ParameterLayout& layout, const HoldOptions& o) {
+  const int n = layout.size();
+  const int threads = o.threads > 0 ? o.threads : DefaultThreads();
+  HoldDecision d;
+  std::vector<bool> held(n, false);
+  if (o.auto_hold) {
+    // Decided at the nominal values (where a degenerate direction has no
+    // information at all) on the samples thinned to decimation_hz: the
+    // information scales with the samples, so the thresholds are scaled too.
+    const std::size_t m = ThinningFactor(data, o.decimation_hz);
+    const RunData thin = Decimate(data, m);
+    const RunProblem pt = BuildRunProblem(run, thin, layout, o.epoch_s, o.derivatives);
+    const BatchLinearization lt = Linearize(pt, pt.prior.mean, true, threads);
+    Eigen::MatrixXd At;
+    Eigen::VectorXd bt;
+    ThetaRows(pt, true, &At, &bt);
+    const Eigen::MatrixXd cov0 = ThetaCovariance(pt, lt, pt.prior.mean, At, threads);
+    ObservabilityThresholds th;
+    th.unobservable /= static_cast<double>(m);
+    th.weak /= static_cast<double>(m);
+    d.unsupported = UnsupportedDirections(layout, cov0, pt.prior.sigma, th);
+    held.assign(n, true);
+    Eigen::VectorXd min_info(n);
+    for (int i = 0; i < n; ++i) {
+      min_info[i] = (i < kNumBaseParams ? o.min_information : o.min_information_effects) /
+                    static_cast<double>(m);
+    }
+    for (int i : SupportedParameters(cov0, pt.prior.sigma, min_info)) held[i] = false;
+  }
+  auto index_of = [&](const std::string& name) {
+    const int i = layout.IndexOf(name);
+    if (i < 0) throw InputError("--hold/--free: unknown parameter '" + name + "'");
+    return i;
+  };
+  for (const std::string& h : o.hold) held[index_of(h)] = true;
+  for (const std::string& f : o.free) held[index_of(f)] = false;
+  for (int i = 0; i < n; ++i) {
+    if (held[i]) d.held.push_back(layout.info(i).name);
+  }
+  return d;
+}
+
 BatchResult SolveBatch(const RunDescription& run, const RunData& data,
                        const ParameterLayout& layout, const BatchOptions& opt) {
   const auto t_start = std::chrono::steady_clock::now();
@@ -124,50 +167,27 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   res.prior = p.prior;
   res.epochs = static_cast<int>(E);
   res.linear_solver = opt.linear_solver;
-  // What to hold, decided at the nominal values (where a degenerate direction
-  // has no information at all) on the samples thinned as for the start: the
-  // information scales with the samples, so the threshold is scaled with them.
   RunDescription run_held = run;
   if (opt.auto_hold || !opt.hold.empty()) {
     say("choosing the parameters this run supports");
-    std::vector<bool> held(n, false);
-    if (opt.auto_hold) {
-      const std::size_t m = ThinningFactor(data, opt.init_decimation_hz);
-      const RunData thin = Decimate(data, m);
-      const RunProblem pt = BuildRunProblem(run, thin, layout, opt.epoch_s, opt.derivatives);
-      const BatchLinearization lt = Linearize(pt, pt.prior.mean, true, threads);
-      Eigen::MatrixXd At;
-      Eigen::VectorXd bt;
-      ThetaRows(pt, true, &At, &bt);
-      const Eigen::MatrixXd cov0 = ThetaCovariance(pt, lt, pt.prior.mean, At, threads);
-      ObservabilityThresholds th;
-      th.unobservable /= static_cast<double>(m);  // information scales with the samples
-      th.weak /= static_cast<double>(m);
-      res.unsupported_at_start = UnsupportedDirections(layout, cov0, pt.prior.sigma, th);
-      held.assign(n, true);
-      Eigen::VectorXd min_info(n);
-      for (int i = 0; i < n; ++i) {
-        min_info[i] = (i < kNumBaseParams ? opt.hold_min_information
-                                          : opt.hold_min_information_effects) /
-                      static_cast<double>(m);
-      }
-      for (int i : SupportedParameters(cov0, pt.prior.sigma, min_info)) {
-        held[i] = false;
-      }
-    }
-    auto index_of = [&](const std::string& name) {
+    HoldOptions ho;
+    ho.auto_hold = opt.auto_hold;
+    ho.min_information = opt.hold_min_information;
+    ho.min_information_effects = opt.hold_min_information_effects;
+    ho.hold = opt.hold;
+    ho.free = opt.free;
+    ho.epoch_s = opt.epoch_s;
+    ho.derivatives = opt.derivatives;
+    ho.decimation_hz = opt.init_decimation_hz;
+    ho.threads = threads;
+    const HoldDecision hd = ChooseHeldParameters(run, data, layout, ho);
+    res.unsupported_at_start = hd.unsupported;
+    res.held = hd.held;
+    for (const std::string& name : hd.held) {
       const int i = layout.IndexOf(name);
-      if (i < 0) throw InputError("--hold/--free: unknown parameter '" + name + "'");
-      return i;
-    };
-    for (const std::string& h : opt.hold) held[index_of(h)] = true;
-    for (const std::string& f : opt.free) held[index_of(f)] = false;
-    for (int i = 0; i < n; ++i) {
-      if (!held[i]) continue;
-      res.held.push_back(layout.info(i).name);
       // Pinned with a prior a million times tighter, here and in the start.
       p.prior.sigma[i] *= 1e-6;
-      run_held.prior_sigma[layout.info(i).name] = p.prior.sigma[i] / layout.info(i).si_per_unit;
+      run_held.prior_sigma[name] = p.prior.sigma[i] / layout.info(i).si_per_unit;
     }
   }
 

@@ -129,4 +129,23 @@ struct BatchResult {
 BatchResult SolveBatch(const RunDescription& run, const RunData& data,
                        const ParameterLayout& layout, const BatchOptions& options);
 
+// The hold decision alone (what fit does first; filter uses it too): see
+// BatchOptions::auto_hold. Costs one linearisation of the run thinned to
+// decimation_hz.
+struct HoldOptions {
+  bool auto_hold = true;
+  double min_information = 100.0, min_information_effects = 10.0;
+  std::vector<std::string> hold, free;
+  double epoch_s = 0.2;
+  AngleDerivativeOptions derivatives;
+  int decimation_hz = 100;
+  int threads = 0;
+};
+struct HoldDecision {
+  std::vector<std::string> held;
+  std::vector<WeakDirection> unsupported;  // at the nominal values, before holding
+};
+HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data,
+                                  const ParameterLayout& layout, const HoldOptions& options);
+
 }  // namespace triadcal

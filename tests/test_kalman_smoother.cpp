@@ -135,3 +135,42 @@ TEST(FilterCommand, BadRunFileGivesOneLineAndNoOutput) {
 
 }  // namespace
 }  // namespace triadcal
+
+namespace triadcal {
+namespace {
+
+// The command says plainly what it cannot separate: by default it holds
+// dlambda2 and names the direction; without holding it names all three.
+TEST(FilterCommand, NamesTheInnerAxisRotationWithoutTheConstraint) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(testing::TempDir()) / "filter_nc";
+  fs::remove_all(dir);
+  const std::string bin = TRIADCAL_BIN;
+  const std::string scen = std::string(TRIADCAL_SOURCE_DIR) + "/examples/paper-experiment3/scenario.yaml";
+  ASSERT_EQ(std::system((bin + " simulate " + scen + " -o " + dir.string() + " > /dev/null").c_str()), 0);
+  std::string yaml;
+  {
+    std::ifstream in(dir / "run.yaml");
+    yaml.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  std::ofstream(dir / "run.yaml") << yaml.substr(0, yaml.find("constraints:")) << "constraints: []\n";
+  auto run = [&](const std::string& extra) {
+    const std::string out = (dir / "out.txt").string();
+    EXPECT_EQ(std::system((bin + " filter " + (dir / "run.yaml").string() + " -o " +
+                           (dir / "f.json").string() + extra + " > " + out).c_str()),
+              0);
+    std::ifstream in(out);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  };
+  const std::string held = run("");
+  EXPECT_NE(held.find("HELD at nominal (this run's motion does not determine them): dlambda2"),
+            std::string::npos)
+      << held;
+  EXPECT_NE(held.find("common rotation of the triad about the inner bench axis"), std::string::npos);
+  const std::string free = run(" --no-auto-hold");
+  EXPECT_NE(free.find("NOT SEPARABLE in this run: gamma_y, gamma_z, dlambda2"), std::string::npos)
+      << free;
+}
+
+}  // namespace
+}  // namespace triadcal

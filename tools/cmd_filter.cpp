@@ -11,6 +11,7 @@
 #include "core/file_util.h"
 #include "core/units.h"
 #include "solvers/observability.h"
+#include "solvers/batch_solver.h"
 #include "solvers/estimate_json.h"
 #include "solvers/kalman_smoother.h"
 #include "solvers/separability.h"
@@ -25,7 +26,8 @@ struct FilterArgs {
   double epoch_s = 0.2;
   double rate_window_s = 0.1;
   int iterations = 2;
-  bool correlations = false;
+  bool correlations = false, no_auto_hold = false;
+  std::string hold, free;
 };
 
 std::string SeriesCsv(const ParameterLayout& layout, const FilterResult& r) {
@@ -70,15 +72,36 @@ int RunFilter(const FilterArgs& a) {
     ShowProgress("filter: pass " + std::to_string(pass), f);
   };
   if (a.iterations < 1) throw InputError("--iterations: must be >= 1");
-  const FilterResult r = RunFilterSmoother(run.description, run.data, layout, opt);
+  // The same hold decision as fit: parameters the run's motion does not
+  // determine are pinned to their nominal values (a prior a million times
+  // tighter), so that the filter does not wander along flat directions.
+  RunDescription run_held = run.description;
+  HoldDecision hd;
+  const Prior prior = MakePrior(run.description, layout);
+  if (!a.no_auto_hold || !a.hold.empty()) {
+    HoldOptions ho;
+    ho.auto_hold = !a.no_auto_hold;
+    ho.hold = SplitList(a.hold);
+    ho.free = SplitList(a.free);
+    ho.epoch_s = a.epoch_s;
+    ho.derivatives = opt.derivatives;
+    hd = ChooseHeldParameters(run.description, run.data, layout, ho);
+    for (const std::string& name : hd.held) {
+      const int i = layout.IndexOf(name);
+      run_held.prior_sigma[name] = 1e-6 * prior.sigma[i] / layout.info(i).si_per_unit;
+    }
+  }
+  const FilterResult r = RunFilterSmoother(run_held, run.data, layout, opt);
   EndProgress();
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-  const std::vector<WeakDirection> weak =
-      UnsupportedDirections(layout, r.rts.cov, r.prior.sigma);
-  const std::vector<std::string> held = ParametersIn(weak);
+  // Against the run's own prior: held parameters come out determined there.
+  const std::vector<WeakDirection> weak = UnsupportedDirections(layout, r.rts.cov, prior.sigma);
+  std::vector<std::string> held = ParametersIn(weak);
+  held.insert(held.end(), hd.held.begin(), hd.held.end());
   const std::set<std::string> held_set(held.begin(), held.end());
+  const std::set<std::string> pinned(hd.held.begin(), hd.held.end());
 
   nlohmann::json out;
   out["command"] = "filter";
@@ -88,6 +111,8 @@ int RunFilter(const FilterArgs& a) {
   if (a.correlations) out["rts"]["correlation"] = CorrelationJson(layout, r.rts.cov);
   out["unobservable"] = WeakDirectionsJson(weak);
   out["not_estimable"] = held;
+  out["held"] = hd.held;
+  out["unobservable_at_nominal"] = WeakDirectionsJson(hd.unsupported);
   out["settings"] = {{"epoch_s", a.epoch_s},
                      {"epochs", r.epochs},
                      {"passes", r.passes},
@@ -114,17 +139,35 @@ int RunFilter(const FilterArgs& a) {
     const double f = p.si_per_unit;
     std::printf("%-26s %14.5g %10.3g %14.5g %10.3g  %s%s\n", p.name.c_str(), r.ekf.theta[i] / f,
                 std::sqrt(r.ekf.cov(i, i)) / f, r.rts.theta[i] / f, std::sqrt(r.rts.cov(i, i)) / f,
-                p.unit.c_str(), held_set.count(p.name) ? "  (not estimable: prior value)" : "");
+                p.unit.c_str(),
+                pinned.count(p.name)     ? "  (held at nominal)"
+                : held_set.count(p.name) ? "  (not estimable: prior value)"
+                                         : "");
   }
   std::printf("innovations: mean NIS %.2f (6 expected for a consistent filter)\n", r.mean_nis);
+  auto advice = [](const WeakDirection& d) {
+    for (const auto& w : d.weights) {
+      if (w.first == "dlambda2") return " A constraint such as dpsi - dlambda2 in run.yaml fixes it.";
+    }
+    return "";
+  };
+  if (!hd.held.empty()) {
+    std::string names;
+    for (const std::string& h : hd.held) names += (names.empty() ? "" : ", ") + h;
+    std::printf("HELD at nominal (this run's motion does not determine them): %s\n", names.c_str());
+    for (const WeakDirection& d : hd.unsupported) {
+      std::printf("  undetermined: %s; its other parameters are estimated relative to the held "
+                  "ones.%s\n",
+                  d.description.c_str(), advice(d));
+    }
+  }
   for (const WeakDirection& d : weak) {
     std::string names;
     for (const auto& w : d.weights) names += (names.empty() ? "" : ", ") + w.first;
     std::printf(
         "NOT SEPARABLE in this run: %s -- %s. Their values above are the prior's, not "
-        "estimates (sigma %.0f%% of the prior); add a constraint (e.g. dpsi - dlambda2) to fix "
-        "them.\n",
-        names.c_str(), d.description.c_str(), 100.0 * d.sigma_ratio);
+        "estimates (sigma %.0f%% of the prior).%s\n",
+        names.c_str(), d.description.c_str(), 100.0 * d.sigma_ratio, advice(d));
   }
   std::printf("wrote %s%s%s\n", a.out_json.c_str(), a.series_csv.empty() ? "" : " and ",
               a.series_csv.c_str());
@@ -151,6 +194,11 @@ Command AddFilterCommand(CLI::App& app) {
       ->capture_default_str();
   c.app->add_option("--effects", args->effects, "catalogue effects to estimate too, e.g. a,b");
   c.app->add_flag("--correlations", args->correlations, "add the correlation matrix to OUT");
+  c.app->add_option("--hold", args->hold, "parameters to hold at their nominal values, e.g. dpsi,Kxy");
+  c.app->add_option("--free", args->free, "parameters to estimate even if the run barely supports them");
+  c.app->add_flag("--no-auto-hold", args->no_auto_hold,
+                  "estimate every parameter (by default those the run's motion does not support "
+                  "are held at nominal, as in fit)");
   c.run = [args] { return RunFilter(*args); };
   return c;
 }
