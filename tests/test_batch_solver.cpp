@@ -238,3 +238,29 @@ TEST(FitCommand, FitAndCompareWriteTheirOutputs) {
 
 }  // namespace
 }  // namespace triadcal
+
+namespace triadcal {
+namespace {
+
+// A missing output folder is reported before any work, in one line.
+TEST(FitCommand, MissingOutputFolderFailsFirst) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(testing::TempDir()) / "fit_outdir";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string bin = TRIADCAL_BIN;
+  const std::string scen = std::string(TRIADCAL_SOURCE_DIR) + "/examples/noise-free/scenario.yaml";
+  ASSERT_EQ(std::system((bin + " simulate " + scen + " -o " + (dir / "run").string() + " > /dev/null").c_str()), 0);
+  const std::string out = (dir / "no" / "out.json").string();
+  for (const char* cmd : {"fit", "filter", "compare", "diagnose"}) {
+    EXPECT_NE(std::system((bin + " " + cmd + " " + (dir / "run" / "run.yaml").string() + " -o " +
+                           out + " 2> " + (dir / "err.txt").string() + " > /dev/null").c_str()),
+              0);
+    EXPECT_EQ(Slurp((dir / "err.txt").string()),
+              "triadcal: error: " + out + ": cannot write (folder missing or not writable)\n")
+        << cmd;
+  }
+}
+
+}  // namespace
+}  // namespace triadcal

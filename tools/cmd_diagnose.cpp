@@ -94,12 +94,13 @@ nlohmann::json StateJson(const ParameterLayout& layout, const BatchResult& r,
 }
 
 int RunDiagnose(const DiagnoseArgs& a) {
+  CheckOutputPath(a.out_json);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
   DiagnoseOptions opt;
   opt.alpha = a.alpha;
   opt.max_effects = a.max_effects;
   opt.fit.epoch_s = a.epoch_s;
-  opt.candidates = ParseEffectList(a.candidates);
+  opt.candidates = ParseEffectList(a.candidates, "--candidates");
   opt.progress = [](const std::string& s) { ShowProgress("diagnose: " + s, 0.0); };
   if (!(a.alpha > 0.0 && a.alpha < 1.0)) throw InputError("--alpha: must be in (0, 1)");
   std::map<std::string, double> truth;

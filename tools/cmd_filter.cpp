@@ -61,6 +61,8 @@ std::string SeriesCsv(const ParameterLayout& layout, const FilterResult& r) {
 
 int RunFilter(const FilterArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
+  CheckOutputPath(a.out_json);
+  if (!a.series_csv.empty()) CheckOutputPath(a.series_csv);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
   const ParameterLayout layout(ParseEffectList(a.effects));
   FilterOptions opt;

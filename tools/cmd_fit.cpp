@@ -31,6 +31,8 @@ int RunFit(const FitArgs& a) {
   if (a.init != "rts" && a.init != "nominal") {
     throw InputError("--init: expected rts or nominal, got '" + a.init + "'");
   }
+  CheckOutputPath(a.out_json);
+  if (!a.residuals_csv.empty()) CheckOutputPath(a.residuals_csv);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
   const ParameterLayout layout(ParseEffectList(a.effects));
   BatchOptions opt;

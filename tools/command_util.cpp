@@ -1,6 +1,7 @@
 #include "tools/command_util.h"
 
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <sstream>
 #include <unistd.h>
@@ -30,13 +31,13 @@ std::vector<std::string> SplitList(const std::string& list) {
   return out;
 }
 
-std::vector<Effect> ParseEffectList(const std::string& list) {
+std::vector<Effect> ParseEffectList(const std::string& list, const std::string& option) {
   std::vector<Effect> out;
   for (const std::string& item : SplitList(list)) {
     try {
       out.push_back(EffectFromName(item));
     } catch (const std::invalid_argument& e) {
-      throw InputError(std::string("--effects: ") + e.what());
+      throw InputError(option + ": " + e.what());
     }
   }
   return out;
@@ -60,6 +61,15 @@ void EndProgress() {
   if (ProgressShown()) {
     std::fprintf(stderr, "\r%60s\r", "");
     ProgressShown() = false;
+  }
+}
+
+void CheckOutputPath(const std::string& path) {
+  namespace fs = std::filesystem;
+  fs::path dir = fs::path(path).parent_path();
+  if (dir.empty()) dir = ".";
+  if (!fs::is_directory(dir) || access(dir.c_str(), W_OK) != 0) {
+    throw InputError(path + ": cannot write (folder missing or not writable)");
   }
 }
 

@@ -25,8 +25,13 @@ LoadedRun LoadRunOrThrow(const std::string& run_yaml);
 // "a,b" -> {"a", "b"} (empty items dropped).
 std::vector<std::string> SplitList(const std::string& list);
 
-// "a,b" -> effects; throws InputError("--effects: unknown effect ...").
-std::vector<Effect> ParseEffectList(const std::string& list);
+// "a,b" -> effects; throws InputError("OPTION: unknown effect ...").
+std::vector<Effect> ParseEffectList(const std::string& list,
+                                    const std::string& option = "--effects");
+
+// Fails early (before long work) when an output file's folder is missing or
+// not writable: InputError("PATH: cannot write (folder missing or not writable)").
+void CheckOutputPath(const std::string& path);
 
 // A progress line on stderr ("filter: pass 1/2  37%"), only on a terminal.
 void ShowProgress(const std::string& what, double fraction);
