@@ -3,8 +3,6 @@
 #include <ceres/ceres.h>
 
 #include <chrono>
-#include <cstdio>
-#include <cstdlib>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -109,18 +107,20 @@ std::vector<int> SupportedParameters(const Eigen::MatrixXd& cov, const Eigen::Ve
 }  // namespace
 
 HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data,
-                                  const ParameterLayout& layout, const HoldOptions& o) {
+                                  const ParameterLayout& layout, const HoldPolicy& o,
+                                  double epoch_s, const AngleDerivativeOptions& derivatives,
+                                  int decimation_hz, int threads) {
   const int n = layout.size();
-  const int threads = o.threads > 0 ? o.threads : DefaultThreads();
+  if (threads <= 0) threads = DefaultThreads();
   HoldDecision d;
   std::vector<bool> held(n, false);
   if (o.auto_hold) {
     // Decided at the nominal values (where a degenerate direction has no
     // information at all) on the samples thinned to decimation_hz: the
     // information scales with the samples, so the thresholds are scaled too.
-    const std::size_t m = ThinningFactor(data, o.decimation_hz);
+    const std::size_t m = ThinningFactor(data, decimation_hz);
     const RunData thin = Decimate(data, m);
-    const RunProblem pt = BuildRunProblem(run, thin, layout, o.epoch_s, o.derivatives);
+    const RunProblem pt = BuildRunProblem(run, thin, layout, epoch_s, derivatives);
     const BatchLinearization lt = Linearize(pt, pt.prior.mean, true, threads);
     Eigen::MatrixXd At;
     Eigen::VectorXd bt;
@@ -168,19 +168,10 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   res.epochs = static_cast<int>(E);
   res.linear_solver = opt.linear_solver;
   RunDescription run_held = run;
-  if (opt.auto_hold || !opt.hold.empty()) {
+  if (opt.holding.auto_hold || !opt.holding.hold.empty()) {
     say("choosing the parameters this run supports");
-    HoldOptions ho;
-    ho.auto_hold = opt.auto_hold;
-    ho.min_information = opt.hold_min_information;
-    ho.min_information_effects = opt.hold_min_information_effects;
-    ho.hold = opt.hold;
-    ho.free = opt.free;
-    ho.epoch_s = opt.epoch_s;
-    ho.derivatives = opt.derivatives;
-    ho.decimation_hz = opt.init_decimation_hz;
-    ho.threads = threads;
-    const HoldDecision hd = ChooseHeldParameters(run, data, layout, ho);
+    const HoldDecision hd = ChooseHeldParameters(run, data, layout, opt.holding, opt.epoch_s,
+                                                 opt.derivatives, opt.init_decimation_hz, threads);
     res.unsupported_at_start = hd.unsupported;
     res.held = hd.held;
     for (const std::string& name : hd.held) {
@@ -287,7 +278,6 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
     cost_prev = cost_here;
     ceres::Solver::Summary summary;
     ceres::Solve(so, problem.get(), &summary);
-    if (std::getenv("TRIADCAL_CERES_REPORT")) std::fprintf(stderr, "%s\n", summary.FullReport().c_str());
     if (summary.termination_type == ceres::FAILURE) {
       throw std::runtime_error("Ceres failed: " + summary.message);
     }

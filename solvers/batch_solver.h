@@ -55,6 +55,22 @@ namespace triadcal {
 
 enum class BatchInit { kRts, kNominal, kGiven };
 
+// Parameters held at their nominal values. auto_hold holds those the run's
+// motion does not support: a pivoted Cholesky of the data information (in
+// units of the prior) at the nominal values keeps, most informative first,
+// every parameter with at least min_information left once the kept ones are
+// known, and holds the rest. `hold` adds to the held set, `free` removes.
+struct HoldPolicy {
+  bool auto_hold = true;
+  // Base parameters need 100 (posterior sigma <~ 0.1 prior sigma): below that
+  // a nearly flat direction lets the nonlinear fit wander (a single-axis run's
+  // dpsi trades against W0y and the scale factors). Effect parameters, whose
+  // priors are only a size scale, need 10 (<~ 0.3 prior sigma).
+  double min_information = 100.0;
+  double min_information_effects = 10.0;
+  std::vector<std::string> hold, free;
+};
+
 struct BatchOptions {
   double epoch_s = 0.2;
   AngleDerivativeOptions derivatives;
@@ -71,19 +87,7 @@ struct BatchOptions {
   bool compute_covariance = true;
   std::string covariance_method = "schur";  // | ceres (sparse QR; used with a robust loss)
   int threads = 0;                // 0: all cores
-  // Parameters held at their nominal values. auto_hold holds those the run's
-  // motion does not support: a pivoted Cholesky of the data information (in
-  // units of the prior) at the start keeps, most informative first, every
-  // parameter with at least hold_min_information left once the kept ones are
-  // known, and holds the rest. `hold` adds to the held set, `free` removes.
-  bool auto_hold = true;
-  // Base parameters need 100 (posterior sigma <~ 0.1 prior sigma): below that
-  // a nearly flat direction lets the nonlinear fit wander (a single-axis run's
-  // dpsi trades against W0y and the scale factors). Effect parameters, whose
-  // priors are only a size scale, need 10 (<~ 0.3 prior sigma).
-  double hold_min_information = 100.0;
-  double hold_min_information_effects = 10.0;
-  std::vector<std::string> hold, free;
+  HoldPolicy holding;            // which parameters to hold at nominal
   std::function<void(const std::string&)> progress;  // one line per stage
 };
 
@@ -129,23 +133,15 @@ struct BatchResult {
 BatchResult SolveBatch(const RunDescription& run, const RunData& data,
                        const ParameterLayout& layout, const BatchOptions& options);
 
-// The hold decision alone (what fit does first; filter uses it too): see
-// BatchOptions::auto_hold. Costs one linearisation of the run thinned to
-// decimation_hz.
-struct HoldOptions {
-  bool auto_hold = true;
-  double min_information = 100.0, min_information_effects = 10.0;
-  std::vector<std::string> hold, free;
-  double epoch_s = 0.2;
-  AngleDerivativeOptions derivatives;
-  int decimation_hz = 100;
-  int threads = 0;
-};
+// The hold decision alone (what fit does first; filter uses it too). Costs one
+// linearisation of the run thinned to decimation_hz.
 struct HoldDecision {
   std::vector<std::string> held;
   std::vector<WeakDirection> unsupported;  // at the nominal values, before holding
 };
 HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data,
-                                  const ParameterLayout& layout, const HoldOptions& options);
+                                  const ParameterLayout& layout, const HoldPolicy& policy,
+                                  double epoch_s, const AngleDerivativeOptions& derivatives,
+                                  int decimation_hz = 100, int threads = 0);
 
 }  // namespace triadcal

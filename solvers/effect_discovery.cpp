@@ -18,9 +18,9 @@ BatchResult FitLayout(const RunDescription& run, const RunData& data,
   BatchOptions o = base;
   o.init = BatchInit::kGiven;
   o.init_theta = start;
-  o.hold = hold;
-  o.free = free;
-  o.auto_hold = true;  // decides only the new effect's parameters: the rest are hold/free
+  o.holding.hold = hold;
+  o.holding.free = free;
+  o.holding.auto_hold = true;  // decides only the new effect's parameters: the rest are hold/free
   o.compute_covariance = covariance;
   return SolveBatch(run, data, layout, o);
 }

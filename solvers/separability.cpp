@@ -119,20 +119,14 @@ std::string Describe(const Weights& w) {
 
 }  // namespace
 
-std::vector<WeakDirection> FindWeakDirections(const ParameterLayout& layout,
-                                              const Eigen::MatrixXd& posterior_cov,
-                                              const Eigen::VectorXd& prior_sigma,
-                                              double min_information) {
-  std::vector<int> all(prior_sigma.size());
-  for (int i = 0; i < static_cast<int>(all.size()); ++i) all[i] = i;
-  return FindWeakDirections(layout, posterior_cov, prior_sigma, all, min_information);
-}
+namespace {
 
-std::vector<WeakDirection> FindWeakDirections(const ParameterLayout& layout,
-                                              const Eigen::MatrixXd& posterior_cov,
-                                              const Eigen::VectorXd& prior_sigma,
-                                              const std::vector<int>& subset,
-                                              double min_information) {
+// Weak directions among the parameters in `subset` (the others marginalised).
+std::vector<WeakDirection> WeakDirectionsOf(const ParameterLayout& layout,
+                                            const Eigen::MatrixXd& posterior_cov,
+                                            const Eigen::VectorXd& prior_sigma,
+                                            const std::vector<int>& subset,
+                                            double min_information) {
   const int m = static_cast<int>(subset.size());
   Eigen::MatrixXd cov(m, m);
   Eigen::VectorXd sig(m);
@@ -167,8 +161,19 @@ std::vector<WeakDirection> FindWeakDirections(const ParameterLayout& layout,
   return dirs;
 }
 
+}  // namespace
+
 std::string DescribeDirection(const std::vector<std::pair<std::string, double>>& weights) {
   return Describe(weights);
+}
+
+std::vector<WeakDirection> FindWeakDirections(const ParameterLayout& layout,
+                                              const Eigen::MatrixXd& posterior_cov,
+                                              const Eigen::VectorXd& prior_sigma,
+                                              double min_information) {
+  std::vector<int> all(prior_sigma.size());
+  for (int i = 0; i < static_cast<int>(all.size()); ++i) all[i] = i;
+  return WeakDirectionsOf(layout, posterior_cov, prior_sigma, all, min_information);
 }
 
 std::vector<std::string> ParametersIn(const std::vector<WeakDirection>& dirs) {

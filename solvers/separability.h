@@ -32,14 +32,6 @@ std::vector<WeakDirection> FindWeakDirections(const ParameterLayout& layout,
                                               const Eigen::VectorXd& prior_sigma,
                                               double min_information = 10.0);
 
-// The same over a subset of the parameters (indices into the layout), e.g. all
-// but those held at nominal values; the rest are marginalised out.
-std::vector<WeakDirection> FindWeakDirections(const ParameterLayout& layout,
-                                              const Eigen::MatrixXd& posterior_cov,
-                                              const Eigen::VectorXd& prior_sigma,
-                                              const std::vector<int>& subset,
-                                              double min_information = 10.0);
-
 // Names of the parameters that appear in any of the directions.
 std::vector<std::string> ParametersIn(const std::vector<WeakDirection>& dirs);
 

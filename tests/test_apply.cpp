@@ -20,6 +20,7 @@
 
 #include "core/bench_model.h"
 #include "core/errors.h"
+#include "tests/temp_dir_test.h"
 #include "core/file_util.h"
 #include "core/run_data.h"
 #include "core/run_description.h"
@@ -31,22 +32,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class ApplyTest : public ::testing::Test {
+class ApplyTest : public testing_fixtures::TempDirTest {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() / ("triadcal_" + std::string(info->test_suite_name()) + "_" +
-                                        info->name() + "_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
   std::string Write(const std::string& name, const std::string& text) const {
-    std::ofstream(Path(name), std::ios::binary) << text;
-    return Path(name);
+    return WriteText(name, text);
   }
-  fs::path dir_;
 };
 
 // A calibration with every sensor-stage parameter non-zero, in file units.

@@ -150,7 +150,7 @@ TEST(Diagnose, OuterSineEncoderErrorIsABaseModelReparametrisation) {
   sc.angle_noise_rad = 0.0;
   const RunData data = Simulate(sc);
   BatchOptions opt;
-  opt.auto_hold = false;
+  opt.holding.auto_hold = false;
   const BatchResult r = SolveBatch(sc.run, data, ParameterLayout(), opt);
   const Eigen::VectorXd& th = r.estimate.theta;
   EXPECT_NEAR(th[kW0x] - sc.truth[kW0x], sc.truth[kKx] * s, 0.05 * sc.truth[kKx] * s);

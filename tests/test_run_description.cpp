@@ -12,6 +12,7 @@
 #include <string>
 
 #include "core/errors.h"
+#include "tests/temp_dir_test.h"
 #include "core/run_description.h"
 #include "core/units.h"
 
@@ -20,16 +21,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class RunDescriptionTest : public ::testing::Test {
+class RunDescriptionTest : public testing_fixtures::TempDirTest {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() / ("triadcal_" + std::string(info->test_suite_name()) + "_" +
-                                        info->name() + "_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
 
   // Writes run.yaml (and an empty run.csv beside it) and returns its path.
   std::string WriteYaml(const std::string& text, const std::string& name = "run.yaml") {
@@ -52,7 +45,6 @@ class RunDescriptionTest : public ::testing::Test {
 
   std::string Path(const std::string& name = "run.yaml") const { return (dir_ / name).string(); }
 
-  fs::path dir_;
 };
 
 // Restores an environment variable on scope exit.

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "core/errors.h"
+#include "tests/temp_dir_test.h"
 #include "core/file_util.h"
 #include "core/run_description.h"
 #include "core/run_io.h"
@@ -26,23 +27,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class RunIoTest : public ::testing::Test {
+class RunIoTest : public testing_fixtures::TempDirTest {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() / ("triadcal_" + std::string(info->test_suite_name()) + "_" +
-                                        info->name() + "_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
 
-  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
 
-  std::string WriteText(const std::string& name, const std::string& text) const {
-    std::ofstream(Path(name), std::ios::binary) << text;
-    return Path(name);
-  }
 
   // A run description in code: the defaults of run.yaml and this data file.
   RunDescription Describe(const std::string& data_name) const {
@@ -74,7 +62,6 @@ class RunIoTest : public ::testing::Test {
     return ErrorOf(Describe("run.csv"));
   }
 
-  fs::path dir_;
 };
 
 // A plausible run: 1.5 kHz-like smooth values with no repeats, rates and temp.

@@ -26,8 +26,7 @@ struct DiagnoseArgs {
 
 // Truth values in file units keyed by layout parameter name; keys the file
 // has that we do not know are ignored (SPEC section 7).
-std::map<std::string, double> ReadTruth(const std::string& path, const ParameterLayout& a,
-                                        const ParameterLayout& b) {
+std::map<std::string, double> ReadTruth(const std::string& path) {
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(ReadFile(path));
@@ -49,8 +48,6 @@ std::map<std::string, double> ReadTruth(const std::string& path, const Parameter
       }
     }
   }
-  (void)a;
-  (void)b;
   return out;
 }
 
@@ -105,7 +102,7 @@ int RunDiagnose(const DiagnoseArgs& a) {
   if (!(a.alpha > 0.0 && a.alpha < 1.0)) throw InputError("--alpha: must be in (0, 1)");
   std::map<std::string, double> truth;
   // Read the truth first: a bad truth file must fail before the work.
-  if (!a.truth_json.empty()) truth = ReadTruth(a.truth_json, ParameterLayout(), ParameterLayout());
+  if (!a.truth_json.empty()) truth = ReadTruth(a.truth_json);
   const DiagnosisResult d = Diagnose(run.description, run.data, opt);
   EndProgress();
   const std::map<std::string, double>* tp = a.truth_json.empty() ? nullptr : &truth;
@@ -172,7 +169,6 @@ int RunDiagnose(const DiagnoseArgs& a) {
   std::printf("%-32s %14.4f %14.4f  (1 expected)\n", "chi2/dof", d.before.chi2_per_dof,
               d.after.chi2_per_dof);
 
-  const FitReport rb = MakeFitReport(d.before_layout, d.before);
   const FitReport ra = MakeFitReport(d.after_layout, d.after);
   std::printf("\n%-26s %13s %9s %13s %9s %8s", "parameter", "before", "sigma", "after", "sigma",
               "shift/s");
@@ -208,7 +204,6 @@ int RunDiagnose(const DiagnoseArgs& a) {
     }
     std::printf("  %s%s\n", p.unit.c_str(), held ? " (held)" : "");
   }
-  (void)rb;
   std::printf("wrote %s\n", a.out_json.c_str());
   return 0;
 }

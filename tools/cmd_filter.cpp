@@ -81,13 +81,11 @@ int RunFilter(const FilterArgs& a) {
   HoldDecision hd;
   const Prior prior = MakePrior(run.description, layout);
   if (!a.no_auto_hold || !a.hold.empty()) {
-    HoldOptions ho;
-    ho.auto_hold = !a.no_auto_hold;
-    ho.hold = SplitList(a.hold);
-    ho.free = SplitList(a.free);
-    ho.epoch_s = a.epoch_s;
-    ho.derivatives = opt.derivatives;
-    hd = ChooseHeldParameters(run.description, run.data, layout, ho);
+    HoldPolicy hp;
+    hp.auto_hold = !a.no_auto_hold;
+    hp.hold = SplitList(a.hold);
+    hp.free = SplitList(a.free);
+    hd = ChooseHeldParameters(run.description, run.data, layout, hp, a.epoch_s, opt.derivatives);
     for (const std::string& name : hd.held) {
       const int i = layout.IndexOf(name);
       run_held.prior_sigma[name] = 1e-6 * prior.sigma[i] / layout.info(i).si_per_unit;

@@ -44,9 +44,9 @@ int RunFit(const FitArgs& a) {
   opt.robust_scale = a.robust_scale;
   opt.threads = a.threads;
   opt.covariance_method = a.covariance;
-  opt.auto_hold = !a.no_auto_hold;
-  opt.hold = SplitList(a.hold);
-  opt.free = SplitList(a.free);
+  opt.holding.auto_hold = !a.no_auto_hold;
+  opt.holding.hold = SplitList(a.hold);
+  opt.holding.free = SplitList(a.free);
   opt.progress = [](const std::string& s) { ShowProgress("fit: " + s, 0.0); };
   const BatchResult r = SolveBatch(run.description, run.data, layout, opt);
   EndProgress();
