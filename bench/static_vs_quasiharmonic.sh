@@ -2,7 +2,7 @@
 # The paper's Table 2 columns on one simulated sensor: the standard static
 # method (40 min of bench positions) next to the quasi-harmonic batch (90 s of
 # the paper's profile), each with its sigma. The simulation and both fits are
-# the test StaticVsQuasiHarmonic.Table2 (tests/test_static_method.cpp); this
+# the test StaticVsQuasiHarmonic.Table2 (solvers/static/static_method_test.cpp); this
 # prints its table.
 #   bench/static_vs_quasiharmonic.sh [BUILD_DIR]      (default build)
 set -euo pipefail

@@ -4,8 +4,8 @@
 
 #include <cstdint>
 
-#include "core/simulator.h"
-#include "core/units.h"
+#include "core/simulation/simulator.h"
+#include "core/model/units.h"
 
 namespace triadcal {
 namespace testing_fixtures {

@@ -1,13 +1,13 @@
 // `triadcal apply CALIBRATION.json RUN.yaml -o corrected.csv`: raw readings ->
 // calibrated specific force [g] in the triad frame, by the exact inverse of the
-// readings model (solvers/apply_calibration.h).
+// readings model (core/model/apply_calibration.h).
 #include <cstdio>
 #include <memory>
 
-#include "core/column_mapping.h"
-#include "core/file_util.h"
-#include "core/units.h"
-#include "solvers/apply_calibration.h"
+#include "core/io/column_mapping.h"
+#include "core/io/file_util.h"
+#include "core/model/units.h"
+#include "core/io/calibration_io.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
 

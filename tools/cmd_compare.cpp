@@ -6,13 +6,13 @@
 #include <memory>
 #include <set>
 
-#include "core/errors.h"
-#include "solvers/batch_solver.h"
-#include "solvers/estimate_json.h"
-#include "solvers/kalman_smoother.h"
+#include "core/model/errors.h"
+#include "solvers/estimation/batch_solver.h"
+#include "tools/report/estimate_json.h"
+#include "solvers/estimation/kalman_smoother.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
-#include "tools/fit_report.h"
+#include "tools/report/fit_report.h"
 
 namespace triadcal {
 namespace {

@@ -1,5 +1,5 @@
 // `triadcal design SCENARIO.yaml -o OUT.json`: experiment design from the
-// Cramer-Rao bound of the scenario's profile (solvers/experiment_design.h):
+// Cramer-Rao bound of the scenario's profile (solvers/analysis/experiment_design.h):
 //   - sigma of every parameter against the run duration (15 s ... 40 min by
 //     default), for the quasi-harmonic profile and for a static multi-position
 //     test of the same total time;
@@ -17,13 +17,13 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/errors.h"
-#include "core/file_util.h"
-#include "core/simulator.h"
-#include "solvers/experiment_design.h"
+#include "core/model/errors.h"
+#include "core/io/file_util.h"
+#include "core/simulation/simulator.h"
+#include "solvers/analysis/experiment_design.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
-#include "tools/svg_plot.h"
+#include "tools/report/svg_plot.h"
 
 namespace triadcal {
 namespace {

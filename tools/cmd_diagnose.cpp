@@ -1,18 +1,18 @@
 // `triadcal diagnose RUN.yaml -o OUT.json [--truth truth.json]`: the closed
-// loop of SPEC section 8 (solvers/effect_discovery.h).
+// loop of SPEC section 8 (solvers/diagnosis/effect_discovery.h).
 #include <cmath>
 #include <cstdio>
 #include <memory>
 #include <set>
 
-#include "core/errors.h"
-#include "core/file_util.h"
-#include "core/simulator.h"
-#include "solvers/effect_discovery.h"
-#include "solvers/estimate_json.h"
+#include "core/model/errors.h"
+#include "core/io/file_util.h"
+#include "core/simulation/simulator.h"
+#include "solvers/diagnosis/effect_discovery.h"
+#include "tools/report/estimate_json.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
-#include "tools/fit_report.h"
+#include "tools/report/fit_report.h"
 
 namespace triadcal {
 namespace {

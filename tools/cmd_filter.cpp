@@ -1,5 +1,5 @@
 // `triadcal filter RUN.yaml -o OUT.json [--series FILE.csv]`: the paper's EKF
-// with the RTS smoother (solvers/kalman_smoother.h).
+// with the RTS smoother (solvers/estimation/kalman_smoother.h).
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -7,14 +7,14 @@
 #include <set>
 #include <sstream>
 
-#include "core/errors.h"
-#include "core/file_util.h"
-#include "core/units.h"
-#include "solvers/observability.h"
-#include "solvers/batch_solver.h"
-#include "solvers/estimate_json.h"
-#include "solvers/kalman_smoother.h"
-#include "solvers/separability.h"
+#include "core/model/errors.h"
+#include "core/io/file_util.h"
+#include "core/model/units.h"
+#include "solvers/estimation/observability.h"
+#include "solvers/estimation/batch_solver.h"
+#include "tools/report/estimate_json.h"
+#include "solvers/estimation/kalman_smoother.h"
+#include "solvers/estimation/separability.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
 

@@ -1,18 +1,18 @@
-// `triadcal fit RUN.yaml -o OUT.json`: the batch solution (solvers/batch_solver.h).
+// `triadcal fit RUN.yaml -o OUT.json`: the batch solution (solvers/estimation/batch_solver.h).
 #include <cmath>
 #include <cstdio>
 #include <memory>
 #include <set>
 #include <sstream>
 
-#include "core/errors.h"
-#include "core/file_util.h"
-#include "solvers/batch_solver.h"
-#include "solvers/estimate_json.h"
-#include "solvers/separability.h"
+#include "core/model/errors.h"
+#include "core/io/file_util.h"
+#include "solvers/estimation/batch_solver.h"
+#include "tools/report/estimate_json.h"
+#include "solvers/estimation/separability.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
-#include "tools/fit_report.h"
+#include "tools/report/fit_report.h"
 
 namespace triadcal {
 namespace {

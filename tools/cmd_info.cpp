@@ -1,8 +1,8 @@
 // `triadcal params`: the parameter names, units and effects that files use.
 #include <cstdio>
 
-#include "core/effects.h"
-#include "core/parameters.h"
+#include "core/model/effects.h"
+#include "core/model/parameters.h"
 #include "tools/commands.h"
 
 namespace triadcal {

@@ -1,7 +1,7 @@
 // `triadcal montecarlo SCENARIO.yaml -n N -o OUT.json`: N simulated runs of a
 // scenario through the EKF, the RTS smoother and the batch solver, their error
 // scatter against their own sigma and against the Cramer-Rao bound
-// (solvers/monte_carlo.h), in parallel over the cores.
+// (solvers/analysis/monte_carlo.h), in parallel over the cores.
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -9,9 +9,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/errors.h"
-#include "core/simulator.h"
-#include "solvers/monte_carlo.h"
+#include "core/model/errors.h"
+#include "core/simulation/simulator.h"
+#include "solvers/analysis/monte_carlo.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
 

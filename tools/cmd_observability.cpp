@@ -1,6 +1,6 @@
 // `triadcal observability RUN.yaml|SCENARIO.yaml -o OUT.json`: Cramer-Rao sigma
 // per parameter and the directions the run cannot determine, with and without
-// the constraints (solvers/observability.h).
+// the constraints (solvers/estimation/observability.h).
 //
 // RUN.yaml: the recorded motion and timing of the run, evaluated at the nominal
 // values or at --at FILE (a fit/filter OUT or a truth.json; better for a real
@@ -12,15 +12,15 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/errors.h"
-#include "core/file_util.h"
-#include "core/simulator.h"
-#include "core/yaml_fields.h"
-#include "solvers/experiment_design.h"
-#include "solvers/observability.h"
+#include "core/model/errors.h"
+#include "core/io/file_util.h"
+#include "core/simulation/simulator.h"
+#include "core/io/yaml_fields.h"
+#include "solvers/analysis/experiment_design.h"
+#include "solvers/estimation/observability.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
-#include "tools/observability_report.h"
+#include "tools/report/observability_report.h"
 
 namespace triadcal {
 namespace {

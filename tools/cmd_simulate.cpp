@@ -5,8 +5,8 @@
 #include <memory>
 #include <string>
 
-#include "core/simulator.h"
-#include "core/units.h"
+#include "core/simulation/simulator.h"
+#include "core/model/units.h"
 #include "tools/commands.h"
 
 namespace triadcal {

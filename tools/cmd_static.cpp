@@ -1,5 +1,5 @@
 // `triadcal static RUN.yaml -o OUT.json`: the standard static method
-// (solvers/static_method.h): still intervals, averaged positions, and the
+// (solvers/static/static_method.h): still intervals, averaged positions, and the
 // readings model fitted to them with the angles, the position labels, or the
 // gravity norm as the reference.
 #include <algorithm>
@@ -9,11 +9,11 @@
 #include <set>
 #include <sstream>
 
-#include "core/column_mapping.h"
-#include "core/errors.h"
-#include "core/units.h"
-#include "solvers/estimate_json.h"
-#include "solvers/static_method.h"
+#include "core/io/column_mapping.h"
+#include "core/model/errors.h"
+#include "core/model/units.h"
+#include "tools/report/estimate_json.h"
+#include "solvers/static/static_method.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
 

@@ -6,9 +6,10 @@
 #include <sstream>
 #include <unistd.h>
 
-#include "core/errors.h"
-#include "core/file_util.h"
-#include "core/run_io.h"
+#include "core/model/errors.h"
+#include "core/io/file_util.h"
+#include "core/io/run_io.h"
+#include "core/io/run_description_io.h"
 
 namespace triadcal {
 

@@ -7,9 +7,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/effects.h"
-#include "core/run_data.h"
-#include "core/run_description.h"
+#include "core/model/effects.h"
+#include "core/model/run_data.h"
+#include "core/model/run_description.h"
 
 namespace triadcal {
 

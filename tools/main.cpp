@@ -5,7 +5,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "core/errors.h"
+#include "core/model/errors.h"
 #include "tools/commands.h"
 
 int main(int argc, char** argv) {

@@ -1,0 +1,316 @@
+// Channel table, unit factors, and parsing/writing of `columns:` and `mounting:`.
+#include "core/io/column_mapping.h"
+
+#include <cmath>
+
+#include "core/io/file_util.h"
+#include "core/model/units.h"
+
+namespace triadcal {
+
+namespace {
+
+const char* kAxisNames = "xyz";
+
+std::string JoinNames(const std::vector<std::string>& v) {
+  std::string s;
+  for (const std::string& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s;
+}
+
+ColumnSource ParseOneColumn(const ChannelInfo& ch, const YAML::Node& node, const YamlPlace& at) {
+  ColumnSource c;
+  c.unit = DefaultUnit(ch.kind);
+  if (node.IsScalar()) {
+    c.source = node.Scalar();
+    if (c.source.empty()) at.Fail("empty column name");
+    double number = 0.0;
+    if (node.Tag() == "?" && YAML::convert<double>::decode(node, number)) {
+      at.Fail("got the number " + c.source + "; write {value: " + c.source +
+              "} for a constant channel, or quote a column named \"" + c.source + "\"");
+    }
+    return c;
+  }
+  if (!node.IsMap()) {
+    at.Fail(
+        "expected a column name or a map {source: NAME, unit: ..., scale: ..., offset: ...}, "
+        "got " +
+        DescribeNode(node));
+  }
+  CheckKeys(node, at, {"source", "var", "unit", "scale", "offset", "value"});
+  int given = 0;
+  for (const char* key : {"source", "var"}) {
+    if (node[key]) {
+      c.source = ReadString(node[key], at.Child(key));
+      if (c.source.empty()) at.Child(key).Fail("empty column name");
+      ++given;
+    }
+  }
+  if (node["value"]) {
+    c.constant = ReadNumber(node["value"], at.Child("value"));
+    ++given;
+  }
+  if (given != 1) at.Fail("give exactly one of source, var or value");
+  if (node["unit"]) {
+    c.unit = ReadString(node["unit"], at.Child("unit"));
+    if (OurUnitsPerSourceUnit(ch.kind, c.unit) == 0.0) {
+      at.Child("unit").Fail("unknown unit '" + c.unit + "' for " + ch.name +
+                            " (allowed: " + JoinNames(AllowedUnits(ch.kind)) + ")");
+    }
+  }
+  if (node["scale"]) {
+    c.scale = ReadNumber(node["scale"], at.Child("scale"));
+    if (c.scale == 0.0) at.Child("scale").Fail("must not be 0");
+  }
+  if (node["offset"]) c.offset = ReadNumber(node["offset"], at.Child("offset"));
+  return c;
+}
+
+// columns.label: a column name, or {source: NAME} (no unit, scale or offset).
+ColumnSource ParseLabelColumn(const YAML::Node& node, const YamlPlace& at) {
+  ColumnSource c;
+  if (node.IsMap()) {
+    CheckKeys(node, at, {"source"});
+    if (!node["source"]) at.Fail("expected {source: NAME}");
+    c.source = ReadString(node["source"], at.Child("source"));
+  } else {
+    c.source = ReadString(node, at);
+  }
+  if (c.source.empty()) at.Fail("empty column name");
+  return c;
+}
+
+}  // namespace
+
+const std::vector<ChannelInfo>& Channels() {
+  static const std::vector<ChannelInfo> channels = {
+      {"t", ChannelKind::kTime, true},
+      {"lambda1", ChannelKind::kAngle, true},
+      {"lambda2", ChannelKind::kAngle, true},
+      {"wx", ChannelKind::kReading, true},
+      {"wy", ChannelKind::kReading, true},
+      {"wz", ChannelKind::kReading, true},
+      {"lambda1_rate", ChannelKind::kRate, false},
+      {"lambda2_rate", ChannelKind::kRate, false},
+      {"temp_C", ChannelKind::kTemperature, false},
+  };
+  return channels;
+}
+
+const ChannelInfo* FindChannel(const std::string& name) {
+  for (const ChannelInfo& c : Channels()) {
+    if (c.name == name) return &c;
+  }
+  return nullptr;
+}
+
+std::string DefaultUnit(ChannelKind kind) { return AllowedUnits(kind).front(); }
+
+std::vector<std::string> AllowedUnits(ChannelKind kind) {
+  switch (kind) {
+    case ChannelKind::kTime:
+      return {"s", "ms"};
+    case ChannelKind::kAngle:
+      return {"deg", "rad"};
+    case ChannelKind::kRate:
+      return {"deg/s", "rad/s"};
+    case ChannelKind::kReading:
+      return {"mV", "V", "g", "mg"};
+    case ChannelKind::kTemperature:
+      return {"C"};
+  }
+  return {};
+}
+
+double OurUnitsPerSourceUnit(ChannelKind kind, const std::string& unit) {
+  const std::string u = unit.empty() ? DefaultUnit(kind) : unit;
+  switch (kind) {
+    case ChannelKind::kTime:
+      return u == "s" ? 1.0 : u == "ms" ? kMsToS : 0.0;
+    case ChannelKind::kAngle:
+      return u == "deg" ? 1.0 : u == "rad" ? 1.0 / kDegToRad : 0.0;
+    case ChannelKind::kRate:
+      return u == "deg/s" ? 1.0 : u == "rad/s" ? 1.0 / kDegToRad : 0.0;
+    case ChannelKind::kReading:
+      // g and mg: 1 g = 1000 mV, i.e. a nominal scale of 1000 mV/g.
+      return u == "mV" ? 1.0 : u == "V" ? 1000.0 : u == "g" ? 1000.0 : u == "mg" ? 1.0 : 0.0;
+    case ChannelKind::kTemperature:
+      return u == "C" ? 1.0 : 0.0;
+  }
+  return 0.0;
+}
+
+double SiPerOurUnit(ChannelKind kind) {
+  return kind == ChannelKind::kAngle || kind == ChannelKind::kRate ? kDegToRad : 1.0;
+}
+
+std::map<std::string, ColumnSource> ParseColumns(const YAML::Node& node, const YamlPlace& at) {
+  std::map<std::string, ColumnSource> out;
+  if (node.IsNull()) return out;
+  std::vector<std::string> names;
+  for (const ChannelInfo& c : Channels()) names.push_back(c.name);
+  names.push_back(kLabelChannel);
+  CheckKeys(node, at, names);
+  for (const auto& kv : node) {
+    const std::string name = kv.first.Scalar();
+    if (name == kLabelChannel) {
+      out[name] = ParseLabelColumn(kv.second, at.Child(name));
+      continue;
+    }
+    out[name] = ParseOneColumn(*FindChannel(name), kv.second, at.Child(name));
+  }
+  return out;
+}
+
+std::string LabelSource(const RunDescription& run) {
+  auto it = run.columns.find(kLabelChannel);
+  return it == run.columns.end() ? "" : it->second.source;
+}
+
+std::map<std::string, Eigen::Vector3d> ParsePositions(const YAML::Node& node,
+                                                      const YamlPlace& at) {
+  if (!node.IsMap() || node.size() == 0) {
+    at.Fail("expected a map {LABEL: \"+x\" or [x, y, z]} of the direction that points up");
+  }
+  std::map<std::string, Eigen::Vector3d> out;
+  for (const auto& kv : node) {
+    const std::string label = kv.first.Scalar();
+    const YamlPlace p = at.Child(label);
+    if (out.count(label)) p.Fail("given twice");
+    Eigen::Vector3d v;
+    if (kv.second.IsSequence()) {
+      v = ReadVector3(kv.second, p);
+      if (!(v.norm() > 0.0)) p.Fail("the up direction must not be [0, 0, 0]");
+      v.normalize();
+    } else {
+      const std::string s = ReadString(kv.second, p);
+      const int axis = s.size() == 2 && (s[0] == '+' || s[0] == '-')
+                           ? static_cast<int>(std::string("xyz").find(s[1]))
+                           : -1;
+      if (axis < 0 || axis > 2) {
+        p.Fail("expected +x, -x, +y, -y, +z, -z or a list [x, y, z], got '" + s + "'");
+      }
+      v.setZero();
+      v[axis] = s[0] == '-' ? -1.0 : 1.0;
+    }
+    out[label] = v;
+  }
+  return out;
+}
+
+const std::map<std::string, Eigen::Vector3d>& DefaultLabelPositions() {
+  static const std::map<std::string, Eigen::Vector3d> positions = {
+      {"x_p", Eigen::Vector3d::UnitX()},  {"x_a", -Eigen::Vector3d::UnitX()},
+      {"y_p", Eigen::Vector3d::UnitY()},  {"y_a", -Eigen::Vector3d::UnitY()},
+      {"z_p", Eigen::Vector3d::UnitZ()},  {"z_a", -Eigen::Vector3d::UnitZ()},
+  };
+  return positions;
+}
+
+const std::map<std::string, Eigen::Vector3d>& PositionsOf(const RunDescription& run) {
+  return run.positions.empty() ? DefaultLabelPositions() : run.positions;
+}
+
+Eigen::Vector3d ImuToPlatform(const RunDescription& run, const Eigen::Vector3d& v_imu) {
+  Eigen::Vector3d v;
+  for (int i = 0; i < 3; ++i) v[i] = run.axis_sign[i] * v_imu[run.axis_source[i]];
+  return v;
+}
+
+void ParseMounting(const YAML::Node& node, const YamlPlace& at, RunDescription* run) {
+  CheckKeys(node, at, {"axes"});
+  if (!node["axes"]) at.Fail("missing 'axes' (e.g. axes: [\"+y\", \"-z\", \"+x\"])");
+  const YamlPlace axes_at = at.Child("axes");
+  const YAML::Node axes = node["axes"];
+  if (!axes.IsSequence() || axes.size() != 3) {
+    axes_at.Fail(
+        "expected a list of 3 signed IMU axes like [\"+y\", \"-z\", \"+x\"], got " +
+        (axes.IsSequence() ? std::to_string(axes.size()) + " entries" : DescribeNode(axes)));
+  }
+  bool used[3] = {false, false, false};
+  for (std::size_t i = 0; i < 3; ++i) {
+    const std::string s = ReadString(axes[i], axes_at.Index(i));
+    std::string letter = s;
+    double sign = 1.0;
+    if (!s.empty() && (s[0] == '+' || s[0] == '-')) {
+      sign = s[0] == '-' ? -1.0 : 1.0;
+      letter = s.substr(1);
+    }
+    int src = -1;
+    if (letter == "x" || letter == "X") src = 0;
+    if (letter == "y" || letter == "Y") src = 1;
+    if (letter == "z" || letter == "Z") src = 2;
+    if (src < 0) axes_at.Index(i).Fail("expected +x, -x, +y, -y, +z or -z, got '" + s + "'");
+    if (used[src]) {
+      axes_at.Fail(std::string("IMU axis ") + kAxisNames[src] +
+                   " used twice: the axes must be a signed permutation of x, y, z");
+    }
+    used[src] = true;
+    run->axis_source[i] = src;
+    run->axis_sign[i] = sign;
+  }
+}
+
+ColumnSource SourceOf(const RunDescription& run, const std::string& name) {
+  auto it = run.columns.find(name);
+  if (it != run.columns.end()) return it->second;
+  ColumnSource c;
+  c.source = name;
+  c.unit = DefaultUnit(FindChannel(name)->kind);
+  return c;
+}
+
+int MountingDeterminant(const RunDescription& run) {
+  // det of the signed permutation matrix P (row i has axis_sign[i] at column axis_source[i]).
+  int inversions = 0;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = i + 1; j < 3; ++j) inversions += run.axis_source[i] > run.axis_source[j];
+  }
+  double det = inversions % 2 ? -1.0 : 1.0;
+  for (int i = 0; i < 3; ++i) det *= run.axis_sign[i];
+  return det > 0 ? 1 : -1;
+}
+
+bool IsIdentityMounting(const RunDescription& run) {
+  for (int i = 0; i < 3; ++i) {
+    if (run.axis_source[i] != i || run.axis_sign[i] != 1.0) return false;
+  }
+  return true;
+}
+
+std::string MountingAxisText(const RunDescription& run, int i) {
+  return std::string(run.axis_sign[i] < 0 ? "-" : "+") + kAxisNames[run.axis_source[i]];
+}
+
+void EmitColumns(const std::map<std::string, ColumnSource>& columns, YAML::Emitter* out) {
+  *out << YAML::BeginMap;
+  if (auto it = columns.find(kLabelChannel); it != columns.end()) {
+    *out << YAML::Key << kLabelChannel << YAML::Value << YAML::DoubleQuoted << it->second.source;
+  }
+  for (const ChannelInfo& ch : Channels()) {
+    auto it = columns.find(ch.name);
+    if (it == columns.end()) continue;
+    const ColumnSource& c = it->second;
+    const std::string unit = c.unit.empty() ? DefaultUnit(ch.kind) : c.unit;
+    *out << YAML::Key << ch.name << YAML::Value;
+    const bool plain =
+        !c.constant && unit == DefaultUnit(ch.kind) && c.scale == 1.0 && c.offset == 0.0;
+    if (plain) {
+      *out << YAML::DoubleQuoted << c.source;
+      continue;
+    }
+    *out << YAML::Flow << YAML::BeginMap;
+    if (c.constant) {
+      *out << YAML::Key << "value" << YAML::Value << FormatDouble(*c.constant);
+    } else {
+      *out << YAML::Key << "source" << YAML::Value << YAML::DoubleQuoted << c.source;
+    }
+    if (unit != DefaultUnit(ch.kind)) *out << YAML::Key << "unit" << YAML::Value << unit;
+    if (c.scale != 1.0) *out << YAML::Key << "scale" << YAML::Value << FormatDouble(c.scale);
+    if (c.offset != 0.0) *out << YAML::Key << "offset" << YAML::Value << FormatDouble(c.offset);
+    *out << YAML::EndMap;
+  }
+  *out << YAML::EndMap;
+}
+
+}  // namespace triadcal

@@ -1,0 +1,216 @@
+// Fast reader of the text form of run data (CSV contract of SPEC section 7, or
+// blank-separated text): one pass over the file in memory, numbers parsed with
+// std::from_chars, only the wanted columns converted.
+#include <algorithm>
+#include <charconv>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+
+#include "core/io/data_table.h"
+#include "core/model/errors.h"
+
+namespace triadcal {
+
+namespace {
+
+std::string ReadWholeFile(const std::string& path) {
+  std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
+  if (!f) throw InputError(path + ": cannot read (no such file or not readable)");
+  std::string data;
+  char buf[1 << 16];
+  std::size_t n;
+  if (std::fseek(f.get(), 0, SEEK_END) == 0) {
+    const long size = std::ftell(f.get());
+    if (size > 0) data.reserve(static_cast<std::size_t>(size));
+    std::fseek(f.get(), 0, SEEK_SET);
+  }
+  while ((n = std::fread(buf, 1, sizeof(buf), f.get())) > 0) data.append(buf, n);
+  if (std::ferror(f.get())) throw InputError(path + ": read error");
+  return data;
+}
+
+bool IsBlank(char c) { return c == ' ' || c == '\t' || c == '\r'; }
+
+// [begin, end) of the next field starting at p; returns the position after the
+// separator (or end of line).
+struct Field {
+  const char* begin;
+  const char* end;
+};
+
+class LineSplitter {
+ public:
+  LineSplitter(const char* begin, const char* end, bool comma)
+      : p_(begin), end_(end), comma_(comma) {
+    if (!comma_) SkipBlanks();
+  }
+  bool Next(Field* f) {
+    if (comma_) {
+      if (done_) return false;
+      const char* sep = p_;  // fields are short: a plain loop beats memchr
+      while (sep != end_ && *sep != ',') ++sep;
+      f->begin = p_;
+      f->end = sep;
+      if (sep != end_) {
+        p_ = sep + 1;
+      } else {
+        done_ = true;
+      }
+    } else {
+      if (p_ == end_) return false;
+      f->begin = p_;
+      while (p_ != end_ && !IsBlank(*p_)) ++p_;
+      f->end = p_;
+      SkipBlanks();
+    }
+    while (f->begin != f->end && IsBlank(*f->begin)) ++f->begin;
+    while (f->end != f->begin && IsBlank(f->end[-1])) --f->end;
+    return true;
+  }
+
+ private:
+  void SkipBlanks() {
+    while (p_ != end_ && IsBlank(*p_)) ++p_;
+  }
+  const char* p_;
+  const char* end_;
+  bool comma_;
+  bool done_ = false;
+};
+
+std::string HeaderName(Field f) {
+  std::string s(f.begin, f.end);
+  if (s.size() >= 2 && (s.front() == '"' || s.front() == '\'') && s.back() == s.front()) {
+    s = s.substr(1, s.size() - 2);
+  }
+  return s;
+}
+
+bool IsSkippedLine(const char* b, const char* e) {
+  while (b != e && IsBlank(*b)) ++b;
+  return b == e || *b == '#';
+}
+
+}  // namespace
+
+std::string DataTable::Where(std::size_t row) const {
+  if (is_mat) return path + ": sample " + std::to_string(row + 1);
+  return path + ":" + std::to_string(line[row]);
+}
+
+DataTable ReadTextTable(const std::string& path, const std::vector<std::string>& wanted) {
+  return ReadTextTable(path, wanted, TextTableOptions{});
+}
+
+DataTable ReadTextTable(const std::string& path, const std::vector<std::string>& wanted,
+                        const TextTableOptions& options) {
+  const std::string data = ReadWholeFile(path);
+  DataTable table;
+  table.path = path;
+  const char* p = data.data();
+  const char* const end = p + data.size();
+  if (data.size() >= 3 && std::memcmp(p, "\xEF\xBB\xBF", 3) == 0) p += 3;  // UTF-8 BOM
+
+  int line_no = 0;
+  bool comma = true;
+  bool have_names = false;
+  std::vector<std::vector<double>*> target;  // per field: where its value goes
+  std::vector<std::vector<std::string>*> text_target;  // per field, for text columns
+  std::size_t fields_needed = 0;
+  const std::size_t rows_estimate = static_cast<std::size_t>(std::count(p, end, '\n')) + 1;
+
+  // Once the column names are known: which field feeds which wanted column.
+  auto assign_targets = [&]() {
+    target.assign(table.names.size(), nullptr);
+    text_target.assign(table.names.size(), nullptr);
+    auto field_of = [&](const std::string& w) -> std::ptrdiff_t {
+      auto it = std::find(table.names.begin(), table.names.end(), w);
+      if (it == table.names.end()) return -1;
+      const std::size_t idx = static_cast<std::size_t>(it - table.names.begin());
+      if (target[idx] || text_target[idx]) return -1;  // asked for twice
+      return static_cast<std::ptrdiff_t>(idx);
+    };
+    for (const std::string& w : options.wanted_text) {
+      const std::ptrdiff_t idx = field_of(w);
+      if (idx < 0) continue;
+      std::vector<std::string>& col = table.text_columns[w];
+      col.reserve(rows_estimate);
+      text_target[idx] = &col;
+      fields_needed = std::max(fields_needed, static_cast<std::size_t>(idx) + 1);
+    }
+    for (const std::string& w : wanted) {
+      const std::ptrdiff_t idx = field_of(w);
+      if (idx < 0) continue;
+      std::vector<double>& col = table.columns[w];
+      col.reserve(rows_estimate);
+      target[idx] = &col;
+      fields_needed = std::max(fields_needed, static_cast<std::size_t>(idx) + 1);
+    }
+    table.line.reserve(rows_estimate);
+    have_names = true;
+  };
+
+  while (p < end) {
+    const char* eol = static_cast<const char*>(std::memchr(p, '\n', end - p));
+    const char* line_end = eol ? eol : end;
+    const char* line_begin = p;
+    p = eol ? eol + 1 : end;
+    ++line_no;
+    if (IsSkippedLine(line_begin, line_end)) continue;
+
+    if (!have_names) {
+      comma = std::memchr(line_begin, ',', line_end - line_begin) != nullptr;
+      table.header_line = line_no;
+      if (options.header.empty()) {  // this line is the header
+        LineSplitter split(line_begin, line_end, comma);
+        Field f;
+        while (split.Next(&f)) table.names.push_back(HeaderName(f));
+        assign_targets();
+        continue;
+      }
+      table.names = options.header;  // no header line: this line is data
+      assign_targets();
+    }
+
+    LineSplitter split(line_begin, line_end, comma);
+    Field f;
+    std::size_t idx = 0;
+    for (; idx < fields_needed && split.Next(&f); ++idx) {
+      if (text_target[idx]) {
+        text_target[idx]->push_back(HeaderName(f));  // unquoted like a header name
+        continue;
+      }
+      if (!target[idx]) continue;
+      const char* b = f.begin;
+      if (b != f.end && *b == '+') ++b;
+      double v = 0.0;
+      const auto res = std::from_chars(b, f.end, v);
+      if (res.ec == std::errc::result_out_of_range) {
+        v = std::strtod(std::string(f.begin, f.end).c_str(), nullptr);  // +-inf or denormal
+      } else if (res.ec != std::errc() || res.ptr != f.end || f.begin == f.end) {
+        throw InputError(path + ":" + std::to_string(line_no) + ": column '" + table.names[idx] +
+                         "': not a number: '" + std::string(f.begin, f.end) + "'");
+      }
+      target[idx]->push_back(v);
+    }
+    if (idx < fields_needed) {
+      std::size_t missing = idx;
+      while (!target[missing] && !text_target[missing]) ++missing;
+      throw InputError(path + ":" + std::to_string(line_no) + ": " + std::to_string(idx) +
+                       " fields, but column '" + table.names[missing] + "' is field " +
+                       std::to_string(missing + 1) +
+                       (options.header.empty() ? " of the header" : " of data_format.header"));
+    }
+    table.line.push_back(line_no);
+  }
+  if (!have_names) {
+    throw InputError(path + (options.header.empty() ? ": no header line (the file is empty)"
+                                                    : ": no data lines (the file is empty)"));
+  }
+  table.rows = table.line.size();
+  return table;
+}
+
+}  // namespace triadcal

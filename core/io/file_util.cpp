@@ -1,0 +1,75 @@
+#include "core/io/file_util.h"
+
+#include <charconv>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <unistd.h>
+
+#include "core/model/errors.h"
+
+namespace triadcal {
+
+namespace fs = std::filesystem;
+
+void WriteFileAtomically(const std::string& path, const std::string& content) {
+  const fs::path target(path);
+  const fs::path tmp =
+      target.parent_path() / (".tmp." + target.filename().string() + "." + std::to_string(getpid()));
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw InputError(path + ": cannot write (folder missing or not writable)");
+    out.write(content.data(), static_cast<std::streamsize>(content.size()));
+    out.flush();
+    if (!out) {
+      out.close();
+      fs::remove(tmp);
+      throw InputError(path + ": write failed (disk full?)");
+    }
+  }
+  std::error_code ec;
+  fs::rename(tmp, target, ec);
+  if (ec) {
+    fs::remove(tmp);
+    throw InputError(path + ": cannot write: " + ec.message());
+  }
+}
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot read (no such file or not readable)");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string FormatDouble(double x) {
+  char buf[64];
+  auto res = std::to_chars(buf, buf + sizeof(buf), x);
+  return std::string(buf, res.ptr);
+}
+
+std::string ResolveDataPath(const std::string& referring_file, const std::string& path) {
+  const std::string prefix = "shared:";
+  const fs::path base = fs::absolute(fs::path(referring_file)).parent_path();
+  if (path.rfind(prefix, 0) != 0) {
+    const fs::path p(path);
+    return (p.is_absolute() ? p : (base / p)).lexically_normal().string();
+  }
+  const std::string rest = path.substr(prefix.size());
+  if (const char* env = std::getenv("TRIADCAL_SHARED"); env && *env) {
+    return (fs::path(env) / rest).lexically_normal().string();
+  }
+  for (fs::path dir = base; !dir.empty(); dir = dir.parent_path()) {
+    const fs::path candidate = dir / "shared";
+    if (fs::is_directory(candidate) && fs::exists(candidate / rest)) {
+      return (candidate / rest).lexically_normal().string();
+    }
+    if (dir == dir.parent_path()) break;
+  }
+  return "";
+}
+
+}  // namespace triadcal

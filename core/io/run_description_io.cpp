@@ -1,0 +1,218 @@
+// run.yaml in and out (SPEC section 7): the bench and triad nominal values, the
+// constraints, and the column mapping and mounting for foreign data files.
+#include "core/io/run_description_io.h"
+
+#include "core/io/column_mapping.h"
+#include "core/io/constraint_parser.h"
+#include "core/model/errors.h"
+#include "core/io/file_util.h"
+#include "core/io/yaml_fields.h"
+
+namespace triadcal {
+
+namespace {
+
+void ParseBench(const YAML::Node& node, const YamlPlace& at, RunDescription* run) {
+  CheckKeys(node, at, {"lever_arm_mm", "angle_noise_arcsec", "g_mps2"});
+  if (node["lever_arm_mm"]) {
+    run->lever_arm0_m = ReadVector3(node["lever_arm_mm"], at.Child("lever_arm_mm")) * kMmToM;
+  }
+  if (node["angle_noise_arcsec"]) {
+    run->angle_noise_rad =
+        ReadNonNegative(node["angle_noise_arcsec"], at.Child("angle_noise_arcsec")) * kArcsecToRad;
+  }
+  if (node["g_mps2"]) run->g_mps2 = ReadPositive(node["g_mps2"], at.Child("g_mps2"));
+}
+
+void ParseTriad(const YAML::Node& node, const YamlPlace& at, RunDescription* run) {
+  CheckKeys(node, at, {"scale_mV_per_g", "bias_mV", "noise_mV"});
+  if (node["scale_mV_per_g"]) {
+    const YamlPlace p = at.Child("scale_mV_per_g");
+    run->scale_mV_per_g = ReadVector3(node["scale_mV_per_g"], p);
+    for (int i = 0; i < 3; ++i) {
+      if (!(run->scale_mV_per_g[i] > 0.0)) {
+        p.Index(i).Fail("must be > 0, got " + FormatDouble(run->scale_mV_per_g[i]) +
+                        " (an inverted axis belongs in mounting.axes)");
+      }
+    }
+  }
+  if (node["bias_mV"]) run->bias_mV = ReadVector3(node["bias_mV"], at.Child("bias_mV"));
+  if (node["noise_mV"]) run->noise_mV = ReadPositive(node["noise_mV"], at.Child("noise_mV"));
+}
+
+// Readings in g or mg become mV at 1000 mV/g: without a triad section saying
+// otherwise, the nominal triad is then 1000 mV/g with no bias.
+void DefaultTriadForGReadings(const YAML::Node& triad, RunDescription* run) {
+  for (const char* ch : {"wx", "wy", "wz"}) {
+    const std::string unit = SourceOf(*run, ch).unit;
+    if (unit != "g" && unit != "mg") return;
+  }
+  if (!triad || !triad["scale_mV_per_g"]) run->scale_mV_per_g.setConstant(1000.0);
+  if (!triad || !triad["bias_mV"]) run->bias_mV.setZero();
+}
+
+YAML::Emitter& EmitVector(YAML::Emitter& out, const Eigen::Vector3d& v) {
+  out << YAML::Flow << YAML::BeginSeq;
+  for (int i = 0; i < 3; ++i) out << FormatDouble(v[i]);
+  return out << YAML::EndSeq;
+}
+
+// priors: {NAME: SIGMA} in file units, for any base or effect parameter.
+void ParsePriors(const YAML::Node& node, const YamlPlace& at, RunDescription* run) {
+  if (!node.IsMap()) at.Fail("expected a map {parameter: sigma in file units}");
+  std::vector<Effect> all;
+  for (const EffectSpec& e : EffectCatalogue()) all.push_back(e.id);
+  const ParameterLayout every(all);
+  for (const auto& kv : node) {
+    const std::string name = kv.first.as<std::string>();
+    const YamlPlace p = at.Child(name);
+    if (every.IndexOf(name) < 0) p.Fail("unknown parameter (see `triadcal params`)");
+    run->prior_sigma[name] = ReadPositive(kv.second, p);
+  }
+}
+
+// data_format: {header: [names...], sort_by_time: bool}, for text files.
+void ParseDataFormat(const YAML::Node& node, const YamlPlace& at, RunDescription* run) {
+  CheckKeys(node, at, {"header", "sort_by_time"});
+  if (node["header"]) {
+    const YamlPlace p = at.Child("header");
+    const YAML::Node h = node["header"];
+    if (!h.IsSequence() || h.size() == 0) {
+      p.Fail("expected the list of column names of a file without a header line, got " +
+             DescribeNode(h));
+    }
+    for (std::size_t i = 0; i < h.size(); ++i) {
+      const std::string name = ReadString(h[i], p.Index(i));
+      if (name.empty()) p.Index(i).Fail("empty column name");
+      for (const std::string& seen : run->data_header) {
+        if (seen == name) p.Index(i).Fail("column name '" + name + "' given twice");
+      }
+      run->data_header.push_back(name);
+    }
+  }
+  if (node["sort_by_time"]) {
+    const YamlPlace p = at.Child("sort_by_time");
+    if (!node["sort_by_time"].IsScalar() ||
+        !YAML::convert<bool>::decode(node["sort_by_time"], run->sort_by_time)) {
+      p.Fail("expected true or false, got " + DescribeNode(node["sort_by_time"]));
+    }
+  }
+}
+
+}  // namespace
+
+RunDescription LoadRunDescription(const std::string& yaml_path) {
+  const YAML::Node root = LoadYamlFile(yaml_path);
+  const YamlPlace at{yaml_path, ""};
+  if (!root.IsMap()) at.Fail("expected a map of keys (data, bench, triad, ...)");
+  if (!root["data"]) {
+    at.Child("data").Fail("missing: the data file (relative to this file, or shared:PATH)");
+  }
+  return ParseRunDescription(root, yaml_path, yaml_path);
+}
+
+RunDescription ParseRunDescription(const YAML::Node& node, const std::string& yaml_path,
+                                   const std::string& where) {
+  RunDescription run;
+  run.yaml_path = yaml_path;
+  run.constraints = DefaultConstraints();
+  const YamlPlace at{where, ""};
+  if (!node.IsDefined() || node.IsNull()) return run;
+  CheckKeys(node, at,
+            {"data", "bench", "triad", "constraints", "columns", "mounting", "priors",
+             "data_format", "positions"});
+  if (node["data"]) {
+    const std::string data = ReadString(node["data"], at.Child("data"));
+    if (data.empty()) at.Child("data").Fail("empty file name");
+    run.data_path = ResolveDataPath(yaml_path, data);
+    if (run.data_path.empty()) {
+      at.Child("data").Fail("shared data folder not found for '" + data +
+                            "' (set TRIADCAL_SHARED)");
+    }
+  }
+  if (node["bench"]) ParseBench(node["bench"], at.Child("bench"), &run);
+  if (node["triad"]) ParseTriad(node["triad"], at.Child("triad"), &run);
+  if (node["constraints"]) {
+    run.constraints = ParseConstraints(node["constraints"], at.Child("constraints"));
+  }
+  if (node["columns"]) run.columns = ParseColumns(node["columns"], at.Child("columns"));
+  if (node["mounting"]) ParseMounting(node["mounting"], at.Child("mounting"), &run);
+  if (node["priors"]) ParsePriors(node["priors"], at.Child("priors"), &run);
+  if (node["data_format"]) ParseDataFormat(node["data_format"], at.Child("data_format"), &run);
+  if (node["positions"]) run.positions = ParsePositions(node["positions"], at.Child("positions"));
+  DefaultTriadForGReadings(node["triad"], &run);
+  return run;
+}
+
+std::string RunDescriptionToYaml(const RunDescription& run, const std::string& data_relative) {
+  YAML::Emitter out;
+  out << YAML::Comment("triadcal run description (SPEC section 7)") << YAML::Newline;
+  out << YAML::BeginMap;
+  out << YAML::Key << "data" << YAML::Value << data_relative;
+
+  out << YAML::Key << "bench" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "lever_arm_mm" << YAML::Value;
+  EmitVector(out, run.lever_arm0_m / kMmToM);
+  out << YAML::Key << "angle_noise_arcsec" << YAML::Value
+      << FormatDouble(run.angle_noise_rad / kArcsecToRad);
+  if (run.g_mps2 != kStandardGravity) {
+    out << YAML::Key << "g_mps2" << YAML::Value << FormatDouble(run.g_mps2);
+  }
+  out << YAML::EndMap;
+
+  out << YAML::Key << "triad" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "scale_mV_per_g" << YAML::Value;
+  EmitVector(out, run.scale_mV_per_g);
+  out << YAML::Key << "bias_mV" << YAML::Value;
+  EmitVector(out, run.bias_mV);
+  out << YAML::Key << "noise_mV" << YAML::Value << FormatDouble(run.noise_mV);
+  out << YAML::EndMap;
+
+  out << YAML::Key << "constraints" << YAML::Value;
+  if (run.constraints.empty()) {
+    out << YAML::Flow << YAML::BeginSeq << YAML::EndSeq;
+  } else {
+    out << YAML::BeginSeq;
+    for (const Constraint& c : run.constraints) EmitConstraint(c, &out);
+    out << YAML::EndSeq;
+  }
+
+  if (!run.columns.empty()) {
+    out << YAML::Key << "columns" << YAML::Value;
+    EmitColumns(run.columns, &out);
+  }
+  if (!run.prior_sigma.empty()) {
+    out << YAML::Key << "priors" << YAML::Value << YAML::BeginMap;
+    for (const auto& [name, sigma] : run.prior_sigma) {
+      out << YAML::Key << name << YAML::Value << FormatDouble(sigma);
+    }
+    out << YAML::EndMap;
+  }
+  if (!run.data_header.empty() || run.sort_by_time) {
+    out << YAML::Key << "data_format" << YAML::Value << YAML::BeginMap;
+    if (!run.data_header.empty()) {
+      out << YAML::Key << "header" << YAML::Value << YAML::Flow << run.data_header;
+    }
+    if (run.sort_by_time) out << YAML::Key << "sort_by_time" << YAML::Value << true;
+    out << YAML::EndMap;
+  }
+  if (!run.positions.empty()) {
+    out << YAML::Key << "positions" << YAML::Value << YAML::BeginMap;
+    for (const auto& [label, up] : run.positions) {
+      out << YAML::Key << label << YAML::Value;
+      EmitVector(out, up);
+    }
+    out << YAML::EndMap;
+  }
+  if (!IsIdentityMounting(run)) {
+    out << YAML::Key << "mounting" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "axes" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+    for (int i = 0; i < 3; ++i) out << YAML::DoubleQuoted << MountingAxisText(run, i);
+    out << YAML::EndSeq << YAML::EndMap;
+  }
+  out << YAML::EndMap;
+  if (!out.good()) throw std::logic_error("run.yaml emitter: " + out.GetLastError());
+  return std::string(out.c_str()) + "\n";
+}
+
+}  // namespace triadcal

@@ -1,0 +1,272 @@
+// Run data in and out: reads the data file of a run.yaml (text or MATLAB),
+// maps its columns onto our channels, converts units, unwraps the angles,
+// validates, applies the IMU mounting, and writes the CSV contract back.
+#include "core/io/run_io.h"
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <filesystem>
+
+#include "core/io/column_mapping.h"
+#include "core/io/data_table.h"
+#include "core/model/errors.h"
+#include "core/io/file_util.h"
+#include "core/io/run_validation.h"
+#include "core/model/units.h"
+
+namespace triadcal {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+bool IsMatFile(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext == ".mat";
+}
+
+std::string JoinNames(const std::vector<std::string>& v) {
+  std::string s;
+  for (const std::string& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s;
+}
+
+std::string Label(const DataTable& table, const std::string& name, const ColumnSource& src) {
+  if (src.constant) return name + " (constant)";
+  std::string s = (table.is_mat ? "variable '" : "column '") + src.source + "'";
+  return src.source == name ? s : s + " (" + name + ")";
+}
+
+[[noreturn]] void MissingColumn(const DataTable& table, const std::string& name,
+                                const ColumnSource& src) {
+  const std::string what = src.source == name ? "" : " (for " + name + ")";
+  if (table.is_mat) {
+    throw InputError(table.path + ": variable '" + src.source + "'" + what +
+                     " not found (the file has: " + JoinNames(table.names) + ")");
+  }
+  throw InputError(table.path + ":" + std::to_string(table.header_line) + ": missing column '" +
+                   src.source + "'" + what + " (header: " + JoinNames(table.names) + ")");
+}
+
+// Channel `name` in our units, or empty values when it is optional and absent.
+ChannelValues ReadChannel(const DataTable& table, const RunDescription& run,
+                          const ChannelInfo& ch) {
+  const ColumnSource src = SourceOf(run, ch.name);
+  ChannelValues out;
+  out.name = ch.name;
+  out.label = Label(table, ch.name, src);
+  const double factor = OurUnitsPerSourceUnit(ch.kind, src.unit) * src.scale;
+  if (factor == 0.0) {
+    throw InputError(run.yaml_path + ": columns." + ch.name + ": unit '" + src.unit +
+                     "' or scale 0 not allowed");
+  }
+  if (src.constant) {
+    out.values.assign(table.rows, *src.constant * factor + src.offset);
+    return out;
+  }
+  auto it = table.columns.find(src.source);
+  if (it == table.columns.end()) {
+    if (ch.required || run.columns.count(ch.name)) MissingColumn(table, ch.name, src);
+    return out;
+  }
+  out.values = it->second;
+  if (factor != 1.0 || src.offset != 0.0) {
+    for (double& v : out.values) v = v * factor + src.offset;
+  }
+  return out;
+}
+
+// Keeps rows keep[0], keep[1], ... in that order (a selection or a permutation).
+template <typename V>
+void KeepRows(const std::vector<std::size_t>& keep, std::vector<V>* values) {
+  if (values->empty()) return;
+  std::vector<V> out(keep.size());
+  for (std::size_t j = 0; j < keep.size(); ++j) out[j] = std::move((*values)[keep[j]]);
+  values->swap(out);
+}
+
+void KeepRows(const std::vector<std::size_t>& keep, ChannelValues* c) {
+  KeepRows(keep, &c->values);
+}
+
+void Warn(RunWarnings* warnings, const std::optional<std::string>& line) {
+  if (warnings && line) warnings->lines.push_back(*line);
+}
+
+std::vector<double> Scaled(const std::vector<double>& v, double factor) {
+  std::vector<double> out(v.size());
+  for (std::size_t k = 0; k < v.size(); ++k) out[k] = v[k] * factor;
+  return out;
+}
+
+void AppendDouble(double x, std::string* out) {
+  char buf[32];  // the same shortest round-trip text as FormatDouble
+  const auto res = std::to_chars(buf, buf + sizeof(buf), x);
+  out->append(buf, res.ptr);
+}
+
+}  // namespace
+
+RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
+  const std::string where = run.yaml_path.empty() ? run.data_path : run.yaml_path + ": data";
+  if (run.data_path.empty()) throw InputError(where + ": no data file given");
+  if (!fs::is_regular_file(run.data_path)) {
+    throw InputError(where + ": no such file '" + run.data_path + "'");
+  }
+
+  // Read the columns the mapping asks for.
+  std::vector<std::string> wanted;
+  for (const ChannelInfo& ch : Channels()) {
+    const ColumnSource src = SourceOf(run, ch.name);
+    if (!src.constant) wanted.push_back(src.source);
+  }
+  const std::string label_source = LabelSource(run);
+  if (IsMatFile(run.data_path) && (!label_source.empty() || !run.data_header.empty())) {
+    throw InputError(run.yaml_path + ": " +
+                     (label_source.empty() ? "data_format.header" : "columns.label") +
+                     ": only for text data files, not MATLAB");
+  }
+  TextTableOptions text_options;
+  text_options.header = run.data_header;
+  if (!label_source.empty()) text_options.wanted_text.push_back(label_source);
+  const DataTable table = IsMatFile(run.data_path)
+                              ? ReadMatTable(run.data_path, wanted)
+                              : ReadTextTable(run.data_path, wanted, text_options);
+  std::vector<std::string> labels;
+  if (!label_source.empty()) {
+    auto it = table.text_columns.find(label_source);
+    if (it == table.text_columns.end()) {
+      ColumnSource src;
+      src.source = label_source;
+      MissingColumn(table, kLabelChannel, src);
+    }
+    labels = it->second;
+  }
+  const std::vector<ChannelInfo>& chs = Channels();  // t, l1, l2, wx, wy, wz, r1, r2, temp
+  ChannelValues t = ReadChannel(table, run, chs[0]);
+  ChannelValues lambda[2] = {ReadChannel(table, run, chs[1]), ReadChannel(table, run, chs[2])};
+  ChannelValues w[3] = {ReadChannel(table, run, chs[3]), ReadChannel(table, run, chs[4]),
+                        ReadChannel(table, run, chs[5])};
+  ChannelValues rate[2] = {ReadChannel(table, run, chs[6]), ReadChannel(table, run, chs[7])};
+  ChannelValues temp = ReadChannel(table, run, chs[8]);
+  std::vector<ChannelValues*> all = {&t,    &lambda[0], &lambda[1], &w[0], &w[1],
+                                     &w[2], &rate[0],   &rate[1],   &temp};
+  if (rate[0].present() != rate[1].present()) {
+    const ChannelValues& given = rate[0].present() ? rate[0] : rate[1];
+    throw InputError(table.path + ": " + given.label +
+                     " without the other rate channel (give lambda1_rate and lambda2_rate, "
+                     "or neither)");
+  }
+
+  // Fatal checks on the samples as recorded.
+  CheckSampleCount(table, table.rows, "samples");
+  CheckFinite(table, {all.begin(), all.end()});
+  if (run.sort_by_time) {  // data_format.sort_by_time: rows stored in another order
+    std::vector<std::size_t> order(table.rows);
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return t.values[a] < t.values[b]; });
+    for (ChannelValues* c : all) KeepRows(order, c);
+    KeepRows(order, &labels);
+  }
+  CheckTimeNotDecreasing(table, t);
+
+  // Repeated time stamps: keep the first sample of each.
+  const std::vector<std::size_t> keep = FirstOfEqualTimes(t.values);
+  if (keep.size() < table.rows) {
+    for (ChannelValues* c : all) KeepRows(keep, c);
+    KeepRows(keep, &labels);
+    Warn(warnings, DuplicateWarning(table.rows - keep.size()));
+    CheckSampleCount(table, keep.size(), "distinct time stamps");
+  }
+  Warn(warnings, GapWarning(t.values));
+  for (ChannelValues& l : lambda) UnwrapDegrees(&l.values);
+
+  // Units of the readings and angles, judged against the nominal triad.
+  double scale_of_imu_axis[3], range_of_imu_axis[3];
+  for (int i = 0; i < 3; ++i) {
+    const int j = run.axis_source[i];
+    scale_of_imu_axis[j] = run.scale_mV_per_g[i];
+    range_of_imu_axis[j] = run.scale_mV_per_g[i] + std::abs(run.bias_mV[i]);
+  }
+  for (int j = 0; j < 3; ++j) {
+    // Only readings taken as mV: a declared V, g or mg is the user's word.
+    const std::string unit = SourceOf(run, w[j].name).unit;
+    if (unit.empty() || unit == "mV") {
+      CheckReadingsInMillivolts(table, w[j], range_of_imu_axis[j]);
+    }
+  }
+  // Both angles held constant (a run without a bench: static positions by label
+  // or by gravity only): there is nothing to judge the angle unit by.
+  if (!SourceOf(run, "lambda1").constant || !SourceOf(run, "lambda2").constant) {
+    CheckAnglesInDegrees(table, lambda, w, scale_of_imu_axis);
+  }
+  for (const ChannelValues& c : w) Warn(warnings, SaturationWarning(c));
+
+  RunData data;
+  data.t_s = std::move(t.values);
+  for (int i = 0; i < 2; ++i) {
+    data.lambda_rad[i] = Scaled(lambda[i].values, kDegToRad);
+    if (rate[i].present()) data.rate_rad_s[i] = Scaled(rate[i].values, kDegToRad);
+  }
+  for (int i = 0; i < 3; ++i) {
+    data.w_mV[i] = run.axis_sign[i] == 1.0 ? w[run.axis_source[i]].values
+                                           : Scaled(w[run.axis_source[i]].values, -1.0);
+  }
+  data.temp_C = std::move(temp.values);
+  data.label = std::move(labels);
+  if (MountingDeterminant(run) < 0) {
+    Warn(warnings, std::string("mounting.axes [") + MountingAxisText(run, 0) + ", " +
+                       MountingAxisText(run, 1) + ", " + MountingAxisText(run, 2) +
+                       "] is a reflection (determinant -1), not a rotation: check the signs");
+  }
+  return data;
+}
+
+void WriteRunCsv(const RunData& run, const std::string& path, const std::string& comment) {
+  std::string out;
+  out.reserve(128 + run.size() * 160);
+  std::string text = comment;
+  if (!text.empty() && text.back() == '\n') text.pop_back();
+  if (!text.empty()) {
+    std::size_t start = 0;
+    while (start <= text.size()) {
+      std::size_t end = text.find('\n', start);
+      if (end == std::string::npos) end = text.size();
+      out += "# " + text.substr(start, end - start) + "\n";
+      start = end + 1;
+    }
+  }
+  out += "t,lambda1,lambda2,wx,wy,wz";
+  if (run.has_rates()) out += ",lambda1_rate,lambda2_rate";
+  if (run.has_temp()) out += ",temp_C";
+  out += "\n";
+  for (std::size_t k = 0; k < run.size(); ++k) {
+    AppendDouble(run.t_s[k], &out);
+    for (int i = 0; i < 2; ++i) {
+      out += ',';
+      AppendDouble(run.lambda_rad[i][k] / kDegToRad, &out);
+    }
+    for (int i = 0; i < 3; ++i) {
+      out += ',';
+      AppendDouble(run.w_mV[i][k], &out);
+    }
+    if (run.has_rates()) {
+      for (int i = 0; i < 2; ++i) {
+        out += ',';
+        AppendDouble(run.rate_rad_s[i][k] / kDegToRad, &out);
+      }
+    }
+    if (run.has_temp()) {
+      out += ',';
+      AppendDouble(run.temp_C[k], &out);
+    }
+    out += '\n';
+  }
+  WriteFileAtomically(path, out);
+}
+
+}  // namespace triadcal

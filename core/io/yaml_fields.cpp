@@ -1,0 +1,102 @@
+// Typed YAML field access with "FILE: key.path: what is wrong" errors.
+#include "core/io/yaml_fields.h"
+
+#include <cmath>
+#include <filesystem>
+#include <set>
+
+#include "core/model/errors.h"
+
+namespace triadcal {
+
+YamlPlace YamlPlace::Child(const std::string& key) const {
+  return {where, path.empty() ? key : path + "." + key};
+}
+
+YamlPlace YamlPlace::Index(std::size_t i) const {
+  return {where, path + "[" + std::to_string(i) + "]"};
+}
+
+std::string YamlPlace::Message(const std::string& what) const {
+  return path.empty() ? where + ": " + what : where + ": " + path + ": " + what;
+}
+
+void YamlPlace::Fail(const std::string& what) const { throw InputError(Message(what)); }
+
+YAML::Node LoadYamlFile(const std::string& path) {
+  if (!std::filesystem::is_regular_file(path)) {
+    throw InputError(path + ": cannot read (no such file or not readable)");
+  }
+  try {
+    return YAML::LoadFile(path);
+  } catch (const YAML::ParserException& e) {
+    throw InputError(path + ":" + std::to_string(e.mark.line + 1) +
+                     ": YAML syntax error: " + e.msg);
+  } catch (const YAML::BadFile&) {
+    throw InputError(path + ": cannot read (no such file or not readable)");
+  }
+}
+
+std::string DescribeNode(const YAML::Node& node) {
+  if (!node.IsDefined() || node.IsNull()) return "nothing";
+  if (node.IsSequence()) return "a list";
+  if (node.IsMap()) return "a map";
+  return "'" + node.Scalar() + "'";
+}
+
+void CheckKeys(const YAML::Node& node, const YamlPlace& at,
+               const std::vector<std::string>& allowed) {
+  if (!node.IsMap()) at.Fail("expected a map, got " + DescribeNode(node));
+  std::set<std::string> seen;
+  for (const auto& kv : node) {
+    const std::string key = kv.first.Scalar();
+    bool ok = false;
+    for (const std::string& a : allowed) ok = ok || a == key;
+    if (ok) {
+      if (!seen.insert(key).second) at.Child(key).Fail("given twice");
+      continue;
+    }
+    std::string list;
+    for (const std::string& a : allowed) list += (list.empty() ? "" : ", ") + a;
+    at.Child(key).Fail("unknown key (allowed: " + list + ")");
+  }
+}
+
+double ReadNumber(const YAML::Node& node, const YamlPlace& at) {
+  if (!node.IsScalar()) at.Fail("expected a number, got " + DescribeNode(node));
+  double v = 0.0;
+  if (!YAML::convert<double>::decode(node, v)) {
+    at.Fail("expected a number, got " + DescribeNode(node));
+  }
+  if (!std::isfinite(v)) at.Fail("expected a finite number, got " + DescribeNode(node));
+  return v;
+}
+
+double ReadPositive(const YAML::Node& node, const YamlPlace& at) {
+  const double v = ReadNumber(node, at);
+  if (!(v > 0.0)) at.Fail("must be > 0, got " + node.Scalar());
+  return v;
+}
+
+double ReadNonNegative(const YAML::Node& node, const YamlPlace& at) {
+  const double v = ReadNumber(node, at);
+  if (v < 0.0) at.Fail("must be >= 0, got " + node.Scalar());
+  return v;
+}
+
+std::string ReadString(const YAML::Node& node, const YamlPlace& at) {
+  if (!node.IsScalar()) at.Fail("expected a text, got " + DescribeNode(node));
+  return node.Scalar();
+}
+
+Eigen::Vector3d ReadVector3(const YAML::Node& node, const YamlPlace& at) {
+  if (!node.IsSequence()) at.Fail("expected a list of 3 numbers, got " + DescribeNode(node));
+  if (node.size() != 3) {
+    at.Fail("expected a list of 3 numbers, got " + std::to_string(node.size()));
+  }
+  Eigen::Vector3d v;
+  for (std::size_t i = 0; i < 3; ++i) v[i] = ReadNumber(node[i], at.Index(i));
+  return v;
+}
+
+}  // namespace triadcal

@@ -1,0 +1,45 @@
+// Rates and angular accelerations of the bench from the recorded angles.
+//
+// The paper's block B2 needs lambda' (V_DU = w x S), and the angle-stage effects
+// need lambda''. When the run has no rate columns they are estimated by a local
+// cubic least-squares fit (Savitzky-Golay) over a window of +-half_window_s
+// around each sample, using the real time stamps:
+//
+//   lambda(t_k + s) ~ c0 + c1 s + c2 s^2 + c3 s^3,   lambda' = c1, lambda'' = 2 c2
+//
+// Errors: a cubic fit has no bias up to the 4th derivative; for lambda' the next
+// term is ~ lambda^(5) h^4 / 10 (3e-6 rad/s for the paper's profile and
+// h = 0.1 s). White angle noise sigma gives lambda' noise ~ 2.1 sigma / (h sqrt(N))
+// with N samples in the window (RateNoiseGain returns the exact factor).
+#pragma once
+
+#include <vector>
+
+#include "core/model/bench_model.h"
+#include "core/model/run_data.h"
+
+namespace triadcal {
+
+struct AngleDerivativeOptions {
+  double half_window_s = 0.1;
+};
+
+// Per sample: recorded angle (as is), rate and angular acceleration of both
+// axes. With rate columns, the rate is taken from the file and the acceleration
+// is the local-fit derivative of the rate.
+// With `only` given, rates and accelerations are estimated at those sample
+// indices alone (the others keep their angle with rate = accel = 0): the base
+// model needs lambda' only at the measurement epochs.
+std::vector<BenchAngles<double>> EstimateAngleDerivatives(
+    const RunData& run, const AngleDerivativeOptions& opt,
+    const std::vector<std::size_t>* only = nullptr);
+
+// True when the model needs lambda', lambda'' at every sample (effects of the
+// angle stage, and the size effect's per-axis kinematics in block B1).
+bool NeedsRatesAtEverySample(const ParameterLayout& layout);
+
+// sigma(lambda') / sigma(lambda) of the local fit at an interior sample of a
+// uniformly sampled run with interval dt_s [1/s].
+double RateNoiseGain(double dt_s, const AngleDerivativeOptions& opt);
+
+}  // namespace triadcal

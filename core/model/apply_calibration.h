@@ -1,0 +1,42 @@
+// Applying a calibration: raw readings -> calibrated specific force.
+//
+// Convention. The forward model is the readings model of paper eq. 1
+// (bench_model.h Readings_mV): specific force W [g, triad frame] -> readings
+// [mV]. A calibration is its parameters theta (SPEC section 3); applying it is
+// the exact inverse of that model, bench_model.h SpecificForceFromReadings_g:
+//
+//   u_i = (Wpr_i - W0_i) / K_i,    M W + diag(W) K W = u    (solved by Newton)
+//
+// so Readings_mV(theta, ApplyCalibration(theta, z)) = z to rounding. Sensor-
+// stage effects of the calibration (thermal_drift, thermal_drift_temp,
+// scale_asymmetry) are inverted with it; the drifts count from the start of the
+// run they are applied to (t of its samples, its first temp_C), as in the
+// estimators. Geometry and angle effects do not act on W at the sensing point
+// and are ignored (size_effect: W is the one at the x accelerometer's point).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/model/parameters.h"
+#include "core/model/run_data.h"
+#include "core/model/run_description.h"
+
+namespace triadcal {
+
+struct Calibration {
+  std::string path;
+  std::string section;  // where the parameters were: "parameters", "rts.parameters", ...
+  std::string command;  // the "command" of the OUT file, or ""
+  ParameterLayout layout;
+  Eigen::VectorXd theta;  // SI
+};
+
+// W [g] in the triad frame of every sample of the run, by the exact inverse of
+// the readings model with the calibration's parameters.
+std::vector<Eigen::Vector3d> ApplyCalibration(const Calibration& cal, const RunDescription& run,
+                                              const RunData& data);
+
+}  // namespace triadcal

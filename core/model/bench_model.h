@@ -1,0 +1,442 @@
+// The physics of triadcal, written once: bench kinematics (SPEC sections 1-2,
+// paper eq. 2), the readings model (paper eq. 1) and its exact inverse, and the
+// effects of the catalogue (effects.h). Everything is templated on the scalar so
+// that Ceres Jets flow through; the simulator, the filter, the batch solver and
+// the analyses all call these functions and nothing else.
+//
+// Frames (SPEC section 1): L level (x up, g_L = (-g, 0, 0)), 1 outer-axis frame,
+// 2 platform frame (= triad frame). Names carry frames: C_L2 rotates frame-2
+// vectors into L, p_O_L is the position of O in L.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/LU>
+#include <cmath>
+
+#include "core/model/effects.h"
+#include "core/model/parameters.h"
+#include "core/model/rotations.h"
+#include "core/model/units.h"
+
+namespace triadcal {
+
+// What the model needs besides theta: fixed, known quantities of the run.
+struct ModelConfig {
+  Eigen::Vector3d lever_arm0_m{0.138, 0.020, 0.020};  // R0, nominal, frame 2
+  double g_mps2 = kStandardGravity;
+  double temp_ref_C = 0.0;  // reference of thermal_drift_temp (first temp_C of the run)
+  ParameterLayout layout;
+};
+
+// Angle, rate and angular acceleration of one bench axis [rad, rad/s, rad/s^2].
+template <typename T>
+struct AxisState {
+  T angle{0.0};
+  T rate{0.0};
+  T accel{0.0};
+};
+
+// Both bench axes: [0] the outer axis (lambda1), [1] the inner axis (lambda2).
+template <typename T>
+struct BenchAngles {
+  AxisState<T> axis[2];
+};
+
+template <typename T>
+BenchAngles<T> CastAngles(const BenchAngles<double>& a) {
+  BenchAngles<T> out;
+  for (int i = 0; i < 2; ++i) {
+    out.axis[i].angle = T(a.axis[i].angle);
+    out.axis[i].rate = T(a.axis[i].rate);
+    out.axis[i].accel = T(a.axis[i].accel);
+  }
+  return out;
+}
+
+// Time and temperature of one sample, for the drifting effects.
+struct SampleContext {
+  double t_s = 0.0;
+  double temp_C = 0.0;
+};
+
+// ---------------------------------------------------------------------------
+// Angle stage: recorded angles <-> bench angles.
+//
+//   recorded(t) = E(bench(t - tau)),  E(l)_i = l_i + s_i sin(l_i) + c_i cos(l_i)
+//
+// The simulator evaluates the profile at t - tau and applies EncoderReading.
+// The estimators invert the chain: undo the latency with a second-order Taylor
+// step, bench(t) = recorded(t + tau), then invert E by fixed-point iteration.
+// ---------------------------------------------------------------------------
+
+template <typename T>
+T AngleLatency_s(const ModelConfig& cfg, const T* theta) {
+  const int o = cfg.layout.offset(Effect::kAngleLatency);
+  return o < 0 ? T(0.0) : theta[o];
+}
+
+// Encoder error e(l) = s sin l + c cos l of axis i and its first two derivatives.
+template <typename T>
+void EncoderError(const ModelConfig& cfg, const T* theta, int i, const T& l, T* e, T* de,
+                  T* dde) {
+  using std::cos;
+  using std::sin;
+  const int o = cfg.layout.offset(Effect::kEncoderHarmonic);
+  if (o < 0) {
+    *e = *de = *dde = T(0.0);
+    return;
+  }
+  const T& s = theta[o + 2 * i];
+  const T& c = theta[o + 2 * i + 1];
+  const T sl = sin(l), cl = cos(l);
+  *e = s * sl + c * cl;
+  *de = s * cl - c * sl;
+  *dde = -*e;
+}
+
+// Bench angles -> what the angle sensors report (encoder error only).
+//   r = l + e(l),  r' = l'(1 + e'),  r'' = l''(1 + e') + l'^2 e''
+template <typename T>
+BenchAngles<T> EncoderReading(const ModelConfig& cfg, const T* theta, const BenchAngles<T>& b) {
+  BenchAngles<T> r = b;
+  if (!cfg.layout.has(Effect::kEncoderHarmonic)) return r;
+  for (int i = 0; i < 2; ++i) {
+    T e, de, dde;
+    EncoderError(cfg, theta, i, b.axis[i].angle, &e, &de, &dde);
+    r.axis[i].angle = b.axis[i].angle + e;
+    r.axis[i].rate = b.axis[i].rate * (T(1.0) + de);
+    r.axis[i].accel = b.axis[i].accel * (T(1.0) + de) + b.axis[i].rate * b.axis[i].rate * dde;
+  }
+  return r;
+}
+
+// Recorded angles (and the rates/accelerations derived from them) -> bench angles.
+template <typename T>
+BenchAngles<T> BenchAnglesFromRecorded(const ModelConfig& cfg, const T* theta,
+                                       const BenchAngles<double>& recorded) {
+  BenchAngles<T> b = CastAngles<T>(recorded);
+  if (cfg.layout.has(Effect::kAngleLatency)) {
+    // bench(t) = recorded(t + tau) to second order in tau.
+    const T tau = AngleLatency_s(cfg, theta);
+    for (int i = 0; i < 2; ++i) {
+      const AxisState<double>& r = recorded.axis[i];
+      b.axis[i].angle = T(r.angle) + tau * r.rate + T(0.5) * tau * tau * r.accel;
+      b.axis[i].rate = T(r.rate) + tau * r.accel;
+      b.axis[i].accel = T(r.accel);
+    }
+  }
+  if (cfg.layout.has(Effect::kEncoderHarmonic)) {
+    for (int i = 0; i < 2; ++i) {
+      const AxisState<T> r = b.axis[i];
+      T l = r.angle, e, de, dde;
+      for (int it = 0; it < 4; ++it) {  // contraction factor |e'| << 1
+        EncoderError(cfg, theta, i, l, &e, &de, &dde);
+        l = r.angle - e;
+      }
+      EncoderError(cfg, theta, i, l, &e, &de, &dde);
+      b.axis[i].angle = l;
+      b.axis[i].rate = r.rate / (T(1.0) + de);
+      b.axis[i].accel =
+          (r.accel - b.axis[i].rate * b.axis[i].rate * dde) / (T(1.0) + de);
+    }
+  }
+  return b;
+}
+
+// ---------------------------------------------------------------------------
+// Geometry stage: bench kinematics (SPEC sections 1-2, paper eq. 2).
+//
+//   C_L1 = Rz(dpsi) Ry(l1 + dtheta_c)
+//   C_12 = Rz(eps) Rx(l2 + dlambda2) Rz(-eps)         (eps = 0 without the effect)
+//   C_L2 = C_L1 C_12
+//
+// A point fixed at r in frame 2 (r measured from the inner-axis point, i.e. the
+// bench centre when the axes intersect) is at
+//
+//   p_L = C_L1 d e_z + q,    q = C_L2 r               (d = 0 without the effect)
+//
+// Angular velocities in L: w1 = u1 l1' with u1 = Rz(dpsi) e_y (outer axis), and
+// w12 = C_L1 n l2' with n = Rz(eps) e_x (inner axis); w = w1 + w12. Then
+//
+//   v_L = w1 x p_L + w12 x q
+//   a_L = (u1 l1'') x p_L + w1 x v_L + (w1 x w12 + C_L1 n l2'') x q + w12 x (w x q)
+//
+// With d = 0 this is a = w' x q + w x (w x q): the normal, tangential and
+// Coriolis terms of the paper's eq. 2 (w' = u1 l1'' + C_L1 n l2'' + w1 x w12).
+// ---------------------------------------------------------------------------
+
+template <typename T>
+struct BenchMotion {
+  Mat3<T> C_L1, C_L2;
+  Vec3<T> axis_offset_L;  // C_L1 d e_z
+  Vec3<T> w1_L, w12_L;    // angular velocities [rad/s]
+  Vec3<T> dw1_L;          // u1 l1''
+  Vec3<T> dw12_L;         // w1 x w12 + C_L1 n l2''
+};
+
+template <typename T>
+BenchMotion<T> ComputeBenchMotion(const ModelConfig& cfg, const T* theta,
+                                  const BenchAngles<T>& b) {
+  const int o_eps = cfg.layout.offset(Effect::kAxisNonperpendicularity);
+  const int o_d = cfg.layout.offset(Effect::kAxisNonintersection);
+  const T eps = o_eps < 0 ? T(0.0) : theta[o_eps];
+  const T d = o_d < 0 ? T(0.0) : theta[o_d];
+
+  const Mat3<T> Rpsi = Rz(theta[kDpsi]);
+  BenchMotion<T> m;
+  m.C_L1 = Rpsi * Ry<T>(b.axis[0].angle + theta[kDthetaC]);
+  Mat3<T> C_12 = Rx<T>(b.axis[1].angle + theta[kDlambda2]);
+  Vec3<T> n_1(T(1.0), T(0.0), T(0.0));
+  if (o_eps >= 0) {
+    const Mat3<T> Reps = Rz(eps);
+    C_12 = Reps * C_12 * Reps.transpose();
+    n_1 = Reps.col(0);
+  }
+  m.C_L2 = m.C_L1 * C_12;
+  m.axis_offset_L = m.C_L1.col(2) * d;
+  const Vec3<T> u1 = Rpsi.col(1);
+  const Vec3<T> n_L = m.C_L1 * n_1;
+  m.w1_L = u1 * b.axis[0].rate;
+  m.w12_L = n_L * b.axis[1].rate;
+  m.dw1_L = u1 * b.axis[0].accel;
+  m.dw12_L = m.w1_L.cross(m.w12_L) + n_L * b.axis[1].accel;
+  return m;
+}
+
+template <typename T>
+struct PointMotion {
+  Vec3<T> p_L, v_L, a_L;  // [m, m/s, m/s^2]
+};
+
+// Motion in L of the point fixed at r_2 (frame 2, from the inner-axis point).
+template <typename T>
+PointMotion<T> MotionOfPoint(const BenchMotion<T>& m, const Vec3<T>& r_2) {
+  PointMotion<T> pm;
+  const Vec3<T> q = m.C_L2 * r_2;
+  const Vec3<T> w = m.w1_L + m.w12_L;
+  pm.p_L = m.axis_offset_L + q;
+  pm.v_L = m.w1_L.cross(pm.p_L) + m.w12_L.cross(q);
+  pm.a_L = m.dw1_L.cross(pm.p_L) + m.w1_L.cross(pm.v_L) + m.dw12_L.cross(q) +
+           m.w12_L.cross(w.cross(q));
+  return pm;
+}
+
+// R = R0 + dR, the position of O in frame 2 [m].
+template <typename T>
+Vec3<T> LeverArm_m(const ModelConfig& cfg, const T* theta) {
+  return Vec3<T>(T(cfg.lever_arm0_m.x()) + theta[kDx2], T(cfg.lever_arm0_m.y()) + theta[kDy2],
+                 T(cfg.lever_arm0_m.z()) + theta[kDz2]);
+}
+
+// Where accelerometer i senses, in frame 2: O, or O + r_i with the size effect.
+template <typename T>
+Vec3<T> SensingPoint_m(const ModelConfig& cfg, const T* theta, int i) {
+  Vec3<T> r = LeverArm_m(cfg, theta);
+  const int o = cfg.layout.offset(Effect::kSizeEffect);
+  if (o >= 0 && i > 0) {
+    const T* ri = theta + o + 3 * (i - 1);
+    r += Vec3<T>(ri[0], ri[1], ri[2]);
+  }
+  return r;
+}
+
+// Specific force in the triad frame, in g, at a point moving with a_L:
+//   W = C_L2^T (a_L - g_L) / g,   g_L = (-g, 0, 0)      (an axis up reads +1 g)
+template <typename T>
+Vec3<T> SpecificForce_g(const ModelConfig& cfg, const Mat3<T>& C_L2, const Vec3<T>& a_L) {
+  Vec3<T> f = a_L;
+  f.x() += T(cfg.g_mps2);
+  return C_L2.transpose() * f / T(cfg.g_mps2);
+}
+
+// The specific force each accelerometer feels: column i is W at accelerometer
+// i's sensing point (all three columns equal without the size effect).
+template <typename T>
+Mat3<T> SpecificForceAtAxes_g(const ModelConfig& cfg, const T* theta, const BenchMotion<T>& m) {
+  Mat3<T> W;
+  const bool size = cfg.layout.has(Effect::kSizeEffect);
+  W.col(0) = SpecificForce_g(cfg, m.C_L2, MotionOfPoint(m, SensingPoint_m(cfg, theta, 0)).a_L);
+  for (int i = 1; i < 3; ++i) {
+    W.col(i) = size ? SpecificForce_g(cfg, m.C_L2,
+                                      MotionOfPoint(m, SensingPoint_m(cfg, theta, i)).a_L)
+                    : W.col(0);
+  }
+  return W;
+}
+
+// ---------------------------------------------------------------------------
+// Sensor stage: the readings model (paper eq. 1), in mV.
+//
+//   u_i   = sum_j M_ij W_j + W_i sum_j K_ij W_j
+//   Wpr_i = K_i u_i + dK_i |u_i| + W0_i(t)            (dK_i: scale_asymmetry)
+//
+//   M = [[ 1,       -alpha_y,  beta_z ],
+//        [ alpha_x,  1,       -gamma_z],
+//        [-beta_x,   gamma_y,  1      ]]
+//
+// W0_i(t) = W0_i + rate_i t + coef_i (temp_C - T_ref) with the drift effects.
+// With the size effect, accelerometer i applies row i to the W at its own point.
+// ---------------------------------------------------------------------------
+
+template <typename T>
+Mat3<T> MisalignmentMatrix(const T* theta) {
+  Mat3<T> M;
+  M << T(1.0), -theta[kAlphaY], theta[kBetaZ],  //
+      theta[kAlphaX], T(1.0), -theta[kGammaZ],  //
+      -theta[kBetaX], theta[kGammaY], T(1.0);
+  return M;
+}
+
+template <typename T>
+Mat3<T> NonlinearityMatrix(const T* theta) {
+  return Eigen::Map<const Eigen::Matrix<T, 3, 3, Eigen::RowMajor>>(theta + kKxx);
+}
+
+// Zero offsets at this sample [mV].
+template <typename T>
+Vec3<T> ZeroOffset_mV(const ModelConfig& cfg, const T* theta, const SampleContext& ctx) {
+  Vec3<T> w0(theta[kW0x], theta[kW0y], theta[kW0z]);
+  const int o_t = cfg.layout.offset(Effect::kThermalDrift);
+  if (o_t >= 0) {
+    for (int i = 0; i < 3; ++i) w0[i] += theta[o_t + i] * T(ctx.t_s);
+  }
+  const int o_T = cfg.layout.offset(Effect::kThermalDriftTemp);
+  if (o_T >= 0) {
+    for (int i = 0; i < 3; ++i) w0[i] += theta[o_T + i] * T(ctx.temp_C - cfg.temp_ref_C);
+  }
+  return w0;
+}
+
+// Specific force at each axis (columns, g) -> readings [mV].
+template <typename T>
+Vec3<T> Readings_mV(const ModelConfig& cfg, const T* theta, const Mat3<T>& W_axes,
+                    const SampleContext& ctx) {
+  using std::abs;
+  const Mat3<T> M = MisalignmentMatrix(theta);
+  const Mat3<T> K = NonlinearityMatrix(theta);
+  const Vec3<T> w0 = ZeroOffset_mV(cfg, theta, ctx);
+  const int o_a = cfg.layout.offset(Effect::kScaleAsymmetry);
+  Vec3<T> out;
+  for (int i = 0; i < 3; ++i) {
+    const Vec3<T> W = W_axes.col(i);
+    const T u = M.row(i).dot(W) + W[i] * K.row(i).dot(W);
+    out[i] = theta[kKx + i] * u + w0[i];
+    if (o_a >= 0) out[i] += theta[o_a + i] * abs(u);
+  }
+  return out;
+}
+
+// Common-point form: one specific-force vector for all three axes.
+template <typename T>
+Vec3<T> Readings_mV(const ModelConfig& cfg, const T* theta, const Vec3<T>& W,
+                    const SampleContext& ctx) {
+  Mat3<T> W_axes;
+  W_axes << W, W, W;
+  return Readings_mV(cfg, theta, W_axes, ctx);
+}
+
+// The value of a scalar without its derivative part (double, or a Ceres Jet).
+inline double ScalarPart(double x) { return x; }
+template <typename J>
+double ScalarPart(const J& x) {
+  return x.a;
+}
+
+// Exact inverse of the common-point readings model: readings [mV] -> W [g].
+//   u_i = (Wpr_i - W0_i) / (K_i + dK_i sgn)   (sgn(u_i) = sgn(Wpr_i - W0_i))
+//   solve F(W) = M W + diag(W) K W - u = 0 by Newton from W = M^-1 u,
+//   J = M + diag(K W) + diag(W) K; converged to rounding for |K_ij| << 1.
+// The iterations run on the values only; one last Newton step in T with the
+// value Jacobian J0 gives the derivatives exactly (implicit function theorem:
+// dW = -J0^-1 dF), at a fraction of the cost of iterating in Jets.
+template <typename T>
+Vec3<T> SpecificForceFromReadings_g(const ModelConfig& cfg, const T* theta,
+                                    const Vec3<T>& readings_mV, const SampleContext& ctx) {
+  const Mat3<T> M = MisalignmentMatrix(theta);
+  const Mat3<T> K = NonlinearityMatrix(theta);
+  const Vec3<T> w0 = ZeroOffset_mV(cfg, theta, ctx);
+  const int o_a = cfg.layout.offset(Effect::kScaleAsymmetry);
+  Vec3<T> u;
+  for (int i = 0; i < 3; ++i) {
+    const T v = readings_mV[i] - w0[i];
+    T scale = theta[kKx + i];
+    if (o_a >= 0) scale += v < T(0.0) ? -theta[o_a + i] : theta[o_a + i];
+    u[i] = v / scale;
+  }
+  Mat3<double> M0, K0;
+  Vec3<double> u0;
+  for (int r = 0; r < 3; ++r) {
+    u0[r] = ScalarPart(u[r]);
+    for (int c = 0; c < 3; ++c) {
+      M0(r, c) = ScalarPart(M(r, c));
+      K0(r, c) = ScalarPart(K(r, c));
+    }
+  }
+  auto jacobian = [&](const Vec3<double>& W) {
+    Mat3<double> J = M0;
+    J.diagonal() += K0 * W;
+    J += W.asDiagonal() * K0;
+    return J;
+  };
+  Vec3<double> W0 = M0.inverse() * u0;
+  for (int it = 0; it < 8; ++it) {  // quadratic: 2-3 steps for |K_ij| ~ 1e-3
+    const Vec3<double> F = M0 * W0 + W0.cwiseProduct(K0 * W0) - u0;
+    const Vec3<double> step = jacobian(W0).inverse() * F;
+    W0 -= step;
+    if (step.cwiseAbs().maxCoeff() <= 1e-15 * (1.0 + W0.cwiseAbs().maxCoeff())) break;
+  }
+  const Vec3<T> W = W0.template cast<T>();
+  const Vec3<T> F = M * W + W.cwiseProduct(K * W) - u;
+  const Mat3<double> J0_inv = jacobian(W0).inverse();
+  const Mat3<T> J_inv = J0_inv.template cast<T>();
+  return W - J_inv * F;
+}
+
+// ---------------------------------------------------------------------------
+// The whole forward chain: bench angles -> predicted readings [mV].
+// ---------------------------------------------------------------------------
+template <typename T>
+Vec3<T> PredictReadings_mV(const ModelConfig& cfg, const T* theta, const BenchAngles<T>& bench,
+                           const SampleContext& ctx) {
+  const BenchMotion<T> m = ComputeBenchMotion(cfg, theta, bench);
+  return Readings_mV(cfg, theta, SpecificForceAtAxes_g(cfg, theta, m), ctx);
+}
+
+// ---------------------------------------------------------------------------
+// The paper's two blocks, on top of the chain above.
+//
+// B1: readings -> acceleration of O in L (paper eq. 3):
+//   a_L = C_L2 W g + g_L,   W = inverse readings model of z
+// With the size effect each accelerometer senses at its own point; the
+// difference of the readings at those points and at O, predicted from the
+// bench kinematics, is removed first, so W is the specific force at O.
+//
+// B2: the reference motion of O from the angles alone:
+//   S_DU = p_O_L,   V_DU = v_O_L      (MotionOfPoint at R)
+// ---------------------------------------------------------------------------
+template <typename T>
+Vec3<T> AccelerationFromReadings_L(const ModelConfig& cfg, const T* theta,
+                                   const BenchAngles<double>& recorded,
+                                   const Eigen::Vector3d& readings_mV, const SampleContext& ctx) {
+  const BenchAngles<T> b = BenchAnglesFromRecorded<T>(cfg, theta, recorded);
+  const BenchMotion<T> m = ComputeBenchMotion(cfg, theta, b);
+  Vec3<T> z = readings_mV.template cast<T>();
+  if (cfg.layout.has(Effect::kSizeEffect)) {
+    const Mat3<T> W_axes = SpecificForceAtAxes_g(cfg, theta, m);
+    const Vec3<T> W_O = W_axes.col(0);
+    z -= Readings_mV(cfg, theta, W_axes, ctx) - Readings_mV(cfg, theta, W_O, ctx);
+  }
+  const Vec3<T> W = SpecificForceFromReadings_g(cfg, theta, z, ctx);
+  Vec3<T> a = m.C_L2 * W * T(cfg.g_mps2);
+  a.x() -= T(cfg.g_mps2);
+  return a;
+}
+
+template <typename T>
+PointMotion<T> ReferenceMotion(const ModelConfig& cfg, const T* theta,
+                               const BenchAngles<double>& recorded) {
+  const BenchAngles<T> b = BenchAnglesFromRecorded<T>(cfg, theta, recorded);
+  return MotionOfPoint(ComputeBenchMotion(cfg, theta, b), LeverArm_m(cfg, theta));
+}
+
+}  // namespace triadcal

@@ -1,0 +1,66 @@
+#include "core/model/parameters.h"
+
+#include "core/model/units.h"
+
+namespace triadcal {
+
+const std::vector<ParameterInfo>& BaseParameterInfo() {
+  static const std::vector<ParameterInfo> info = [] {
+    std::vector<ParameterInfo> v;
+    auto add = [&v](const char* name, const char* unit, double f) {
+      v.push_back({name, unit, f, std::nullopt});
+    };
+    for (const char* n : {"Kx", "Ky", "Kz"}) add(n, "mV/g", 1.0);
+    for (const char* n : {"W0x", "W0y", "W0z"}) add(n, "mV", 1.0);
+    for (const char* n : {"alpha_x", "alpha_y", "beta_x", "beta_z", "gamma_y", "gamma_z"}) {
+      add(n, "arcmin", kArcminToRad);
+    }
+    for (const char* n : {"Kxx", "Kxy", "Kxz", "Kyx", "Kyy", "Kyz", "Kzx", "Kzy", "Kzz"}) {
+      add(n, "1/g", 1.0);
+    }
+    for (const char* n : {"dpsi", "dtheta_c", "dlambda2"}) add(n, "arcmin", kArcminToRad);
+    for (const char* n : {"dx2", "dy2", "dz2"}) add(n, "mm", kMmToM);
+    return v;
+  }();
+  return info;
+}
+
+ParameterLayout::ParameterLayout() : ParameterLayout(std::vector<Effect>{}) {}
+
+ParameterLayout::ParameterLayout(const std::vector<Effect>& effects) {
+  info_ = BaseParameterInfo();
+  for (int i = 0; i < kNumEffects; ++i) offset_[i] = -1;
+  for (Effect e : effects) {
+    if (offset_[static_cast<int>(e)] >= 0) continue;  // listed twice
+    effects_.push_back(e);
+    offset_[static_cast<int>(e)] = static_cast<int>(info_.size());
+    const EffectSpec& spec = GetEffectSpec(e);
+    for (const ParamSpec& p : spec.params) {
+      info_.push_back({spec.name + "." + p.name, p.unit, p.si_per_unit, e});
+    }
+  }
+  for (int i = 0; i < size(); ++i) index_[info_[i].name] = i;
+}
+
+int ParameterLayout::IndexOf(const std::string& name) const {
+  auto it = index_.find(name);
+  return it == index_.end() ? -1 : it->second;
+}
+
+NamedValues ToFileUnits(const ParameterLayout& layout, const Eigen::VectorXd& theta) {
+  NamedValues out;
+  for (int i = 0; i < layout.size(); ++i) {
+    out[layout.info(i).name] = theta[i] / layout.info(i).si_per_unit;
+  }
+  return out;
+}
+
+void SetFromFileUnits(const ParameterLayout& layout, const NamedValues& values,
+                      Eigen::VectorXd* theta) {
+  for (const auto& [name, value] : values) {
+    const int i = layout.IndexOf(name);
+    if (i >= 0) (*theta)[i] = value * layout.info(i).si_per_unit;
+  }
+}
+
+}  // namespace triadcal

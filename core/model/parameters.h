@@ -1,0 +1,76 @@
+// The parameter vector theta: the 27 base parameters of SPEC section 3 followed
+// by the parameters of each effect switched on in the layout.
+//
+// Internally every entry is in SI/radians (see units.h); ParameterInfo gives the
+// name and the unit used in every file the tool reads or writes, and the factor
+// between the two.
+#pragma once
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/model/effects.h"
+
+namespace triadcal {
+
+// Base parameters, in the order they occupy at the start of theta.
+enum BaseParam : int {
+  kKx = 0, kKy, kKz,                    // scale factors            [mV/g]
+  kW0x, kW0y, kW0z,                     // zero offsets             [mV]
+  kAlphaX, kAlphaY, kBetaX, kBetaZ,     // non-orthogonality angles [rad]
+  kGammaY, kGammaZ,
+  kKxx, kKxy, kKxz,                     // nonlinearity and cross-  [1/g]
+  kKyx, kKyy, kKyz,                     //   coupling K_ij, row-major
+  kKzx, kKzy, kKzz,
+  kDpsi, kDthetaC, kDlambda2,           // bench set-up errors      [rad]
+  kDx2, kDy2, kDz2,                     // lever-arm error, frame 2 [m]
+  kNumBaseParams
+};
+
+struct ParameterInfo {
+  std::string name;  // file name: "Kx", "alpha_y", "angle_latency.tau"
+  std::string unit;  // unit in files: "mV/g", "arcmin", "ms"
+  double si_per_unit;
+  std::optional<Effect> effect;  // empty for base parameters
+};
+
+// Names and units of the 27 base parameters (SPEC section 3).
+const std::vector<ParameterInfo>& BaseParameterInfo();
+
+// Which effects are switched on and where their parameters sit in theta.
+class ParameterLayout {
+ public:
+  ParameterLayout();  // base parameters only
+  explicit ParameterLayout(const std::vector<Effect>& effects);
+
+  int size() const { return static_cast<int>(info_.size()); }
+  const ParameterInfo& info(int i) const { return info_[i]; }
+  const std::vector<ParameterInfo>& infos() const { return info_; }
+  const std::vector<Effect>& effects() const { return effects_; }
+
+  bool has(Effect e) const { return offset_[static_cast<int>(e)] >= 0; }
+  // Index in theta of the first parameter of effect e, or -1 when it is off.
+  int offset(Effect e) const { return offset_[static_cast<int>(e)]; }
+  // Index of a parameter by its file name, or -1.
+  int IndexOf(const std::string& name) const;
+
+ private:
+  std::vector<Effect> effects_;
+  std::vector<ParameterInfo> info_;
+  int offset_[kNumEffects];
+  std::map<std::string, int> index_;
+};
+
+// Parameter values in file units, keyed by name (what JSON and YAML files hold).
+using NamedValues = std::map<std::string, double>;
+
+// theta (SI) -> file units, and back. FromFileUnits fills only the names present.
+NamedValues ToFileUnits(const ParameterLayout& layout, const Eigen::VectorXd& theta);
+void SetFromFileUnits(const ParameterLayout& layout, const NamedValues& values,
+                      Eigen::VectorXd* theta);
+
+}  // namespace triadcal

@@ -1,0 +1,56 @@
+#include "core/model/priors.h"
+
+#include "core/model/errors.h"
+
+namespace triadcal {
+
+Prior MakePrior(const RunDescription& run, const ParameterLayout& layout) {
+  Prior p;
+  p.mean = NominalTheta(run, layout);
+  p.sigma.resize(layout.size());
+  const double k_nom = run.scale_mV_per_g.cwiseAbs().maxCoeff();
+  for (int i = 0; i < layout.size(); ++i) {
+    const ParameterInfo& info = layout.info(i);
+    double s = 0.0;  // file units
+    if (i <= kKz) {
+      s = 0.1 * std::abs(run.scale_mV_per_g[i - kKx]);
+    } else if (i <= kW0z) {
+      s = 0.2 * std::abs(run.scale_mV_per_g[i - kW0x]);
+    } else if (i <= kGammaZ) {
+      s = 180.0;
+    } else if (i <= kKzz) {
+      s = 0.02;
+    } else if (i <= kDlambda2) {
+      s = 180.0;
+    } else if (i <= kDz2) {
+      s = 50.0;
+    } else {
+      switch (*info.effect) {
+        case Effect::kAngleLatency: s = 20.0; break;
+        case Effect::kEncoderHarmonic: s = 10.0; break;
+        case Effect::kAxisNonintersection: s = 10.0; break;
+        case Effect::kAxisNonperpendicularity: s = 30.0; break;
+        case Effect::kSizeEffect: s = 20.0; break;
+        case Effect::kThermalDrift: s = 10.0; break;
+        case Effect::kThermalDriftTemp: s = 10.0; break;
+        case Effect::kScaleAsymmetry: s = 0.05 * k_nom; break;
+      }
+    }
+    p.sigma[i] = s * info.si_per_unit;
+  }
+  for (const auto& [name, sigma] : run.prior_sigma) {
+    const int i = layout.IndexOf(name);
+    if (i < 0) {
+      // Effect parameters of effects not in this layout are fine to list.
+      if (name.find('.') != std::string::npos) continue;
+      throw InputError(run.yaml_path + ": priors." + name + ": unknown parameter");
+    }
+    if (!(sigma > 0.0)) {
+      throw InputError(run.yaml_path + ": priors." + name + ": sigma must be > 0");
+    }
+    p.sigma[i] = sigma * layout.info(i).si_per_unit;
+  }
+  return p;
+}
+
+}  // namespace triadcal

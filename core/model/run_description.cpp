@@ -1,0 +1,22 @@
+#include "core/model/run_description.h"
+
+namespace triadcal {
+
+Eigen::VectorXd NominalTheta(const RunDescription& run, const ParameterLayout& layout) {
+  Eigen::VectorXd theta = Eigen::VectorXd::Zero(layout.size());
+  for (int i = 0; i < 3; ++i) {
+    theta[kKx + i] = run.scale_mV_per_g[i];
+    theta[kW0x + i] = run.bias_mV[i];
+  }
+  return theta;
+}
+
+ModelConfig MakeModelConfig(const RunDescription& run, const ParameterLayout& layout) {
+  ModelConfig cfg;
+  cfg.lever_arm0_m = run.lever_arm0_m;
+  cfg.g_mps2 = run.g_mps2;
+  cfg.layout = layout;
+  return cfg;
+}
+
+}  // namespace triadcal

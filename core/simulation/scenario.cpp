@@ -1,0 +1,296 @@
+// LoadScenario: reads and checks a scenario file (SPEC section 7, the input of
+// `triadcal simulate`; the schema is in simulator.h). Every message is one line
+// "FILE: key.path: what is wrong", through the shared helpers of yaml_fields.h.
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/model/errors.h"
+#include "core/io/file_util.h"
+#include "core/simulation/simulator.h"
+#include "core/io/yaml_fields.h"
+#include "core/io/run_description_io.h"
+
+namespace triadcal {
+namespace {
+
+// A map section: null (absent or empty) counts as an empty map. Besides the
+// allowed keys, rejects a key given twice (yaml-cpp would keep the first).
+void CheckSection(const YAML::Node& n, const YamlPlace& at,
+                  const std::vector<std::string>& allowed) {
+  if (n.IsNull()) return;
+  CheckKeys(n, at, allowed);
+  std::set<std::string> seen;
+  for (const auto& kv : n) {
+    if (!seen.insert(kv.first.Scalar()).second) at.Child(kv.first.Scalar()).Fail("given twice");
+  }
+}
+
+void ReadPair(const YAML::Node& n, const YamlPlace& at, double out[2]) {
+  if (!n.IsSequence()) at.Fail("expected a list of 2 numbers, got " + DescribeNode(n));
+  if (n.size() != 2) at.Fail("expected a list of 2 numbers, got " + std::to_string(n.size()));
+  for (std::size_t i = 0; i < 2; ++i) out[i] = ReadNumber(n[i], at.Index(i));
+}
+
+bool ReadBool(const YAML::Node& n, const YamlPlace& at) {
+  bool b = false;
+  if (!n.IsScalar() || !YAML::convert<bool>::decode(n, b)) {
+    at.Fail("expected true or false, got " + DescribeNode(n));
+  }
+  return b;
+}
+
+std::uint64_t ReadSeed(const YAML::Node& n, const YamlPlace& at) {
+  const std::string text = n.IsScalar() ? n.Scalar() : "";
+  const bool digits =
+      !text.empty() && text.size() <= 20 &&
+      std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
+  if (!digits) at.Fail("expected a non-negative integer, got " + DescribeNode(n));
+  try {
+    return std::stoull(text);
+  } catch (const std::exception&) {
+    at.Fail("expected a non-negative integer below 2^64, got " + DescribeNode(n));
+  }
+}
+
+void ParseProfile(const YAML::Node& n, const YamlPlace& at, HarmonicProfile* p) {
+  CheckSection(n, at, {"amplitude_deg", "period_s", "phase_deg", "duration_s", "rate_hz"});
+  if (n.IsNull()) return;
+  double pair[2];
+  if (n["amplitude_deg"]) {
+    ReadPair(n["amplitude_deg"], at.Child("amplitude_deg"), pair);
+    for (int i = 0; i < 2; ++i) p->amplitude_rad[i] = pair[i] * kDegToRad;
+  }
+  if (n["period_s"]) {
+    ReadPair(n["period_s"], at.Child("period_s"), pair);
+    for (std::size_t i = 0; i < 2; ++i) {
+      p->period_s[i] = ReadPositive(n["period_s"][i], at.Child("period_s").Index(i));
+    }
+  }
+  if (n["phase_deg"]) {
+    ReadPair(n["phase_deg"], at.Child("phase_deg"), pair);
+    for (int i = 0; i < 2; ++i) p->phase_rad[i] = pair[i] * kDegToRad;
+  }
+  if (n["duration_s"]) p->duration_s = ReadPositive(n["duration_s"], at.Child("duration_s"));
+  if (n["rate_hz"]) p->rate_hz = ReadPositive(n["rate_hz"], at.Child("rate_hz"));
+  const double samples = p->duration_s * p->rate_hz;
+  if (samples > static_cast<double>(kMaxSimulatedSamples)) {
+    char text[40];
+    std::snprintf(text, sizeof(text), "%.15g", samples);
+    at.Fail("duration_s * rate_hz = " + std::string(text) + " samples, more than the limit " +
+            std::to_string(kMaxSimulatedSamples));
+  }
+}
+
+// An injected effect and its parameter values in file units.
+struct InjectedEffect {
+  Effect id;
+  std::vector<double> values_file;
+};
+
+// The `effects` section, in catalogue order.
+std::vector<InjectedEffect> ParseEffects(const YAML::Node& n, const YamlPlace& at) {
+  std::vector<InjectedEffect> out;
+  if (n.IsNull()) return out;
+  if (!n.IsMap()) at.Fail("expected a map {effect: {param: value}}, got " + DescribeNode(n));
+  std::set<std::string> seen;
+  for (const auto& kv : n) {
+    const std::string name = kv.first.Scalar();
+    if (!seen.insert(name).second) at.Child(name).Fail("given twice");
+    InjectedEffect inj;
+    try {
+      inj.id = EffectFromName(name);
+    } catch (const std::invalid_argument& e) {
+      at.Fail(e.what());
+    }
+    const YamlPlace eat = at.Child(name);
+    const EffectSpec& spec = GetEffectSpec(inj.id);
+    std::vector<std::string> allowed;
+    for (const ParamSpec& p : spec.params) {
+      allowed.push_back(p.name);
+      allowed.push_back(UnitSuffixedKey(p));
+    }
+    const YAML::Node params = kv.second;
+    CheckSection(params, eat, allowed);
+    for (const ParamSpec& p : spec.params) {
+      const std::string suffixed = UnitSuffixedKey(p);
+      const bool plain = !params.IsNull() && params[p.name];
+      const bool with_unit = !params.IsNull() && params[suffixed];
+      if (plain && with_unit) eat.Fail("both '" + p.name + "' and '" + suffixed + "' given");
+      double v = 0.0;
+      if (plain) v = ReadNumber(params[p.name], eat.Child(p.name));
+      if (with_unit) v = ReadNumber(params[suffixed], eat.Child(suffixed));
+      inj.values_file.push_back(v);
+    }
+    out.push_back(inj);
+  }
+  std::sort(out.begin(), out.end(), [](const InjectedEffect& a, const InjectedEffect& b) {
+    return static_cast<int>(a.id) < static_cast<int>(b.id);
+  });
+  return out;
+}
+
+// The truth: the nominal of the run, then the base parameters the file gives,
+// then the injected effects' parameters.
+Eigen::VectorXd ParseTruth(const YAML::Node& n, const YamlPlace& at, const RunDescription& run,
+                           const ParameterLayout& layout,
+                           const std::vector<InjectedEffect>& effects) {
+  std::vector<std::string> allowed;
+  for (const ParameterInfo& p : BaseParameterInfo()) allowed.push_back(p.name);
+  CheckSection(n, at, allowed);
+  Eigen::VectorXd theta = NominalTheta(run, layout);
+  if (!n.IsNull()) {
+    for (const auto& kv : n) {
+      const std::string name = kv.first.Scalar();
+      const int i = layout.IndexOf(name);
+      theta[i] = ReadNumber(kv.second, at.Child(name)) * layout.info(i).si_per_unit;
+    }
+  }
+  for (const InjectedEffect& e : effects) {
+    const int o = layout.offset(e.id);
+    for (std::size_t j = 0; j < e.values_file.size(); ++j) {
+      const int i = o + static_cast<int>(j);
+      theta[i] = e.values_file[j] * layout.info(i).si_per_unit;
+    }
+  }
+  return theta;
+}
+
+// The `run` section: what run.yaml will declare. Its noise defaults to the
+// true noise of the scenario: angles as given (0 included), readings
+// sqrt(accel^2 + q^2 / 12) with the quantization step q, floored at
+// kMinDeclaredNoise_mV because run.yaml requires noise_mV > 0.
+RunDescription ParseRunSection(const YAML::Node& n, const YamlPlace& at,
+                               const std::string& yaml_path, double accel_noise_mV,
+                               double quantization_mV, double angle_noise_rad) {
+  if (!n.IsNull() && !n.IsMap()) at.Fail("expected a map, got " + DescribeNode(n));
+  const YAML::Node node = n.IsNull() ? YAML::Node(YAML::NodeType::Map) : n;
+  for (const char* key : {"data", "columns", "mounting"}) {
+    if (node[key]) {
+      at.Child(key).Fail("not allowed in a scenario (simulate writes run.csv itself)");
+    }
+  }
+  // Messages from the run parser read "FILE: run: bench.lever_arm_mm: ...".
+  RunDescription run = ParseRunDescription(node, yaml_path, at.where + ": " + at.path);
+  const YAML::Node triad = node["triad"], bench = node["bench"];
+  if (!(triad && triad.IsMap() && triad["noise_mV"])) {
+    const double variance_mV2 =
+        accel_noise_mV * accel_noise_mV + quantization_mV * quantization_mV / 12.0;
+    run.noise_mV = std::max(std::sqrt(variance_mV2), kMinDeclaredNoise_mV);
+  }
+  if (!(bench && bench.IsMap() && bench["angle_noise_arcsec"])) {
+    run.angle_noise_rad = angle_noise_rad;
+  }
+  return run;
+}
+
+}  // namespace
+
+Scenario LoadScenario(const std::string& yaml_path) {
+  const YAML::Node root = LoadYamlFile(yaml_path);
+  const YamlPlace top{yaml_path, ""};
+  if (!root.IsMap())
+    top.Fail("expected a map with the sections profile, truth, noise, effects, run");
+  CheckSection(
+      root, top,
+      {"profile", "truth", "truth_spread", "noise", "effects", "run", "seed", "sensor", "output",
+       "temperature"});
+  auto section = [&root](const char* key) {
+    return root[key] ? root[key] : YAML::Node(YAML::NodeType::Null);
+  };
+
+  Scenario s;
+  s.yaml_path = yaml_path;
+  ParseProfile(section("profile"), top.Child("profile"), &s.profile);
+
+  const YAML::Node noise = section("noise");
+  const YamlPlace noise_at = top.Child("noise");
+  CheckSection(noise, noise_at, {"accel_mV", "angle_arcsec"});
+  if (!noise.IsNull() && noise["accel_mV"]) {
+    s.accel_noise_mV = ReadNonNegative(noise["accel_mV"], noise_at.Child("accel_mV"));
+  }
+  if (!noise.IsNull() && noise["angle_arcsec"]) {
+    s.angle_noise_rad =
+        ReadNonNegative(noise["angle_arcsec"], noise_at.Child("angle_arcsec")) * kArcsecToRad;
+  }
+
+  const YAML::Node sensor = section("sensor");
+  const YamlPlace sensor_at = top.Child("sensor");
+  CheckSection(sensor, sensor_at, {"quantization_mV", "saturation_mV"});
+  if (!sensor.IsNull() && sensor["quantization_mV"]) {
+    s.quantization_mV =
+        ReadNonNegative(sensor["quantization_mV"], sensor_at.Child("quantization_mV"));
+  }
+  if (!sensor.IsNull() && sensor["saturation_mV"]) {
+    const YamlPlace sat_at = sensor_at.Child("saturation_mV");
+    double lim[2];
+    ReadPair(sensor["saturation_mV"], sat_at, lim);
+    if (!(lim[0] < lim[1])) {
+      sat_at.Fail("expected [low, high] with low < high, got [" + FormatDouble(lim[0]) + ", " +
+                  FormatDouble(lim[1]) + "]");
+    }
+    s.saturation_low_mV = lim[0];
+    s.saturation_high_mV = lim[1];
+  }
+
+  s.run = ParseRunSection(section("run"), top.Child("run"), yaml_path, s.accel_noise_mV,
+                          s.quantization_mV, s.angle_noise_rad);
+
+  const std::vector<InjectedEffect> effects =
+      ParseEffects(section("effects"), top.Child("effects"));
+  std::vector<Effect> ids;
+  for (const InjectedEffect& e : effects) ids.push_back(e.id);
+  s.truth_layout = ParameterLayout(ids);
+  s.truth = ParseTruth(section("truth"), top.Child("truth"), s.run, s.truth_layout, effects);
+
+  const YAML::Node temp = section("temperature");
+  const YamlPlace temp_at = top.Child("temperature");
+  CheckSection(temp, temp_at, {"start_C", "rate_C_per_h"});
+  const bool has_temperature = bool(root["temperature"]);
+  if (!temp.IsNull() && temp["start_C"]) {
+    s.temp_start_C = ReadNumber(temp["start_C"], temp_at.Child("start_C"));
+  }
+  if (!temp.IsNull() && temp["rate_C_per_h"]) {
+    s.temp_rate_C_per_h = ReadNumber(temp["rate_C_per_h"], temp_at.Child("rate_C_per_h"));
+  }
+  if (s.truth_layout.has(Effect::kThermalDriftTemp) && !has_temperature) {
+    top.Child("effects")
+        .Child("thermal_drift_temp")
+        .Fail("needs a section temperature: {start_C, rate_C_per_h} (the drift follows temp_C)");
+  }
+
+  const YAML::Node output = section("output");
+  const YamlPlace output_at = top.Child("output");
+  CheckSection(output, output_at, {"rates", "temperature"});
+  s.write_temp = has_temperature;
+  if (!output.IsNull() && output["rates"]) {
+    s.write_rates = ReadBool(output["rates"], output_at.Child("rates"));
+  }
+  if (!output.IsNull() && output["temperature"]) {
+    s.write_temp = ReadBool(output["temperature"], output_at.Child("temperature"));
+  }
+
+  const YAML::Node spread = section("truth_spread");
+  const YamlPlace spread_at = top.Child("truth_spread");
+  if (!spread.IsNull()) {
+    if (!spread.IsMap()) spread_at.Fail("expected a map {parameter: sigma in file units}");
+    for (const auto& kv : spread) {
+      const std::string name = kv.first.as<std::string>();
+      const int i = s.truth_layout.IndexOf(name);
+      if (i < 0) spread_at.Child(name).Fail("unknown parameter (SPEC section 3 names)");
+      s.truth_spread.push_back(
+          {i, ReadNonNegative(kv.second, spread_at.Child(name)) * s.truth_layout.info(i).si_per_unit});
+    }
+  }
+
+  if (root["seed"]) s.seed = ReadSeed(root["seed"], top.Child("seed"));
+  return s;
+}
+
+}  // namespace triadcal

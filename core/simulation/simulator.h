@@ -1,0 +1,143 @@
+// The simulator: a scenario (SPEC section 7) -> a run (run.csv, run.yaml,
+// truth.json). It uses the model of bench_model.h and nothing else for the
+// physics, so data and estimators share one model.
+//
+// Scenario file (every section and key optional; defaults in the structs below):
+//
+//   profile: {amplitude_deg: [360, 90], period_s: [30, 12], phase_deg: [0, 0],
+//             duration_s: 90, rate_hz: 100}
+//   truth: {Kx: 171.5, dpsi: -33, dx2: -7}   # SPEC section 3 names, file units;
+//                                             # absent: nominal (Kx..Kz, W0x..W0z
+//                                             # from run.triad) or 0
+//   noise: {accel_mV: 2.0, angle_arcsec: 0}   # white, 1 sigma per sample
+//   effects: {angle_latency: {tau_ms: 2}}     # injected into the data, NOT declared
+//                                             # in run.yaml; a parameter is written
+//                                             # as its name or name_unit (tau or
+//                                             # tau_ms); absent parameters are 0
+//   run: {bench: ..., triad: ..., constraints: ...}   # what run.yaml declares;
+//        # bench.angle_noise_arcsec defaults to noise.angle_arcsec (0 included)
+//        # and triad.noise_mV to the true reading noise sqrt(accel_mV^2 + q^2/12)
+//        # (q = sensor.quantization_mV), at least kMinDeclaredNoise_mV since
+//        # run.yaml needs noise_mV > 0; `data`, `columns` and `mounting` are not
+//        # allowed (simulate writes the CSV contract itself)
+//   # optional keys beyond SPEC section 7:
+//   seed: 1                                   # overridden by `simulate --seed N`
+//   truth_spread: {dlambda2: 0.5}             # per-seed Gaussian spread added to
+//                                             # the truth (file units), drawn from
+//                                             # a stream of its own (SampleTruth):
+//                                             # Monte Carlo over a population of
+//                                             # sensors and benches
+//   sensor: {quantization_mV: 0.5, saturation_mV: [0, 3300]}   # recording chain
+//   temperature: {start_C: 25, rate_C_per_h: 10}   # temp_C(t) = start + rate t;
+//                                             # required by thermal_drift_temp
+//   output: {rates: false, temperature: <true when `temperature` is given>}
+//                                             # write lambda1_rate/lambda2_rate
+//                                             # (exact recorded rates) / temp_C
+//
+// Sample k (k = 0, 1, ... while t_k = double(k) / rate_hz < duration_s):
+//
+//   bench     = profile(t_k)                          (the bench moves with this)
+//   recorded  = EncoderReading(profile(t_k - tau)) + angle noise
+//   readings  = PredictReadings_mV(bench, t_k, temp_C(t_k)) + accel noise,
+//               then rounded to multiples of quantization_mV, then clipped to
+//               saturation_mV
+//
+// Noise: one std::mt19937_64 seeded with `seed` feeds one
+// std::normal_distribution<double>(0, 1); per sample the draws are, in this
+// order, lambda1, lambda2, wx, wy, wz, each times its sigma. All five are drawn
+// even when a sigma is 0, so the sequence of one channel does not depend on the
+// others. The same seed gives the same data with the same C++ standard library
+// (the normal distribution's algorithm is implementation-defined).
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/model/bench_model.h"
+#include "core/model/run_data.h"
+#include "core/model/run_description.h"
+
+namespace triadcal {
+
+// lambda_i(t) = A_i sin(2 pi t / T_i + phi_i)
+struct HarmonicProfile {
+  double amplitude_rad[2] = {360.0 * kDegToRad, 90.0 * kDegToRad};
+  double period_s[2] = {30.0, 12.0};
+  double phase_rad[2] = {0.0, 0.0};
+  double duration_s = 90.0;
+  double rate_hz = 100.0;
+
+  BenchAngles<double> At(double t_s) const;  // exact angle, rate, acceleration
+  // Number of samples t_k = double(k) / rate_hz < duration_s, and t_k itself.
+  std::size_t NumSamples() const;
+  double SampleTime_s(std::size_t k) const { return static_cast<double>(k) / rate_hz; }
+};
+
+struct Scenario {
+  std::string yaml_path;
+  HarmonicProfile profile;
+  RunDescription run;            // what run.yaml declares
+  ParameterLayout truth_layout;  // base + injected effects
+  Eigen::VectorXd truth;         // SI, in truth_layout
+  // noise, 1 sigma per sample
+  double accel_noise_mV = 2.0;
+  double angle_noise_rad = 0.0;
+  // optional sensor imperfections of the recording chain
+  double quantization_mV = 0.0;  // 0: none
+  double saturation_low_mV = -1e300, saturation_high_mV = 1e300;
+  // optional channels
+  bool write_rates = false;
+  double temp_start_C = 25.0, temp_rate_C_per_h = 0.0;
+  bool write_temp = false;
+  std::uint64_t seed = 1;
+  // (parameter index, sigma SI): see truth_spread above
+  std::vector<std::pair<int, double>> truth_spread;
+};
+
+// The truth of this seed: s.truth plus the truth_spread draws. Call after the
+// seed is final; the data noise stream is not affected.
+void SampleTruth(Scenario* s);
+
+// The reading noise a run declares for noise-free data (run.yaml requires > 0).
+constexpr double kMinDeclaredNoise_mV = 1e-3;
+
+// Most samples a scenario may ask for (about 2 GB of run data).
+constexpr std::size_t kMaxSimulatedSamples = 20000000;
+
+// Reads and checks SCENARIO.yaml. Throws InputError "FILE: key.path: what is
+// wrong" (or "FILE:LINE: ..." for YAML syntax errors).
+Scenario LoadScenario(const std::string& yaml_path);
+
+// Temperature of the scenario at time t [degC]: start_C + rate_C_per_h * t / 3600.
+double ScenarioTemperature_C(const Scenario& s, double t_s);
+
+// The model configuration the data are generated with: MakeModelConfig(run,
+// truth_layout) with temp_ref_C = the temperature of the first sample.
+ModelConfig TruthModelConfig(const Scenario& s);
+
+// Generates the run: samples t_k = k / rate_hz < duration_s.
+RunData Simulate(const Scenario& s);
+
+// The key of parameter i of the layout in truth.json: base parameters by name
+// ("Kx"), effect parameters as effect.name_unit ("angle_latency.tau_ms", the
+// SPEC section 7 form), and its value in file units, written with the fewest
+// digits that read back (value * si_per_unit) to exactly theta[i].
+std::string TruthFileKey(const ParameterLayout& layout, int i);
+double TruthFileValue(const ParameterLayout& layout, const Eigen::VectorXd& theta, int i);
+
+// Writes DIR/run.csv, DIR/run.yaml and DIR/truth.json (creating DIR). The
+// three files are written under temporary names and renamed at the end, so a
+// failure leaves none of them (and no DIR when this call created it).
+//   run.csv     the CSV contract, with "# simulated by ...", "# scenario: NAME",
+//               "# seed: N" comment lines
+//   run.yaml    RunDescriptionToYaml(run, "run.csv"): injected effects NOT declared
+//   truth.json  {"parameters": {"Kx": 171.5, ..., "angle_latency.tau_ms": 2},
+//                "units": {...}, "injected_effects": [...], "scenario": NAME,
+//                "seed": N, "noise": {"accel_mV", "angle_arcsec"}, "samples": N}
+void WriteSimulation(const Scenario& s, const RunData& data, const std::string& dir);
+
+}  // namespace triadcal

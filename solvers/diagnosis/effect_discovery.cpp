@@ -1,0 +1,161 @@
+#include "solvers/diagnosis/effect_discovery.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "solvers/diagnosis/statistics.h"
+
+namespace triadcal {
+namespace {
+
+// The fit of a layout, started from `start` (SI, in that layout), with the
+// given parameters held and every other base/current parameter kept free.
+BatchResult FitLayout(const RunDescription& run, const RunData& data,
+                      const ParameterLayout& layout, const Eigen::VectorXd& start,
+                      const std::vector<std::string>& hold, const std::vector<std::string>& free,
+                      const BatchOptions& base, bool covariance) {
+  BatchOptions o = base;
+  o.init = BatchInit::kGiven;
+  o.init_theta = start;
+  o.holding.hold = hold;
+  o.holding.free = free;
+  o.holding.auto_hold = true;  // decides only the new effect's parameters: the rest are hold/free
+  o.compute_covariance = covariance;
+  return SolveBatch(run, data, layout, o);
+}
+
+std::vector<std::string> FreeNames(const ParameterLayout& layout,
+                                   const std::vector<std::string>& held) {
+  std::vector<std::string> out;
+  for (int i = 0; i < layout.size(); ++i) {
+    const std::string& n = layout.info(i).name;
+    if (std::find(held.begin(), held.end(), n) == held.end()) out.push_back(n);
+  }
+  return out;
+}
+
+// theta of `from` (layout a) placed into layout b, zeros for the new entries.
+Eigen::VectorXd Embed(const ParameterLayout& a, const Eigen::VectorXd& theta,
+                      const ParameterLayout& b) {
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(b.size());
+  for (int i = 0; i < a.size(); ++i) {
+    const int j = b.IndexOf(a.info(i).name);
+    if (j >= 0) out[j] = theta[i];
+  }
+  return out;
+}
+
+std::vector<Effect> WithEffect(std::vector<Effect> v, Effect e) {
+  v.push_back(e);
+  return v;
+}
+
+}  // namespace
+
+DiagnosisResult Diagnose(const RunDescription& run, const RunData& data,
+                         const DiagnoseOptions& opt) {
+  auto say = [&](const std::string& s) {
+    if (opt.progress) opt.progress(s);
+  };
+  DiagnosisResult res;
+  std::vector<Effect> candidates = opt.candidates;
+  if (candidates.empty()) {
+    // With temp_C recorded and (nearly) linear in time, a drift in time and a
+    // drift in temperature are the same function of the samples: test the
+    // temperature form only (SPEC section 8 lists them as one effect).
+    const bool temp_linear_in_time =
+        data.has_temp() && std::abs(Correlation(data.t_s, data.temp_C)) > 0.99;
+    for (const EffectSpec& e : EffectCatalogue()) {
+      if (e.id == Effect::kThermalDriftTemp && !data.has_temp()) continue;
+      if (e.id == Effect::kThermalDrift && temp_linear_in_time) {
+        res.notes.push_back("thermal_drift not tested apart from thermal_drift_temp: temp_C is "
+                            "linear in time in this run, so the two are the same");
+        continue;
+      }
+      candidates.push_back(e.id);
+    }
+  }
+
+  say("fitting the declared model");
+  BatchOptions first = opt.fit;
+  res.before_layout = ParameterLayout();
+  res.before = SolveBatch(run, data, res.before_layout, first);
+  res.before_residuals = AnalyzeResiduals(run, data, res.before_layout, res.before);
+
+  std::vector<Effect> current;
+  ParameterLayout layout = res.before_layout;
+  BatchResult fit = res.before;
+  std::vector<std::string> held = fit.held;
+  for (int round = 1; round <= opt.max_effects && !candidates.empty(); ++round) {
+    std::vector<CandidateTest> tests;
+    for (Effect e : candidates) {
+      say("round " + std::to_string(round) + ": testing " + GetEffectSpec(e).name);
+      const ParameterLayout aug(WithEffect(current, e));
+      CandidateTest t;
+      t.effect = e;
+      t.round = round;
+      const BatchResult r = FitLayout(run, data, aug, Embed(layout, fit.estimate.theta, aug), held,
+                                      FreeNames(layout, held), opt.fit, false);
+      const int k = static_cast<int>(GetEffectSpec(e).params.size());
+      int held_new = 0;
+      for (const std::string& h : r.held) {
+        if (aug.IndexOf(h) >= aug.offset(e) && aug.IndexOf(h) < aug.offset(e) + k) ++held_new;
+      }
+      t.dof = k - held_new;
+      t.lr = 2.0 * (fit.final_cost - r.final_cost);
+      t.statistic = std::max(0.0, t.lr) / std::max(1.0, r.chi2_per_dof);
+      if (t.dof == 0) {
+        t.p_value = 1.0;
+        t.note = "not supported by this run's motion";
+      } else {
+        t.p_value = ChiSquareSurvival(t.statistic, t.dof);
+      }
+      tests.push_back(t);
+    }
+    std::sort(tests.begin(), tests.end(), [](const CandidateTest& a, const CandidateTest& b) {
+      return a.p_value < b.p_value || (a.p_value == b.p_value && a.statistic > b.statistic);
+    });
+    const double threshold = opt.alpha / static_cast<double>(tests.size());
+    for (CandidateTest& t : tests) t.threshold = threshold;
+    const bool pass = tests.front().p_value < threshold;
+    if (pass) tests.front().selected = true;
+    if (round == 1) res.ranking = tests;
+    res.tests.insert(res.tests.end(), tests.begin(), tests.end());
+    if (!pass) break;
+    const Effect chosen = tests.front().effect;
+    res.selected.push_back(chosen);
+    current.push_back(chosen);
+    const ParameterLayout next(current);
+    say("refitting with " + GetEffectSpec(chosen).name);
+    fit = FitLayout(run, data, next, Embed(layout, fit.estimate.theta, next), held,
+                    FreeNames(layout, held), opt.fit, true);
+    layout = next;
+    held = fit.held;
+    candidates.erase(std::find(candidates.begin(), candidates.end(), chosen));
+  }
+  res.after_layout = layout;
+  res.after = fit;
+  res.after_residuals = res.selected.empty()
+                            ? res.before_residuals
+                            : AnalyzeResiduals(run, data, res.after_layout, res.after);
+  res.unexplained = res.after_residuals.structure;
+
+  std::ostringstream v;
+  if (res.selected.empty()) {
+    v << "no catalogue effect is supported by the data";
+  } else {
+    v << "added";
+    for (Effect e : res.selected) v << " " << GetEffectSpec(e).name;
+  }
+  if (res.unexplained) {
+    v << "; STRUCTURE REMAINS that no candidate explains: " << res.after_residuals.structure_summary;
+  } else {
+    v << "; the residual is consistent with the declared noise (white, chi2/dof "
+      << std::round(1000 * res.after.chi2_per_dof) / 1000 << ")";
+  }
+  res.verdict = v.str();
+  return res;
+}
+
+}  // namespace triadcal

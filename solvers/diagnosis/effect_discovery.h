@@ -1,0 +1,69 @@
+// Closing the loop (SPEC section 8): fit, look at the residuals, test every
+// catalogue effect the model lacks, add the ones the data demand, refit, and
+// report before and after.
+//
+// Test of an effect E: the likelihood ratio of the fit with E added against the
+// current model,
+//   LR = 2 (cost_current - cost_with_E),
+// scaled by the augmented fit's chi2/dof when that exceeds 1 (so a declared
+// noise that is too small does not turn into false alarms), against chi2 with
+// as many degrees of freedom as E has parameters the run supports. The
+// augmented fit starts from the current solution with E's parameters at 0 and
+// keeps the current model's held parameters held.
+//
+// Selection: forward, one effect per round. In each round every remaining
+// candidate is tested and the smallest p-value is selected if it is below
+// alpha / (number of candidates in the round) (Bonferroni: the chance of any
+// false selection in a round stays below alpha). Rounds stop when nothing
+// passes. Afterwards the residual is analysed again; structure that no
+// candidate explained is reported with what it correlates with.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/model/effects.h"
+#include "core/model/run_data.h"
+#include "core/model/run_description.h"
+#include "solvers/estimation/batch_solver.h"
+#include "solvers/diagnosis/residual_analysis.h"
+
+namespace triadcal {
+
+struct DiagnoseOptions {
+  BatchOptions fit;            // for every fit (hold/free are managed here)
+  double alpha = 0.01;         // family-wise false-selection rate per round
+  int max_effects = 4;
+  std::vector<Effect> candidates;  // empty: the whole catalogue (that the run can carry)
+  std::function<void(const std::string&)> progress;
+};
+
+struct CandidateTest {
+  Effect effect;
+  int round = 0;
+  int dof = 0;                 // effect parameters the run supports
+  double lr = 0.0;             // 2 (cost_current - cost_with_effect)
+  double statistic = 0.0;      // lr / max(1, chi2/dof of the augmented fit)
+  double p_value = 1.0;
+  double threshold = 0.0;      // alpha / candidates in the round
+  bool selected = false;
+  std::string note;            // e.g. why it could not be tested
+};
+
+struct DiagnosisResult {
+  ParameterLayout before_layout, after_layout;
+  BatchResult before, after;
+  ResidualReport before_residuals, after_residuals;
+  std::vector<CandidateTest> ranking;  // first round, smallest p first
+  std::vector<CandidateTest> tests;    // every test of every round
+  std::vector<Effect> selected;
+  bool unexplained = false;            // structure remains after the selection
+  std::vector<std::string> notes;      // e.g. candidates merged or skipped, and why
+  std::string verdict;
+};
+
+DiagnosisResult Diagnose(const RunDescription& run, const RunData& data,
+                         const DiagnoseOptions& options);
+
+}  // namespace triadcal

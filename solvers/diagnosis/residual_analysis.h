@@ -1,0 +1,58 @@
+// What a batch fit leaves in its residuals, in physical units: per channel the
+// RMS, whiteness (Ljung-Box), the spectrum's strongest peaks with the bench
+// frequencies and their combinations marked, and the correlation with the
+// kinematic signals (angles, rates, angular accelerations, time, temperature).
+//
+// Channels: the process residual of each interval (block B1 integrated minus
+// the trajectory) expressed as a mean acceleration in the triad frame,
+//   a_res = C_L2(mid)^T r_V / T / g        [mg]
+// (this is where a missing sensor or angle effect shows), and the whitened
+// process residuals in L (for whiteness against the declared noise).
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/model/run_data.h"
+#include "core/model/run_description.h"
+#include "solvers/estimation/batch_solver.h"
+#include "solvers/diagnosis/statistics.h"
+
+namespace triadcal {
+
+struct SpectralPeak {
+  double freq_hz = 0.0;
+  double power_fraction = 0.0;  // of the channel's total variance
+  std::string combination;      // e.g. "2 f1 + f2", or "" when none is near
+};
+
+struct ChannelReport {
+  std::string name, unit;
+  double rms = 0.0;
+  double mean = 0.0;
+  WhitenessTest whiteness;
+  std::vector<SpectralPeak> peaks;                            // strongest first
+  std::vector<std::pair<std::string, double>> correlations;   // |r| largest first
+};
+
+struct ResidualReport {
+  std::vector<ChannelReport> channels;
+  double chi2_per_dof = 0.0;
+  int degrees_of_freedom = 0;
+  double f1_hz = 0.0, f2_hz = 0.0;  // bench frequencies found in the angles
+  // Evidence of structure: a channel's Ljung-Box p below this, or chi2/dof
+  // more than 4 standard deviations above 1.
+  double whiteness_alpha = 1e-3;
+  bool structure = false;
+  std::string structure_summary;  // one sentence when structure is present
+};
+
+ResidualReport AnalyzeResiduals(const RunDescription& run, const RunData& data,
+                                const ParameterLayout& layout, const BatchResult& fit);
+
+nlohmann::json ResidualReportJson(const ResidualReport& r);
+
+}  // namespace triadcal

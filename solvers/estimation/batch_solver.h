@@ -1,0 +1,147 @@
+// The batch solver (SPEC section 6): the whole run as one sparse nonlinear
+// least-squares problem, solved by Ceres.
+//
+// Unknowns: theta (n) and the trajectory x_e = (V_e, S_e) of O in L at the
+// epochs t_e (every epoch_s, as in the filter). Residual blocks, each whitened
+// by its own noise (L^T L = covariance^-1):
+//
+//   process, one per interval e -> e+1 (block B1 integrated, inertial_increments.h)
+//     r_p = L_Q [ V_{e+1} - V_e - dv_e(theta) ;  S_{e+1} - S_e - V_e T_e - ds_e(theta) ]
+//   measurement, one per epoch (block B2)
+//     r_m = L_R [ V_e - V_DU(lambda, lambda', theta) ;  S_e - S_DU(lambda, theta) ]
+//   constraints of run.yaml:   (c . theta - value) / sigma
+//   weak priors:               (theta - nominal) / sigma_prior     (priors.h)
+//
+// dv_e, ds_e sum thousands of samples per interval, so they are evaluated once
+// per relinearisation and enter Ceres to first order about theta_lin:
+//
+//   dv_e(theta) ~ dv_e(theta_lin) + J_v,e (theta - theta_lin)
+//
+// (as inertial preintegration does). The outer loop relinearises at Ceres's
+// solution until the relinearisation changes the cost by less than
+// outer_tolerance; at that fixed point the linearisation is exact at the
+// solution, so it is the optimum of the full nonlinear problem (test:
+// exact_increments recomputes dv_e, ds_e in every Ceres evaluation instead).
+// B2, the constraints and the priors are evaluated exactly in every iteration.
+//
+// The Jacobian is block-banded in x plus a dense column block for theta:
+// SPARSE_NORMAL_CHOLESKY (SuiteSparse CHOLMOD) by default; SPARSE_SCHUR
+// eliminates every other epoch's state (the process residuals couple
+// neighbours, so Ceres can only eliminate an independent set).
+//
+// Covariance of theta from the final Jacobian: by default the Schur complement
+// on theta (schur_covariance.h, exploits the block-tridiagonal trajectory),
+// or Ceres's Covariance (SuiteSparse sparse QR; the only one that applies a
+// robust loss's weights). Ceres's default sparse QR fails on a rank-deficient
+// Jacobian; the weak priors keep ours full rank, so directions the data do not
+// determine come out with their prior sigma and are then named by
+// separability.h instead of failing the factorisation.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/model/angle_derivatives.h"
+#include "core/model/run_data.h"
+#include "core/model/run_description.h"
+#include "solvers/estimation/kalman_smoother.h"
+#include "core/model/priors.h"
+#include "solvers/estimation/separability.h"
+
+namespace triadcal {
+
+enum class BatchInit { kRts, kNominal, kGiven };
+
+// Parameters held at their nominal values. auto_hold holds those the run's
+// motion does not support: a pivoted Cholesky of the data information (in
+// units of the prior) at the nominal values keeps, most informative first,
+// every parameter with at least min_information left once the kept ones are
+// known, and holds the rest. `hold` adds to the held set, `free` removes.
+struct HoldPolicy {
+  bool auto_hold = true;
+  // Base parameters need 100 (posterior sigma <~ 0.1 prior sigma): below that
+  // a nearly flat direction lets the nonlinear fit wander (a single-axis run's
+  // dpsi trades against W0y and the scale factors). Effect parameters, whose
+  // priors are only a size scale, need 10 (<~ 0.3 prior sigma).
+  double min_information = 100.0;
+  double min_information_effects = 10.0;
+  std::vector<std::string> hold, free;
+};
+
+struct BatchOptions {
+  double epoch_s = 0.2;
+  AngleDerivativeOptions derivatives;
+  BatchInit init = BatchInit::kRts;
+  Eigen::VectorXd init_theta;   // for kGiven (SI, in the layout)
+  int init_decimation_hz = 100;  // the RTS initialiser runs on samples thinned to this rate
+  int max_outer_iterations = 10;
+  int max_ceres_iterations = 100;
+  double outer_tolerance = 1e-3;  // cost change on relinearisation, in 0.5 chi^2 units
+  std::string linear_solver = "sparse_normal_cholesky";  // | sparse_schur | dense_qr
+  std::string robust_loss;        // "" | huber | cauchy (on whitened process/measurement)
+  double robust_scale = 3.0;      // in whitened units
+  bool exact_increments = false;  // recompute B1 in every evaluation (slow; tests)
+  bool compute_covariance = true;
+  std::string covariance_method = "schur";  // | ceres (sparse QR; used with a robust loss)
+  int threads = 0;                // 0: all cores
+  HoldPolicy holding;            // which parameters to hold at nominal
+  std::function<void(const std::string&)> progress;  // one line per stage
+};
+
+struct ResidualStats {
+  Eigen::Matrix<double, 6, 1> measurement_rms = Eigen::Matrix<double, 6, 1>::Zero();  // V m/s, S m
+  Eigen::Matrix<double, 6, 1> process_rms = Eigen::Matrix<double, 6, 1>::Zero();      // V m/s, S m
+  // Whitened RMS of each kind. The process residuals carry nearly all the
+  // degrees of freedom (expect ~1); the measurement residuals are mostly
+  // absorbed by the trajectory (expect << 1).
+  double measurement_whitened_rms = 0.0;
+  double process_whitened_rms = 0.0;
+};
+
+struct BatchResult {
+  Estimate estimate;            // theta and its covariance (SI)
+  Estimate initial;             // the starting point (with the RTS sigma when from RTS)
+  std::vector<std::string> held;  // held at nominal (their sigma is not an estimate)
+  // The directions the run cannot determine, found at the nominal values
+  // before holding (what the held parameters stand for).
+  std::vector<WeakDirection> unsupported_at_start;
+  Prior prior;
+  double final_cost = 0.0;      // 0.5 sum r^2 over all blocks
+  int residual_count = 0;
+  // 2 cost / (residuals - unknowns): 1 when the declared noise is right and the
+  // model complete (the diagnosis starts here).
+  int degrees_of_freedom = 0;
+  double chi2_per_dof = 0.0;
+  int outer_iterations = 0, ceres_iterations = 0;
+  bool converged = false;
+  std::string linear_solver;
+  ResidualStats residuals;
+  // Per epoch, for diagnosis: times, measurement and process residuals (raw,
+  // V m/s then S m; the process residual of the interval ending at the epoch,
+  // zero at the first), and their whitening.
+  std::vector<double> epoch_t;
+  std::vector<std::size_t> epoch_samples;  // sample index of each epoch
+  std::vector<Eigen::Matrix<double, 6, 1>> measurement_residual, process_residual;
+  std::vector<Eigen::Matrix<double, 6, 1>> measurement_whitened, process_whitened;
+  double init_seconds = 0.0, solve_seconds = 0.0, covariance_seconds = 0.0;
+  int epochs = 0;
+};
+
+BatchResult SolveBatch(const RunDescription& run, const RunData& data,
+                       const ParameterLayout& layout, const BatchOptions& options);
+
+// The hold decision alone (what fit does first; filter uses it too). Costs one
+// linearisation of the run thinned to decimation_hz.
+struct HoldDecision {
+  std::vector<std::string> held;
+  std::vector<WeakDirection> unsupported;  // at the nominal values, before holding
+};
+HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data,
+                                  const ParameterLayout& layout, const HoldPolicy& policy,
+                                  double epoch_s, const AngleDerivativeOptions& derivatives,
+                                  int decimation_hz = 100, int threads = 0);
+
+}  // namespace triadcal

@@ -1,0 +1,266 @@
+// The batch solver: cost-function Jacobians against numeric derivatives, the
+// Schur covariance against Ceres's, noise-free recovery, bad starts, the
+// relinearised increments against exact ones, normalised errors over seeds,
+// and the fit/compare commands.
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include <ceres/gradient_checker.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "solvers/estimation/batch_costs.h"
+#include "solvers/estimation/batch_solver.h"
+#include "tests/sim_fixtures.h"
+
+namespace triadcal {
+namespace {
+
+using testing_fixtures::PaperScenario;
+
+BatchResult Fit(const Scenario& s, const RunData& data, BatchOptions opt = {}) {
+  return SolveBatch(s.run, data, ParameterLayout(), opt);
+}
+
+double MaxAbsZ(const BatchResult& r, const Eigen::VectorXd& truth, std::string* worst) {
+  double m = 0.0;
+  for (int i = 0; i < kNumBaseParams; ++i) {
+    const double z = (r.estimate.theta[i] - truth[i]) / std::sqrt(r.estimate.cov(i, i));
+    if (std::abs(z) > m) {
+      m = std::abs(z);
+      *worst = ParameterLayout().info(i).name;
+    }
+  }
+  return m;
+}
+
+TEST(BatchCosts, JacobiansMatchNumericDerivatives) {
+  const Scenario s = PaperScenario(100.0, 6.0, 2.0, 15.0, 1);
+  const RunData data = Simulate(s);
+  const RunProblem p = BuildRunProblem(s.run, data, ParameterLayout(), 0.2, {});
+  Eigen::VectorXd theta = s.truth;
+  const int n = p.n;
+  IntervalIncrement inc = IntegrateInterval(p.cfg, theta, p.series, p.epochs[3], p.epochs[4], true);
+  Mat6 cov = Mat6::Identity() * 1e-6;
+  cov(0, 3) = cov(3, 0) = 3e-7;
+  const Mat6 L = WhiteningOf(cov);
+  EXPECT_LT((L.transpose() * L - cov.inverse()).norm(), 1e-6 * cov.inverse().norm());
+
+  std::vector<double> xa = {0.1, -0.2, 0.05, 0.13, 0.02, 0.03};
+  std::vector<double> xb = {0.12, -0.19, 0.04, 0.15, 0.01, 0.02};
+  Eigen::VectorXd th = theta;
+  th[kAlphaX] += 1e-3;
+  ceres::NumericDiffOptions nd;
+  nd.relative_step_size = 1e-7;
+  for (const bool exact : {false, true}) {
+    ProcessCost cost(&inc, &theta, L, exact ? &p : nullptr, p.epochs[3], p.epochs[4]);
+    ceres::GradientChecker checker(&cost, static_cast<const std::vector<const ceres::Manifold*>*>(nullptr), nd);
+    ceres::GradientChecker::ProbeResults results;
+    std::vector<const double*> params = {xa.data(), xb.data(), th.data()};
+    EXPECT_TRUE(checker.Probe(params.data(), 1e-6, &results)) << results.error_log;
+  }
+  MeasurementCost mcost(&p, p.epochs[5], L);
+  ceres::GradientChecker mchecker(&mcost, static_cast<const std::vector<const ceres::Manifold*>*>(nullptr), nd);
+  ceres::GradientChecker::ProbeResults mres;
+  std::vector<const double*> mparams = {xa.data(), th.data()};
+  EXPECT_TRUE(mchecker.Probe(mparams.data(), 1e-6, &mres)) << mres.error_log;
+  (void)n;
+}
+
+TEST(BatchSolver, SchurCovarianceEqualsCeresCovariance) {
+  const Scenario s = PaperScenario(50.0, 30.0, 2.0, 15.0, 2);
+  const RunData data = Simulate(s);
+  BatchOptions a, b;
+  b.covariance_method = "ceres";
+  const BatchResult ra = Fit(s, data, a), rb = Fit(s, data, b);
+  // The Schur path works on the normal equations, whose condition number is
+  // the square of the Jacobian's (~1e5 here, the priors against the um/s
+  // trajectory): agreement to ~1e-16 * 1e10 = 1e-6 relative is what double
+  // precision allows, so 1e-5 is the test.
+  for (int i = 0; i < kNumBaseParams; ++i) {
+    for (int j = 0; j < kNumBaseParams; ++j) {
+      const double scale = std::sqrt(rb.estimate.cov(i, i) * rb.estimate.cov(j, j));
+      EXPECT_NEAR(ra.estimate.cov(i, j), rb.estimate.cov(i, j), 1e-5 * scale);
+    }
+  }
+}
+
+TEST(BatchSolver, NoiseFreeDataRecoveredFarBelowSigma) {
+  Scenario s = PaperScenario(50.0, 90.0, 0.0, 0.0, 1);
+  s.run.noise_mV = 2.0;  // declared: sets sigma
+  s.run.angle_noise_rad = 15.0 * kArcsecToRad;
+  const RunData data = Simulate(s);
+  const BatchResult r = Fit(s, data);
+  EXPECT_TRUE(r.converged);
+  // Not exactly 0: the weak priors pull by (sigma / sigma_prior)^2 * (truth -
+  // nominal) / sigma, ~0.01 sigma for dy2 and gamma_y here, and the trapezoid
+  // rule at 50 Hz leaves ~0.005 sigma. Anything model-related would be >> 0.05.
+  std::string worst;
+  EXPECT_LT(MaxAbsZ(r, s.truth, &worst), 0.05) << worst;
+}
+
+// From the nominal values with the truth 3 deg away in misalignment and
+// levelling, the lever arm 20 mm off and the scale 5 % off.
+TEST(BatchSolver, ConvergesFromABadStart) {
+  Scenario s = PaperScenario(50.0, 90.0, 2.0, 15.0, 4);
+  SetFromFileUnits(s.truth_layout,
+                   {{"Kx", 174.0 * 0.95}, {"Ky", 174 * 1.05}, {"alpha_x", 180}, {"beta_z", -180},
+                    {"gamma_y", 180}, {"dtheta_c", 180}, {"dpsi", -180}, {"dlambda2", -180},
+                    {"dx2", 20}, {"dy2", -20}, {"dz2", 20}},
+                   &s.truth);
+  const RunData data = Simulate(s);
+  BatchOptions opt;
+  opt.init = BatchInit::kNominal;
+  const BatchResult r = Fit(s, data, opt);
+  EXPECT_TRUE(r.converged);
+  std::string worst;
+  EXPECT_LT(MaxAbsZ(r, s.truth, &worst), 4.0) << worst;
+  EXPECT_NEAR(r.chi2_per_dof, 1.0, 4.0 * std::sqrt(2.0 / r.degrees_of_freedom));
+  // The same answer as from the smoother's start.
+  const BatchResult r2 = Fit(s, data);
+  for (int i = 0; i < kNumBaseParams; ++i) {
+    EXPECT_NEAR(r.estimate.theta[i], r2.estimate.theta[i], 0.01 * std::sqrt(r2.estimate.cov(i, i)))
+        << ParameterLayout().info(i).name;
+  }
+}
+
+// The relinearised increments reach the optimum of the exact problem.
+TEST(BatchSolver, RelinearisedEqualsExactIncrements) {
+  const Scenario s = PaperScenario(25.0, 30.0, 2.0, 15.0, 6);
+  const RunData data = Simulate(s);
+  const BatchResult lin = Fit(s, data);
+  BatchOptions opt;
+  opt.exact_increments = true;
+  opt.init = BatchInit::kGiven;
+  opt.init_theta = lin.estimate.theta;
+  opt.compute_covariance = false;
+  const BatchResult ex = Fit(s, data, opt);
+  for (int i = 0; i < kNumBaseParams; ++i) {
+    EXPECT_NEAR(ex.estimate.theta[i], lin.estimate.theta[i],
+                0.01 * std::sqrt(lin.estimate.cov(i, i)))
+        << ParameterLayout().info(i).name;
+  }
+  EXPECT_NEAR(ex.final_cost, lin.final_cost, 1e-3 * lin.final_cost);
+}
+
+TEST(BatchSolver, NormalisedErrorsOverSeeds) {
+  double sum = 0.0;
+  int count = 0;
+  for (int seed = 11; seed <= 18; ++seed) {
+    Scenario s = PaperScenario(50.0, 90.0, 2.0, 15.0, seed);
+    s.truth_spread = {{kDlambda2, 30.0 * kArcsecToRad}};  // the constraint's own spread
+    SampleTruth(&s);
+    const RunData data = Simulate(s);
+    const BatchResult r = Fit(s, data);
+    // chi2/dof has standard deviation sqrt(2 / dof): allow 4 of them.
+    EXPECT_NEAR(r.chi2_per_dof, 1.0, 4.0 * std::sqrt(2.0 / r.degrees_of_freedom));
+    for (int i = 0; i < kNumBaseParams; ++i) {
+      const double z = (r.estimate.theta[i] - s.truth[i]) / std::sqrt(r.estimate.cov(i, i));
+      EXPECT_LT(std::abs(z), 4.5) << ParameterLayout().info(i).name << " seed " << seed;
+      sum += z * z;
+      ++count;
+    }
+  }
+  const double rms = std::sqrt(sum / count);
+  EXPECT_GT(rms, 0.8);
+  EXPECT_LT(rms, 1.2);
+}
+
+// A drift in the data, estimated with the thermal_drift effect.
+TEST(BatchSolver, EstimatesAnEffect) {
+  Scenario s = PaperScenario(50.0, 90.0, 2.0, 15.0, 9);
+  s.truth_layout = ParameterLayout({Effect::kThermalDrift});
+  Eigen::VectorXd t(s.truth_layout.size());
+  t << s.truth, 0.5 / 60.0, -0.3 / 60.0, 0.2 / 60.0;  // mV/min -> mV/s
+  s.truth = t;
+  const RunData data = Simulate(s);
+  const BatchResult r = SolveBatch(s.run, data, s.truth_layout, {});
+  for (int i = 0; i < s.truth_layout.size(); ++i) {
+    const double z = (r.estimate.theta[i] - s.truth[i]) / std::sqrt(r.estimate.cov(i, i));
+    EXPECT_LT(std::abs(z), 4.5) << s.truth_layout.info(i).name;
+  }
+}
+
+std::string Slurp(const std::string& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+TEST(FitCommand, FitAndCompareWriteTheirOutputs) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(testing::TempDir()) / "fit_cmd";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string bin = TRIADCAL_BIN;
+  const std::string scen =
+      std::string(TRIADCAL_SOURCE_DIR) + "/examples/paper-experiment3/scenario.yaml";
+  ASSERT_EQ(std::system((bin + " simulate " + scen + " -o " + (dir / "run").string() +
+                         " > /dev/null").c_str()),
+            0);
+  const std::string run = (dir / "run" / "run.yaml").string();
+  ASSERT_EQ(std::system((bin + " fit " + run + " -o " + (dir / "fit.json").string() +
+                         " > " + (dir / "fit.txt").string()).c_str()),
+            0);
+  const nlohmann::json fit = nlohmann::json::parse(Slurp((dir / "fit.json").string()));
+  for (const char* key : {"parameters", "final_cost", "residual_rms", "iterations", "time_s",
+                          "verdict", "chi2_per_dof", "unobservable"}) {
+    EXPECT_TRUE(fit.contains(key)) << key;
+  }
+  EXPECT_EQ(fit["parameters"].size(), static_cast<size_t>(kNumBaseParams));
+  EXPECT_EQ(fit["parameters"]["gamma_z"]["unit"], "arcmin");
+  EXPECT_TRUE(fit["converged"].get<bool>());
+
+  ASSERT_EQ(std::system((bin + " compare " + run + " -o " + (dir / "cmp.json").string() +
+                         " > " + (dir / "cmp.txt").string()).c_str()),
+            0);
+  const nlohmann::json cmp = nlohmann::json::parse(Slurp((dir / "cmp.json").string()));
+  for (const char* key : {"ekf", "rts", "batch", "differences_in_sigma"}) {
+    EXPECT_TRUE(cmp.contains(key)) << key;
+  }
+  EXPECT_TRUE(cmp["ekf"]["parameters"].contains("Kx"));
+  // The batch optimum and the iterated smoother agree (SPEC section 6).
+  EXPECT_LT(cmp["largest_batch_minus_rts"]["sigma"].get<double>(), 0.05);
+  const std::string table = Slurp((dir / "cmp.txt").string());
+  EXPECT_NE(table.find("RTS-EKF"), std::string::npos);
+  EXPECT_NE(table.find("gamma_y"), std::string::npos);
+
+  // Bad option: one line, non-zero, no output.
+  EXPECT_NE(std::system((bin + " fit " + run + " --init sideways -o " +
+                         (dir / "bad.json").string() + " 2> " + (dir / "err.txt").string() +
+                         " > /dev/null").c_str()),
+            0);
+  EXPECT_FALSE(fs::exists(dir / "bad.json"));
+  EXPECT_EQ(Slurp((dir / "err.txt").string()),
+            "triadcal: error: --init: expected rts or nominal, got 'sideways'\n");
+}
+
+}  // namespace
+}  // namespace triadcal
+
+namespace triadcal {
+namespace {
+
+// A missing output folder is reported before any work, in one line.
+TEST(FitCommand, MissingOutputFolderFailsFirst) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(testing::TempDir()) / "fit_outdir";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string bin = TRIADCAL_BIN;
+  const std::string scen = std::string(TRIADCAL_SOURCE_DIR) + "/examples/noise-free/scenario.yaml";
+  ASSERT_EQ(std::system((bin + " simulate " + scen + " -o " + (dir / "run").string() + " > /dev/null").c_str()), 0);
+  const std::string out = (dir / "no" / "out.json").string();
+  for (const char* cmd : {"fit", "filter", "compare", "diagnose"}) {
+    EXPECT_NE(std::system((bin + " " + cmd + " " + (dir / "run" / "run.yaml").string() + " -o " +
+                           out + " 2> " + (dir / "err.txt").string() + " > /dev/null").c_str()),
+              0);
+    EXPECT_EQ(Slurp((dir / "err.txt").string()),
+              "triadcal: error: " + out + ": cannot write (folder missing or not writable)\n")
+        << cmd;
+  }
+}
+
+}  // namespace
+}  // namespace triadcal

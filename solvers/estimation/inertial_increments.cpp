@@ -1,0 +1,177 @@
+#include "solvers/estimation/inertial_increments.h"
+
+#include <ceres/jet.h>
+
+#include "core/model/b1_jacobian.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace triadcal {
+namespace {
+
+template <int N>
+void AccumulateWithJacobian(const ModelConfig& cfg, const Eigen::VectorXd& theta,
+                            const SampleSeries& s, std::size_t k0, std::size_t k1,
+                            const std::vector<double>& alpha, const std::vector<double>& beta,
+                            IntervalIncrement* inc) {
+  using J = ceres::Jet<double, N>;
+  const int n = static_cast<int>(theta.size());
+  std::vector<J> th(N);
+  for (int i = 0; i < N; ++i) th[i] = J(i < n ? theta[i] : 0.0, i);
+  Eigen::Matrix<double, 3, N> dv = Eigen::Matrix<double, 3, N>::Zero();
+  Eigen::Matrix<double, 3, N> ds = Eigen::Matrix<double, 3, N>::Zero();
+  const RunData& run = *s.run;
+  for (std::size_t k = k0; k <= k1; ++k) {
+    const SampleContext ctx{run.t_s[k], run.has_temp() ? run.temp_C[k] : 0.0};
+    const Vec3<J> a = AccelerationFromReadings_L<J>(cfg, th.data(), s.recorded[k],
+                                                    run.readings_mV(k), ctx);
+    const double wa = alpha[k - k0], wb = beta[k - k0];
+    for (int r = 0; r < 3; ++r) {
+      inc->dv_mps[r] += wa * a[r].a;
+      inc->ds_m[r] += wb * a[r].a;
+      dv.row(r) += wa * a[r].v.transpose();
+      ds.row(r) += wb * a[r].v.transpose();
+    }
+  }
+  inc->ddv_dtheta = dv.leftCols(n);
+  inc->dds_dtheta = ds.leftCols(n);
+}
+
+}  // namespace
+
+IntervalIncrement IntegrateInterval(const ModelConfig& cfg, const Eigen::VectorXd& theta,
+                                    const SampleSeries& s, std::size_t k0, std::size_t k1,
+                                    bool with_jacobian) {
+  const RunData& run = *s.run;
+  IntervalIncrement inc;
+  const std::size_t m = k1 - k0;
+  const double t_b = run.t_s[k1];
+  inc.T_s = t_b - run.t_s[k0];
+  std::vector<double> alpha(m + 1, 0.0), beta(m + 1, 0.0);
+  for (std::size_t j = 0; j < m; ++j) {  // step from sample k0+j to k0+j+1
+    const double dt = run.t_s[k0 + j + 1] - run.t_s[k0 + j];
+    const double remain = t_b - run.t_s[k0 + j + 1];
+    alpha[j] += 0.5 * dt;
+    alpha[j + 1] += 0.5 * dt;
+    beta[j] += 0.5 * dt * remain + dt * dt / 3.0;
+    beta[j + 1] += 0.5 * dt * remain + dt * dt / 6.0;
+  }
+  for (std::size_t j = 0; j <= m; ++j) {
+    inc.sum_alpha2 += alpha[j] * alpha[j];
+    inc.sum_alpha_beta += alpha[j] * beta[j];
+    inc.sum_beta2 += beta[j] * beta[j];
+  }
+  const int n = static_cast<int>(theta.size());
+  if (!with_jacobian) {
+    for (std::size_t k = k0; k <= k1; ++k) {
+      const SampleContext ctx{run.t_s[k], run.has_temp() ? run.temp_C[k] : 0.0};
+      const Vec3<double> a = AccelerationFromReadings_L<double>(cfg, theta.data(), s.recorded[k],
+                                                                run.readings_mV(k), ctx);
+      inc.dv_mps += alpha[k - k0] * a;
+      inc.ds_m += beta[k - k0] * a;
+    }
+    return inc;
+  }
+  if (B1HasAnalyticJacobian(cfg.layout)) {
+    inc.ddv_dtheta = Eigen::MatrixXd::Zero(3, n);
+    inc.dds_dtheta = Eigen::MatrixXd::Zero(3, n);
+    Eigen::MatrixXd Jk(3, n);
+    Eigen::Vector3d a;
+    for (std::size_t k = k0; k <= k1; ++k) {
+      const SampleContext ctx{run.t_s[k], run.has_temp() ? run.temp_C[k] : 0.0};
+      AccelerationWithJacobian(cfg, theta.data(), s.recorded[k], run.readings_mV(k), ctx, &a, Jk);
+      inc.dv_mps += alpha[k - k0] * a;
+      inc.ds_m += beta[k - k0] * a;
+      inc.ddv_dtheta += alpha[k - k0] * Jk;
+      inc.dds_dtheta += beta[k - k0] * Jk;
+    }
+    return inc;
+  }
+  if (n <= 32) {
+    AccumulateWithJacobian<32>(cfg, theta, s, k0, k1, alpha, beta, &inc);
+  } else if (n <= 48) {
+    AccumulateWithJacobian<48>(cfg, theta, s, k0, k1, alpha, beta, &inc);
+  } else if (n <= 64) {
+    AccumulateWithJacobian<64>(cfg, theta, s, k0, k1, alpha, beta, &inc);
+  } else {
+    throw std::invalid_argument("more than 64 parameters are not supported");
+  }
+  return inc;
+}
+
+double AccelSampleVariance(double noise_mV, double min_scale_mV_per_g, double angle_noise_rad,
+                           double g_mps2) {
+  const double s_accel = g_mps2 * noise_mV / min_scale_mV_per_g;
+  const double s_angle = g_mps2 * angle_noise_rad;
+  const double floor = 1e-6;  // m/s^2: keeps noise-free runs well posed
+  return s_accel * s_accel + s_angle * s_angle + floor * floor;
+}
+
+namespace {
+
+template <int N>
+ReferenceSample ReferenceWithJacobian(const ModelConfig& cfg, const Eigen::VectorXd& theta,
+                                      const BenchAngles<double>& rec) {
+  using J = ceres::Jet<double, N>;
+  const int n = static_cast<int>(theta.size());
+  std::vector<J> th(N);
+  for (int i = 0; i < N; ++i) th[i] = J(i < n ? theta[i] : 0.0, i);
+  const PointMotion<J> pm = ReferenceMotion<J>(cfg, th.data(), rec);
+  ReferenceSample out;
+  out.dref_dtheta.resize(6, n);
+  for (int r = 0; r < 3; ++r) {
+    out.v_mps[r] = pm.v_L[r].a;
+    out.p_m[r] = pm.p_L[r].a;
+    out.dref_dtheta.row(r) = pm.v_L[r].v.head(n).transpose();
+    out.dref_dtheta.row(3 + r) = pm.p_L[r].v.head(n).transpose();
+  }
+  return out;
+}
+
+}  // namespace
+
+ReferenceSample EvaluateReference(const ModelConfig& cfg, const Eigen::VectorXd& theta,
+                                  const BenchAngles<double>& rec, bool with_jacobian) {
+  const int n = static_cast<int>(theta.size());
+  if (!with_jacobian) {
+    const PointMotion<double> pm = ReferenceMotion<double>(cfg, theta.data(), rec);
+    return ReferenceSample{pm.v_L, pm.p_L, Eigen::MatrixXd()};
+  }
+  if (n <= 32) return ReferenceWithJacobian<32>(cfg, theta, rec);
+  if (n <= 48) return ReferenceWithJacobian<48>(cfg, theta, rec);
+  if (n <= 64) return ReferenceWithJacobian<64>(cfg, theta, rec);
+  throw std::invalid_argument("more than 64 parameters are not supported");
+}
+
+Eigen::Matrix<double, 6, 6> ReferenceNoiseCovariance(const ModelConfig& cfg,
+                                                     const Eigen::VectorXd& theta,
+                                                     const BenchAngles<double>& rec,
+                                                     double sigma_angle_rad,
+                                                     double sigma_rate_rad_s) {
+  Eigen::Matrix<double, 6, 4> J;
+  auto eval = [&](const BenchAngles<double>& b) {
+    const PointMotion<double> pm = ReferenceMotion<double>(cfg, theta.data(), b);
+    Eigen::Matrix<double, 6, 1> y;
+    y << pm.v_L, pm.p_L;
+    return y;
+  };
+  for (int c = 0; c < 4; ++c) {
+    const int axis = c % 2;
+    const bool rate = c >= 2;
+    const double h = 1e-6;
+    BenchAngles<double> bp = rec, bm = rec;
+    (rate ? bp.axis[axis].rate : bp.axis[axis].angle) += h;
+    (rate ? bm.axis[axis].rate : bm.axis[axis].angle) -= h;
+    J.col(c) = (eval(bp) - eval(bm)) / (2 * h);
+  }
+  Eigen::Vector4d var;
+  var << sigma_angle_rad * sigma_angle_rad, sigma_angle_rad * sigma_angle_rad,
+      sigma_rate_rad_s * sigma_rate_rad_s, sigma_rate_rad_s * sigma_rate_rad_s;
+  Eigen::Matrix<double, 6, 6> R = J * var.asDiagonal() * J.transpose();
+  // Floor: 1 um and 1 um/s keep a noise-free run's update well posed.
+  R.diagonal().array() += 1e-12;
+  return R;
+}
+
+}  // namespace triadcal

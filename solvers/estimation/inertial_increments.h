@@ -1,0 +1,73 @@
+// Block B1 integrated between two epochs: the velocity and position increments
+// of O in L that the accelerometer samples imply, their derivatives with
+// respect to theta, and the weights that carry the sample noise into them.
+// Shared by the EKF (process model) and the batch solver (process residuals).
+//
+// Between epochs t_a = t_k0 and t_b = t_k1 the acceleration a_j = a_L(t_j) is
+// taken as piecewise linear between samples (trapezoid), which integrates
+// exactly to
+//
+//   V_b = V_a + dv,              dv = sum_j alpha_j a_j
+//   S_b = S_a + V_a T + ds,      ds = sum_j beta_j a_j,        T = t_b - t_a
+//
+//   alpha_j = (dt_{j-1} + dt_j) / 2
+//   beta_j  = [dt_j (t_b - t_{j+1}) / 2 + dt_j^2 / 3] + [dt_{j-1} (t_b - t_j) / 2 + dt_{j-1}^2 / 6]
+//
+// (dt_j = t_{j+1} - t_j; terms with j-1 < k0 or j >= k1 are absent). Check:
+// constant a gives dv = a T, ds = a T^2 / 2. With white sample noise of
+// variance s^2 on each a_j (isotropic), cov(dv, ds) = s^2 [sum a^2, sum ab;
+// sum ab, sum b^2] (x) I3.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "core/model/bench_model.h"
+#include "core/model/run_data.h"
+
+namespace triadcal {
+
+struct IntervalIncrement {
+  double T_s = 0.0;
+  Eigen::Vector3d dv_mps = Eigen::Vector3d::Zero();
+  Eigen::Vector3d ds_m = Eigen::Vector3d::Zero();
+  Eigen::MatrixXd ddv_dtheta;  // 3 x n, empty when not asked
+  Eigen::MatrixXd dds_dtheta;  // 3 x n
+  double sum_alpha2 = 0.0, sum_alpha_beta = 0.0, sum_beta2 = 0.0;  // noise weights
+};
+
+// Per-sample data the increments need, prepared once per run.
+struct SampleSeries {
+  const RunData* run = nullptr;
+  std::vector<BenchAngles<double>> recorded;  // angles, rates, accelerations
+};
+
+// Increments over samples k0..k1 (inclusive) at theta; with_jacobian fills the
+// derivative blocks (automatic differentiation through bench_model.h).
+IntervalIncrement IntegrateInterval(const ModelConfig& cfg, const Eigen::VectorXd& theta,
+                                    const SampleSeries& series, std::size_t k0, std::size_t k1,
+                                    bool with_jacobian);
+
+// Variance of one acceleration sample [m^2/s^4]: accelerometer white noise
+// through the nominal scale, plus angle noise rotating g.
+double AccelSampleVariance(double noise_mV, double min_scale_mV_per_g, double angle_noise_rad,
+                           double g_mps2);
+
+// Reference motion of O (block B2) at sample k and its derivatives:
+// dref_dtheta is 6 x n (rows V_DU then S_DU).
+struct ReferenceSample {
+  Eigen::Vector3d v_mps, p_m;
+  Eigen::MatrixXd dref_dtheta;
+};
+ReferenceSample EvaluateReference(const ModelConfig& cfg, const Eigen::VectorXd& theta,
+                                  const BenchAngles<double>& recorded, bool with_jacobian);
+
+// Covariance (6 x 6, rows V then S) of the reference motion caused by white
+// angle noise sigma_angle and rate noise sigma_rate (numeric derivatives).
+Eigen::Matrix<double, 6, 6> ReferenceNoiseCovariance(const ModelConfig& cfg,
+                                                     const Eigen::VectorXd& theta,
+                                                     const BenchAngles<double>& recorded,
+                                                     double sigma_angle_rad,
+                                                     double sigma_rate_rad_s);
+
+}  // namespace triadcal

@@ -1,0 +1,87 @@
+// The paper's filter (blocks B1, B2 and the optimal filter of Fig. 2) as an
+// extended Kalman filter with a fixed-interval Rauch-Tung-Striebel smoother.
+//
+// State (paper eq. 5, in total-state form): x = [V_L (3), S_L (3), theta (n)],
+// V and S the velocity and position of O in L, theta every parameter of the
+// layout (27 base parameters, plus effects). Between epochs (every epoch_s) the
+// process model is B1 integrated over the accelerometer samples
+// (inertial_increments.h):
+//
+//   V_b = V_a + dv(theta),  S_b = S_a + V_a T + ds(theta),  theta_b = theta_a
+//
+// with process noise from the accelerometer white noise (and the angle noise
+// that rotates g). At each epoch the filter observes (block B2)
+//
+//   z_V = V - V_DU(lambda, lambda', theta) = 0,   z_S = S - S_DU(lambda, theta) = 0
+//
+// with measurement noise from the angle-sensor noise (and the noise of lambda'
+// estimated from the recorded angles, angle_derivatives.h). Every constraint of
+// run.yaml is one scalar pseudo-measurement at the first epoch (it is one piece
+// of information, not one per epoch). The extended filter relinearises B1 and B2
+// about its current estimate at each epoch.
+//
+// Smoother: the RTS recursion over the epochs. For constant parameters the
+// smoothed theta equals the final filtered theta of the same linearisation; the
+// smoother improves the trajectory, and with smoother_iterations > 1 the whole
+// pass is repeated linearised about the previous smoothed estimate (iterated
+// extended Kalman smoother, i.e. Gauss-Newton on the batch problem), which
+// removes the linearisation error of the early epochs.
+//
+// Memory: per epoch the smoother keeps the filtered state, the packed upper
+// triangle of its covariance and the two 3 x n Jacobians of the interval
+// (~6 kB for n = 27); a 40-min run at epoch_s = 0.2 s needs ~75 MB.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/model/angle_derivatives.h"
+#include "core/model/run_data.h"
+#include "core/model/run_description.h"
+#include "core/model/priors.h"
+#include "solvers/estimation/run_problem.h"
+
+namespace triadcal {
+
+struct FilterOptions {
+  double epoch_s = 0.2;  // measurement epochs; also the rate-fit window length
+  AngleDerivativeOptions derivatives;
+  int smoother_iterations = 2;
+  bool keep_series = false;
+  // Called with (pass, fraction done) now and then; may be empty.
+  std::function<void(int, double)> progress;
+};
+
+struct Estimate {
+  Eigen::VectorXd theta;  // SI
+  Eigen::MatrixXd cov;    // SI, n x n
+};
+
+// One row of the forward pass (the paper's Figs. 4-5) and its innovations.
+struct FilterSeriesRow {
+  double t_s;
+  Eigen::VectorXd theta, sigma;            // SI
+  Eigen::Matrix<double, 6, 1> innovation;  // V [m/s] then S [m]
+  Eigen::Matrix<double, 6, 1> innovation_sigma;
+};
+
+struct FilterResult {
+  Estimate ekf;  // end of the first forward pass
+  Estimate rts;  // smoothed, at the first epoch, after the last iteration
+  Prior prior;
+  std::vector<FilterSeriesRow> series;  // first forward pass, when asked
+  int epochs = 0;
+  int passes = 0;
+  double rate_noise_rad_s = 0.0;  // noise assumed on lambda'
+  // Innovation statistics of the last forward pass.
+  Eigen::Matrix<double, 6, 1> innovation_rms = Eigen::Matrix<double, 6, 1>::Zero();
+  double mean_nis = 0.0;  // E = 6 for a consistent filter
+};
+
+FilterResult RunFilterSmoother(const RunDescription& run, const RunData& data,
+                               const ParameterLayout& layout, const FilterOptions& options);
+
+}  // namespace triadcal

@@ -1,0 +1,93 @@
+#include "solvers/estimation/run_problem.h"
+
+#include <algorithm>
+#include <string>
+
+#include "core/model/errors.h"
+
+namespace triadcal {
+
+std::vector<std::size_t> ChooseEpochs(const RunData& data, double epoch_s) {
+  std::vector<std::size_t> ep;
+  const std::size_t n = data.size();
+  if (n == 0) return ep;
+  ep.push_back(0);
+  for (std::size_t k = 1; k < n; ++k) {
+    if (data.t_s[k] - data.t_s[ep.back()] >= epoch_s - 1e-9) ep.push_back(k);
+  }
+  if (ep.back() != n - 1) {
+    // Merge a short last interval into the previous one.
+    if (ep.size() > 1 && data.t_s[n - 1] - data.t_s[ep.back()] < 0.5 * epoch_s) {
+      ep.back() = n - 1;
+    } else {
+      ep.push_back(n - 1);
+    }
+  }
+  return ep;
+}
+
+RunData Decimate(const RunData& d, std::size_t m) {
+  if (m <= 1) return d;
+  RunData out;
+  auto thin = [m](const std::vector<double>& v) {
+    std::vector<double> o;
+    o.reserve(v.size() / m + 1);
+    for (std::size_t k = 0; k < v.size(); k += m) o.push_back(v[k]);
+    return o;
+  };
+  out.t_s = thin(d.t_s);
+  for (int i = 0; i < 2; ++i) {
+    out.lambda_rad[i] = thin(d.lambda_rad[i]);
+    out.rate_rad_s[i] = thin(d.rate_rad_s[i]);
+  }
+  for (int i = 0; i < 3; ++i) out.w_mV[i] = thin(d.w_mV[i]);
+  out.temp_C = thin(d.temp_C);
+  return out;
+}
+
+std::vector<ConstraintRow> ResolveConstraints(const RunDescription& run,
+                                              const ParameterLayout& layout) {
+  std::vector<ConstraintRow> rows;
+  for (const Constraint& k : run.constraints) {
+    ConstraintRow row{Eigen::VectorXd::Zero(layout.size()), k.value_si, k.sigma_si};
+    for (const auto& [name, coef] : k.terms) {
+      const int i = layout.IndexOf(name);
+      if (i < 0) {
+        throw InputError(run.yaml_path + ": constraints: '" + k.expr + "' names '" + name +
+                         "', which is not estimated in this run (add it with --effects)");
+      }
+      row.c[i] += coef;
+    }
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+RunProblem BuildRunProblem(const RunDescription& run, const RunData& data,
+                           const ParameterLayout& layout, double epoch_s,
+                           const AngleDerivativeOptions& derivatives) {
+  if (!(epoch_s > 0.0)) throw InputError("--epoch-s: must be > 0");
+  RunProblem p;
+  p.cfg = MakeModelConfig(run, layout);
+  if (data.has_temp()) p.cfg.temp_ref_C = data.temp_C.front();
+  p.series.run = &data;
+  p.epochs = ChooseEpochs(data, epoch_s);
+  if (p.epochs.size() < 3) {
+    throw InputError(run.data_path + ": run too short (" + std::to_string(p.epochs.size()) +
+                     " epochs of " + std::to_string(epoch_s) + " s; at least 3 needed)");
+  }
+  p.series.recorded = EstimateAngleDerivatives(
+      data, derivatives, NeedsRatesAtEverySample(layout) ? nullptr : &p.epochs);
+  p.prior = MakePrior(run, layout);
+  p.n = layout.size();
+  p.constraints = ResolveConstraints(run, layout);
+  const double min_scale = run.scale_mV_per_g.cwiseAbs().minCoeff();
+  p.accel_var = AccelSampleVariance(run.noise_mV, min_scale, run.angle_noise_rad, run.g_mps2);
+  p.sigma_angle = run.angle_noise_rad;
+  const double dt =
+      (data.t_s.back() - data.t_s.front()) / std::max<std::size_t>(1, data.size() - 1);
+  p.sigma_rate = data.has_rates() ? 0.0 : RateNoiseGain(dt, derivatives) * p.sigma_angle;
+  return p;
+}
+
+}  // namespace triadcal

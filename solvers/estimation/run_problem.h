@@ -1,0 +1,56 @@
+// What every estimator of a run shares: the model configuration, the recorded
+// angles with their derivatives, the measurement epochs, the priors, the
+// constraints as rows over theta, and the noise the run declares, turned into
+// the variances the process and measurement models need.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/model/angle_derivatives.h"
+#include "core/model/bench_model.h"
+#include "core/model/run_data.h"
+#include "core/model/run_description.h"
+#include "solvers/estimation/inertial_increments.h"
+#include "core/model/priors.h"
+
+namespace triadcal {
+
+// A constraint as a row over theta: c . theta = value +- sigma (SI).
+struct ConstraintRow {
+  Eigen::VectorXd c;
+  double value = 0.0, sigma = 0.0;
+};
+
+struct RunProblem {
+  ModelConfig cfg;
+  SampleSeries series;
+  std::vector<std::size_t> epochs;  // sample index of each epoch
+  Prior prior;
+  std::vector<ConstraintRow> constraints;
+  double accel_var = 0.0;     // per sample [m^2/s^4]
+  double sigma_angle = 0.0;   // [rad]
+  double sigma_rate = 0.0;    // [rad/s], of lambda' from the angles
+  int n = 0;                  // parameters
+};
+
+// The run's constraints as rows over the layout's theta. Throws InputError
+// when a constraint names a parameter that is not in the layout.
+std::vector<ConstraintRow> ResolveConstraints(const RunDescription& run,
+                                              const ParameterLayout& layout);
+
+// Throws InputError for a run too short for epoch_s, or a constraint naming a
+// parameter that is not in the layout.
+RunProblem BuildRunProblem(const RunDescription& run, const RunData& data,
+                           const ParameterLayout& layout, double epoch_s,
+                           const AngleDerivativeOptions& derivatives);
+
+// Sample indices of the measurement epochs: the first sample, then the first
+// sample at least epoch_s after the previous epoch, and the last sample.
+std::vector<std::size_t> ChooseEpochs(const RunData& data, double epoch_s);
+
+// Every m-th sample of a run (m >= 1), for quick initialisers.
+RunData Decimate(const RunData& data, std::size_t m);
+
+}  // namespace triadcal

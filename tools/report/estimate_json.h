@@ -1,0 +1,27 @@
+// The "parameters" object of every OUT file (SPEC section 7):
+//   {"Kx": {"value": 171.52, "sigma": 0.08, "unit": "mV/g"}, ...}
+// values and sigmas in file units; "estimable": false marks parameters that the
+// run cannot separate (their value is the prior's).
+#pragma once
+
+#include <set>
+#include <string>
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include "core/model/parameters.h"
+#include "solvers/estimation/separability.h"
+
+namespace triadcal {
+
+nlohmann::json ParametersJson(const ParameterLayout& layout, const Eigen::VectorXd& theta,
+                              const Eigen::MatrixXd& cov,
+                              const std::set<std::string>& not_estimable);
+
+nlohmann::json WeakDirectionsJson(const std::vector<WeakDirection>& dirs);
+
+// Correlation matrix {"names": [...], "matrix": [[...]]}.
+nlohmann::json CorrelationJson(const ParameterLayout& layout, const Eigen::MatrixXd& cov);
+
+}  // namespace triadcal

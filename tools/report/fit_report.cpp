@@ -1,0 +1,124 @@
+#include "tools/report/fit_report.h"
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "core/io/file_util.h"
+#include "solvers/estimation/observability.h"
+#include "tools/report/estimate_json.h"
+
+namespace triadcal {
+
+FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
+  FitReport rep;
+  rep.held.insert(r.held.begin(), r.held.end());
+  // The same analysis as `observability`, on the fit's own covariance. Held
+  // parameters are pinned far below their (original) prior sigma, so they
+  // come out determined and are reported as held instead.
+  rep.weak = UnsupportedDirections(layout, r.estimate.cov, r.prior.sigma);
+  for (const std::string& s : ParametersIn(rep.weak)) rep.not_estimable.insert(s);
+  rep.not_estimable.insert(rep.held.begin(), rep.held.end());
+  for (int i = 0; i < layout.size(); ++i) {
+    const double z = (r.estimate.theta[i] - r.prior.mean[i]) / r.prior.sigma[i];
+    if (std::abs(z) > 3.0) rep.at_prior_bound.push_back(layout.info(i).name);
+  }
+  std::ostringstream v;
+  v << (r.converged ? "converged" : "NOT CONVERGED") << " in " << r.outer_iterations
+    << " relinearisation(s), " << r.ceres_iterations << " Ceres iterations";
+  v << "; chi2/dof " << std::round(1000 * r.chi2_per_dof) / 1000 << " (1 expected)";
+  if (rep.at_prior_bound.empty()) {
+    v << "; no parameter at a prior bound";
+  } else {
+    v << "; beyond 3 prior sigma (check the nominal values or priors):";
+    for (const std::string& s : rep.at_prior_bound) v << " " << s;
+  }
+  if (!rep.held.empty()) {
+    v << "; held at nominal (this run's motion does not determine them):";
+    for (const std::string& s : r.held) v << " " << s;
+    if (!r.unsupported_at_start.empty()) {
+      v << " (undetermined:";
+      for (std::size_t k = 0; k < r.unsupported_at_start.size(); ++k) {
+        v << (k ? "; " : " ") << r.unsupported_at_start[k].description;
+      }
+      v << "; the other parameters of these directions are estimated relative to the held ones)";
+    }
+  }
+  if (rep.weak.empty()) {
+    v << "; every other parameter estimable";
+  } else {
+    v << "; NOT SEPARABLE in this run (values are the prior's):";
+    for (const std::string& s : ParametersIn(rep.weak)) v << " " << s;
+  }
+  rep.verdict = v.str();
+  return rep;
+}
+
+nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, const FitReport& rep,
+                       bool correlations) {
+  nlohmann::json out;
+  out["parameters"] = ParametersJson(layout, r.estimate.theta, r.estimate.cov, rep.not_estimable);
+  out["initial"] = {{"parameters", ParametersJson(layout, r.initial.theta, r.initial.cov, {})}};
+  if (correlations) out["correlation"] = CorrelationJson(layout, r.estimate.cov);
+  out["unobservable"] = WeakDirectionsJson(rep.weak);
+  out["not_estimable"] = std::vector<std::string>(rep.not_estimable.begin(), rep.not_estimable.end());
+  out["held"] = r.held;
+  out["unobservable_at_nominal"] = WeakDirectionsJson(r.unsupported_at_start);
+  out["at_prior_bound"] = rep.at_prior_bound;
+  out["verdict"] = rep.verdict;
+  out["converged"] = r.converged;
+  out["final_cost"] = r.final_cost;
+  out["residual_count"] = r.residual_count;
+  out["iterations"] = {{"relinearisations", r.outer_iterations}, {"ceres", r.ceres_iterations}};
+  const auto& m = r.residuals.measurement_rms;
+  const auto& p = r.residuals.process_rms;
+  out["residual_rms"] = {
+      {"measurement_v_mps", {m[0], m[1], m[2]}},
+      {"measurement_s_m", {m[3], m[4], m[5]}},
+      {"process_v_mps", {p[0], p[1], p[2]}},
+      {"process_s_m", {p[3], p[4], p[5]}},
+      {"measurement_whitened", r.residuals.measurement_whitened_rms},
+      {"process_whitened", r.residuals.process_whitened_rms}};
+  out["chi2_per_dof"] = r.chi2_per_dof;
+  out["degrees_of_freedom"] = r.degrees_of_freedom;
+  out["time_s"] = {{"init", r.init_seconds},
+                   {"solve", r.solve_seconds},
+                   {"covariance", r.covariance_seconds}};
+  out["settings"] = {{"epochs", r.epochs}, {"linear_solver", r.linear_solver}};
+  return out;
+}
+
+void PrintParameterTable(const ParameterLayout& layout, const BatchResult& r,
+                         const FitReport& rep) {
+  std::printf("%-26s %14s %10s %10s  %s\n", "parameter", "value", "sigma", "start", "unit");
+  for (int i = 0; i < layout.size(); ++i) {
+    const ParameterInfo& pi = layout.info(i);
+    const double f = pi.si_per_unit;
+    std::printf("%-26s %14.6g %10.3g %10.5g  %s%s\n", pi.name.c_str(), r.estimate.theta[i] / f,
+                std::sqrt(std::max(0.0, r.estimate.cov(i, i))) / f, r.initial.theta[i] / f,
+                pi.unit.c_str(),
+                rep.held.count(pi.name)            ? "  (held at nominal)"
+                : rep.not_estimable.count(pi.name) ? "  (not estimable: prior value)"
+                                                   : "");
+  }
+  for (const WeakDirection& d : rep.weak) {
+    std::printf("NOT SEPARABLE: %s (sigma %.0f%% of the prior along it)\n", d.description.c_str(),
+                100.0 * d.sigma_ratio);
+  }
+}
+
+std::string ResidualsCsv(const BatchResult& r) {
+  std::ostringstream s;
+  s << "# triadcal fit residuals per epoch: measurement m_* = x - B2 reference, process p_* of\n"
+    << "# the interval ending at the epoch (0 at the first); v in m/s, s in m\n";
+  s << "t,m_vx,m_vy,m_vz,m_sx,m_sy,m_sz,p_vx,p_vy,p_vz,p_sx,p_sy,p_sz\n";
+  for (std::size_t e = 0; e < r.epoch_t.size(); ++e) {
+    s << FormatDouble(r.epoch_t[e]);
+    for (int c = 0; c < 6; ++c) s << "," << FormatDouble(r.measurement_residual[e][c]);
+    for (int c = 0; c < 6; ++c) s << "," << FormatDouble(r.process_residual[e][c]);
+    s << "\n";
+  }
+  return s.str();
+}
+
+}  // namespace triadcal
