@@ -11,6 +11,7 @@
 #include "tools/report/estimate_json.h"
 #include "solvers/estimation/kalman_smoother.h"
 #include "tools/command_util.h"
+#include "solvers/estimation/run_problem.h"
 #include "tools/commands.h"
 #include "tools/report/fit_report.h"
 
@@ -19,7 +20,7 @@ namespace {
 
 struct CompareArgs {
   std::string run_yaml, out_json, effects;
-  double epoch_s = 0.2;
+  double epoch_s = kDefaultEpoch_s;
 };
 
 double Seconds(std::chrono::steady_clock::time_point t0) {

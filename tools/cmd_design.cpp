@@ -22,6 +22,7 @@
 #include "core/simulation/simulator.h"
 #include "solvers/analysis/experiment_design.h"
 #include "tools/command_util.h"
+#include "solvers/estimation/run_problem.h"
 #include "tools/commands.h"
 #include "tools/report/svg_plot.h"
 
@@ -36,7 +37,7 @@ struct DesignArgs {
   double design_duration_s = 0.0;  // 0: the scenario's
   double static_duration_s = 2400.0;
   int static_positions = 12;
-  double epoch_s = 0.2;
+  double epoch_s = kDefaultEpoch_s;
   int threads = 0;
 };
 

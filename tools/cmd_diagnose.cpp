@@ -11,6 +11,7 @@
 #include "solvers/diagnosis/effect_discovery.h"
 #include "tools/report/estimate_json.h"
 #include "tools/command_util.h"
+#include "solvers/estimation/run_problem.h"
 #include "tools/commands.h"
 #include "tools/report/fit_report.h"
 
@@ -21,7 +22,7 @@ struct DiagnoseArgs {
   std::string run_yaml, out_json, truth_json, candidates;
   double alpha = 0.01;
   int max_effects = 4;
-  double epoch_s = 0.2;
+  double epoch_s = kDefaultEpoch_s;
 };
 
 // Truth values in file units keyed by layout parameter name; keys the file

@@ -23,7 +23,7 @@ namespace {
 
 struct FilterArgs {
   std::string run_yaml, out_json, series_csv, effects;
-  double epoch_s = 0.2;
+  double epoch_s = kDefaultEpoch_s;
   double rate_window_s = 0.1;
   int iterations = 2;
   bool correlations = false, no_auto_hold = false;
@@ -75,9 +75,8 @@ int RunFilter(const FilterArgs& a) {
   };
   if (a.iterations < 1) throw InputError("--iterations: must be >= 1");
   // The same hold decision as fit: parameters the run's motion does not
-  // determine are pinned to their nominal values (a prior a million times
-  // tighter), so that the filter does not wander along flat directions.
-  RunDescription run_held = run.description;
+  // determine are held at their nominal values (removed from the filter's
+  // state), so that the filter does not wander along flat directions.
   HoldDecision hd;
   const Prior prior = MakePrior(run.description, layout);
   if (!a.no_auto_hold || !a.hold.empty()) {
@@ -86,12 +85,9 @@ int RunFilter(const FilterArgs& a) {
     hp.hold = SplitList(a.hold);
     hp.free = SplitList(a.free);
     hd = ChooseHeldParameters(run.description, run.data, layout, hp, a.epoch_s, opt.derivatives);
-    for (const std::string& name : hd.held) {
-      const int i = layout.IndexOf(name);
-      run_held.prior_sigma[name] = 1e-6 * prior.sigma[i] / layout.info(i).si_per_unit;
-    }
+    opt.held = hd.held;
   }
-  const FilterResult r = RunFilterSmoother(run_held, run.data, layout, opt);
+  const FilterResult r = RunFilterSmoother(run.description, run.data, layout, opt);
   EndProgress();
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -11,6 +11,7 @@
 #include "tools/report/estimate_json.h"
 #include "solvers/estimation/separability.h"
 #include "tools/command_util.h"
+#include "solvers/estimation/run_problem.h"
 #include "tools/commands.h"
 #include "tools/report/fit_report.h"
 
@@ -21,7 +22,7 @@ struct FitArgs {
   std::string run_yaml, out_json, residuals_csv, effects, init = "rts", robust;
   std::string linear_solver = "sparse_normal_cholesky";
   std::string covariance = "schur";
-  double epoch_s = 0.5, rate_window_s = 0.1, robust_scale = 3.0;
+  double epoch_s = kDefaultEpoch_s, rate_window_s = 0.1, robust_scale = 3.0;
   int threads = 0;
   bool correlations = false, no_auto_hold = false;
   std::string hold, free;

@@ -13,6 +13,7 @@
 #include "core/simulation/simulator.h"
 #include "solvers/analysis/monte_carlo.h"
 #include "tools/command_util.h"
+#include "solvers/estimation/run_problem.h"
 #include "tools/commands.h"
 
 namespace triadcal {
@@ -24,7 +25,7 @@ struct MonteCarloArgs {
   int runs = 100;
   std::uint64_t first_seed = 1;
   int threads = 0;
-  double epoch_s = 0.2;
+  double epoch_s = kDefaultEpoch_s;
   double tolerance = 0.1;
   bool per_seed = false;
 };

@@ -19,6 +19,7 @@
 #include "solvers/analysis/experiment_design.h"
 #include "solvers/estimation/observability.h"
 #include "tools/command_util.h"
+#include "solvers/estimation/run_problem.h"
 #include "tools/commands.h"
 #include "tools/report/observability_report.h"
 
@@ -27,7 +28,7 @@ namespace {
 
 struct ObservabilityArgs {
   std::string input, out_json, at, effects;
-  double epoch_s = 0.2, rate_window_s = 0.1;
+  double epoch_s = kDefaultEpoch_s, rate_window_s = 0.1;
   double unobservable_below = ObservabilityThresholds{}.unobservable;
   double weak_below = ObservabilityThresholds{}.weak;
   int threads = 0;

@@ -39,6 +39,7 @@
 #include "core/model/angle_derivatives.h"
 #include "core/simulation/simulator.h"
 #include "solvers/estimation/observability.h"
+#include "solvers/estimation/run_problem.h"
 
 namespace triadcal {
 
@@ -52,7 +53,7 @@ Scenario NoiseFreeScenario(const Scenario& s);
 Eigen::VectorXd TruthInLayout(const Scenario& s, const ParameterLayout& layout);
 
 struct DesignOptions {
-  double epoch_s = 0.2;
+  double epoch_s = kDefaultEpoch_s;
   AngleDerivativeOptions derivatives;
   ObservabilityOptions observability;
 };

@@ -1,7 +1,5 @@
 #include "solvers/estimation/batch_costs.h"
 
-#include <Eigen/Cholesky>
-
 namespace triadcal {
 
 using RowMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
@@ -15,81 +13,59 @@ void Store(const M& m, double* out) {
 }
 }  // namespace
 
-Mat6 WhiteningOf(const Mat6& cov) {
-  const Eigen::LLT<Mat6> llt(cov);
-  const Mat6 Lc = llt.matrixL();
-  return Lc.triangularView<Eigen::Lower>().solve(Mat6::Identity());
-}
-
-ProcessCost::ProcessCost(const IntervalIncrement* inc, const Eigen::VectorXd* theta_lin,
-                         const Mat6& L, const RunProblem* exact_problem, std::size_t k0,
-                         std::size_t k1)
-    : inc_(inc), theta_lin_(theta_lin), L_(L), exact_(exact_problem), k0_(k0), k1_(k1) {
-  n_ = static_cast<int>(theta_lin->size());
+ProcessCost::ProcessCost(const ProcessStep* step, const Eigen::VectorXd* theta_lin_free,
+                         const Mat6& L, const StateSpaceModel* exact_model, std::size_t e)
+    : step_(step), theta_lin_(theta_lin_free), L_(L), exact_(exact_model), e_(e) {
+  n_ = static_cast<int>(theta_lin_free->size());
   set_num_residuals(6);
   mutable_parameter_block_sizes()->push_back(6);
   mutable_parameter_block_sizes()->push_back(6);
   mutable_parameter_block_sizes()->push_back(n_);
 }
 
-Vec6 ProcessCost::Raw(const double* xa, const double* xb, const double* theta) const {
+Vec6 ProcessCost::Raw(const double* xa, const double* xb, const double* theta_free) const {
   Eigen::Map<const Vec6> a(xa), b(xb);
-  Eigen::Map<const Eigen::VectorXd> th(theta, n_);
-  Vec6 r;
+  Eigen::Map<const Eigen::VectorXd> th(theta_free, n_);
   if (exact_) {
-    const IntervalIncrement e = IntegrateInterval(exact_->cfg, th, exact_->series, k0_, k1_, false);
-    r.head<3>() = b.head<3>() - a.head<3>() - e.dv_mps;
-    r.tail<3>() = b.tail<3>() - a.tail<3>() - a.head<3>() * e.T_s - e.ds_m;
-    return r;
+    const ProcessStep s = exact_->Process(e_, exact_->Expand(th), false);
+    return StateSpaceModel::ProcessResidual(s, a, b, Eigen::VectorXd());
   }
-  const Eigen::VectorXd d = th - *theta_lin_;
-  r.head<3>() = b.head<3>() - a.head<3>() - inc_->dv_mps - inc_->ddv_dtheta * d;
-  r.tail<3>() = b.tail<3>() - a.tail<3>() - a.head<3>() * inc_->T_s - inc_->ds_m -
-                inc_->dds_dtheta * d;
-  return r;
+  return StateSpaceModel::ProcessResidual(*step_, a, b, th - *theta_lin_);
 }
 
 bool ProcessCost::Evaluate(double const* const* p, double* residuals, double** jacobians) const {
+  Eigen::Map<const Vec6> a(p[0]), b(p[1]);
+  Eigen::Map<const Eigen::VectorXd> th(p[2], n_);
+  const bool want_theta = jacobians && jacobians[2];
+  ProcessStep exact_step;
+  const ProcessStep* s = step_;
+  Eigen::VectorXd d = th - *theta_lin_;
+  if (exact_) {
+    exact_step = exact_->Process(e_, exact_->Expand(th), want_theta);
+    s = &exact_step;
+    d.setZero();
+  }
   Eigen::Map<Vec6> res(residuals);
-  res = L_ * Raw(p[0], p[1], p[2]);
+  res = L_ * StateSpaceModel::ProcessResidual(*s, a, b, d);
   if (!jacobians) return true;
-  if (jacobians[0]) {
-    Mat6 D = -Mat6::Identity();
-    D.block<3, 3>(3, 0) = -inc_->T_s * Eigen::Matrix3d::Identity();
-    Store(L_ * D, jacobians[0]);
-  }
+  if (jacobians[0]) Store(L_ * StateSpaceModel::ProcessJacobianXa(*s), jacobians[0]);
   if (jacobians[1]) Store(L_, jacobians[1]);
-  if (jacobians[2]) {
-    Eigen::MatrixXd J(6, n_);
-    if (exact_) {
-      Eigen::Map<const Eigen::VectorXd> th(p[2], n_);
-      const IntervalIncrement e = IntegrateInterval(exact_->cfg, th, exact_->series, k0_, k1_, true);
-      J.topRows(3) = -e.ddv_dtheta;
-      J.bottomRows(3) = -e.dds_dtheta;
-    } else {
-      J.topRows(3) = -inc_->ddv_dtheta;
-      J.bottomRows(3) = -inc_->dds_dtheta;
-    }
-    Store(L_ * J, jacobians[2]);
-  }
+  if (want_theta) Store(-L_ * s->U, jacobians[2]);
   return true;
 }
 
-MeasurementCost::MeasurementCost(const RunProblem* problem, std::size_t k, const Mat6& L)
-    : problem_(problem), k_(k), L_(L), n_(problem->n) {
+MeasurementCost::MeasurementCost(const StateSpaceModel* model, std::size_t e, const Mat6& L)
+    : model_(model), e_(e), L_(L), n_(model->num_free()) {
   set_num_residuals(6);
   mutable_parameter_block_sizes()->push_back(6);
   mutable_parameter_block_sizes()->push_back(n_);
 }
 
-Vec6 MeasurementCost::Raw(const double* x, const double* theta) const {
+Vec6 MeasurementCost::Raw(const double* x, const double* theta_free) const {
   Eigen::Map<const Vec6> s(x);
-  Eigen::Map<const Eigen::VectorXd> th(theta, n_);
-  const ReferenceSample ref =
-      EvaluateReference(problem_->cfg, th, problem_->series.recorded[k_], false);
-  Vec6 r;
-  r << s.head<3>() - ref.v_mps, s.tail<3>() - ref.p_m;
-  return r;
+  Eigen::Map<const Eigen::VectorXd> th(theta_free, n_);
+  const MeasurementStep m = model_->Measurement(e_, model_->Expand(th), false, false);
+  return StateSpaceModel::MeasurementResidual(m, s);
 }
 
 bool MeasurementCost::Evaluate(double const* const* p, double* residuals,
@@ -97,15 +73,12 @@ bool MeasurementCost::Evaluate(double const* const* p, double* residuals,
   Eigen::Map<const Vec6> s(p[0]);
   Eigen::Map<const Eigen::VectorXd> th(p[1], n_);
   const bool want_theta = jacobians && jacobians[1];
-  const ReferenceSample ref =
-      EvaluateReference(problem_->cfg, th, problem_->series.recorded[k_], want_theta);
-  Vec6 r;
-  r << s.head<3>() - ref.v_mps, s.tail<3>() - ref.p_m;
+  const MeasurementStep m = model_->Measurement(e_, model_->Expand(th), want_theta, false);
   Eigen::Map<Vec6> out(residuals);
-  out = L_ * r;
+  out = L_ * StateSpaceModel::MeasurementResidual(m, s);
   if (!jacobians) return true;
   if (jacobians[0]) Store(L_, jacobians[0]);
-  if (want_theta) Store(-L_ * ref.dref_dtheta, jacobians[1]);
+  if (want_theta) Store(-L_ * m.H, jacobians[1]);
   return true;
 }
 

@@ -1,42 +1,48 @@
-// The batch problem linearised at one theta, without solving it: the B1
-// increments of every interval with their Jacobians, the whitening of every
-// process and measurement residual, and the rows of the priors and
-// constraints. The batch solver builds its Ceres problem from it; the
-// observability analysis turns it into the Fisher information of theta
-// (schur_covariance.h) for any run, recorded or simulated.
+// The batch problem linearised at one theta, without solving it: every
+// interval's process step (state_space_model.h) with its Jacobian, the
+// whitening of every process and measurement residual, and the rows of the
+// priors and constraints, all over the free parameters of the problem. The
+// batch solver builds its Ceres problem from it; the observability analysis
+// turns it into the Fisher information of theta (schur_covariance.h) for any
+// run, recorded or simulated.
 #pragma once
 
 #include <vector>
 
 #include <Eigen/Core>
 
-#include "solvers/estimation/batch_costs.h"
 #include "solvers/estimation/run_problem.h"
+#include "solvers/estimation/state_space_model.h"
 
 namespace triadcal {
 
 struct BatchLinearization {
-  Eigen::VectorXd theta_lin;
-  std::vector<IntervalIncrement> increments;  // E - 1
-  std::vector<Mat6> LQ;                       // E - 1 process whitenings
-  std::vector<Mat6> LR;                       // E measurement whitenings
+  Eigen::VectorXd theta_lin;        // all n parameters
+  Eigen::VectorXd theta_lin_free;   // the free ones
+  std::vector<ProcessStep> process;  // E - 1
+  std::vector<Mat6> LQ;              // E - 1 process whitenings
+  std::vector<Mat6> LR;              // E measurement whitenings
 };
 
-// with_jacobian = false leaves the increment Jacobians empty (exact mode).
+// with_jacobian = false leaves the process Jacobians empty (exact mode).
 BatchLinearization Linearize(const RunProblem& p, const Eigen::VectorXd& theta,
                              bool with_jacobian, int threads);
 
-// Rows over theta alone, whitened: the priors (n rows) and, when asked, the
-// constraints; A theta - b is their residual.
+// Rows over the free parameters alone, whitened: the priors and, when asked,
+// the constraints; A theta_free - b is their residual.
 void ThetaRows(const RunProblem& p, bool with_constraints, Eigen::MatrixXd* A,
                Eigen::VectorXd* b);
 
-// Covariance of theta (the inverse of the Fisher information with the priors,
-// and the constraints when they are in A) from the Jacobians of the
-// linearisation, with the B2 Jacobians evaluated at theta. This is the
+// Covariance of the free parameters (the inverse of the Fisher information
+// with the priors, and the constraints when they are in A) from the Jacobians
+// of the linearisation, with the B2 Jacobians evaluated at theta. This is the
 // Cramer-Rao bound of the model at theta for the run's motion and timing.
 Eigen::MatrixXd ThetaCovariance(const RunProblem& p, const BatchLinearization& lin,
                                 const Eigen::VectorXd& theta, const Eigen::MatrixXd& A,
                                 int threads);
+
+// The free-parameter covariance placed in an n x n matrix (zero rows and
+// columns for the held parameters).
+Eigen::MatrixXd ExpandCovariance(const RunProblem& p, const Eigen::MatrixXd& cov_free);
 
 }  // namespace triadcal

@@ -12,6 +12,7 @@
 #include "solvers/estimation/parallel.h"
 #include "solvers/estimation/run_problem.h"
 #include "solvers/estimation/batch_linearization.h"
+#include "solvers/estimation/state_space_model.h"
 #include "solvers/estimation/observability.h"
 
 namespace triadcal {
@@ -30,12 +31,18 @@ std::size_t ThinningFactor(const RunData& data, int rate_hz) {
 
 // Starting point of theta (and its sigma when an estimator gave one).
 Estimate Initialise(const RunDescription& run, const RunData& data, const ParameterLayout& layout,
-                    const RunProblem& p, const BatchOptions& opt) {
+                    const RunProblem& p, const BatchOptions& opt,
+                    const std::vector<std::string>& held) {
   const int n = p.n;
   Estimate e{p.prior.mean, Eigen::MatrixXd(p.prior.sigma.array().square().matrix().asDiagonal())};
+  for (int i : p.held) {
+    e.cov.row(i).setZero();
+    e.cov.col(i).setZero();
+  }
   if (opt.init == BatchInit::kGiven) {
     if (opt.init_theta.size() != n) throw std::invalid_argument("init_theta has the wrong size");
     e.theta = opt.init_theta;
+    for (int i : p.held) e.theta[i] = p.theta_held[i];
     return e;
   }
   if (opt.init == BatchInit::kNominal) return e;
@@ -46,6 +53,7 @@ Estimate Initialise(const RunDescription& run, const RunData& data, const Parame
   fo.epoch_s = std::max(opt.epoch_s, 1.0);  // coarse epochs: the start needs no more
   fo.derivatives = opt.derivatives;
   fo.smoother_iterations = 1;
+  fo.held = held;
   const FilterResult fr = RunFilterSmoother(run, thin, layout, fo);
   return fr.rts;
 }
@@ -54,14 +62,14 @@ std::unique_ptr<ceres::LossFunction> MakeLoss(const BatchOptions& opt) {
   if (opt.robust_loss.empty()) return nullptr;
   if (opt.robust_loss == "huber") return std::make_unique<ceres::HuberLoss>(opt.robust_scale);
   if (opt.robust_loss == "cauchy") return std::make_unique<ceres::CauchyLoss>(opt.robust_scale);
-  throw InputError("--robust: unknown loss '" + opt.robust_loss + "' (huber, cauchy)");
+  throw InputError("robust loss: unknown '" + opt.robust_loss + "' (huber, cauchy)");
 }
 
 ceres::LinearSolverType SolverType(const std::string& name) {
   if (name == "sparse_normal_cholesky") return ceres::SPARSE_NORMAL_CHOLESKY;
   if (name == "sparse_schur") return ceres::SPARSE_SCHUR;
   if (name == "dense_qr") return ceres::DENSE_QR;
-  throw InputError("--linear-solver: unknown '" + name +
+  throw InputError("linear solver: unknown '" + name +
                    "' (sparse_normal_cholesky, sparse_schur, dense_qr)");
 }
 
@@ -140,7 +148,7 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
   }
   auto index_of = [&](const std::string& name) {
     const int i = layout.IndexOf(name);
-    if (i < 0) throw InputError("--hold/--free: unknown parameter '" + name + "'");
+    if (i < 0) throw InputError("held or freed parameter: unknown '" + name + "'");
     return i;
   };
   for (const std::string& h : o.hold) held[index_of(h)] = true;
@@ -151,13 +159,147 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
   return d;
 }
 
+namespace {
+
+// The Ceres problem of one linearisation: the trajectory blocks, theta_free,
+// one process cost per interval, one measurement cost per epoch, the prior
+// and constraint rows.
+struct LinearisedProblem {
+  std::unique_ptr<ceres::Problem> problem;
+  std::vector<ProcessCost*> process;
+  std::vector<MeasurementCost*> measurement;
+};
+
+LinearisedProblem BuildCeresProblem(const StateSpaceModel& model, const BatchLinearization& lin,
+                                    const Eigen::MatrixXd& A, const Eigen::VectorXd& b,
+                                    const BatchOptions& opt, std::vector<double>* x,
+                                    Eigen::VectorXd* theta_free) {
+  const std::size_t E = model.num_epochs();
+  LinearisedProblem lp;
+  ceres::Problem::Options po;
+  po.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+  po.loss_function_ownership = ceres::TAKE_OWNERSHIP;
+  lp.problem = std::make_unique<ceres::Problem>(po);
+  lp.process.resize(E - 1);
+  lp.measurement.resize(E);
+  for (std::size_t e = 0; e < E; ++e) lp.problem->AddParameterBlock(&(*x)[6 * e], 6);
+  lp.problem->AddParameterBlock(theta_free->data(), model.num_free());
+  for (std::size_t e = 0; e + 1 < E; ++e) {
+    lp.process[e] = new ProcessCost(&lin.process[e], &lin.theta_lin_free, lin.LQ[e],
+                                    opt.exact_increments ? &model : nullptr, e);
+    lp.problem->AddResidualBlock(lp.process[e], MakeLoss(opt).release(), &(*x)[6 * e],
+                                 &(*x)[6 * (e + 1)], theta_free->data());
+  }
+  for (std::size_t e = 0; e < E; ++e) {
+    lp.measurement[e] = new MeasurementCost(&model, e, lin.LR[e]);
+    lp.problem->AddResidualBlock(lp.measurement[e], MakeLoss(opt).release(), &(*x)[6 * e],
+                                 theta_free->data());
+  }
+  lp.problem->AddResidualBlock(new LinearThetaCost(A, b), nullptr, theta_free->data());
+  return lp;
+}
+
+ceres::Solver::Options SolverOptions(const BatchOptions& opt, int threads, std::size_t E,
+                                     std::vector<double>* x, Eigen::VectorXd* theta_free) {
+  ceres::Solver::Options so;
+  so.linear_solver_type = SolverType(opt.linear_solver);
+  so.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
+  so.max_num_iterations = opt.max_ceres_iterations;
+  so.num_threads = threads;
+  so.function_tolerance = 1e-12;
+  so.gradient_tolerance = 1e-12;
+  so.parameter_tolerance = 1e-12;
+  so.logging_type = ceres::SILENT;
+  // The problem is close to linear (B1 enters linearised, B2 is smooth in
+  // theta): start with a Gauss-Newton-sized step instead of Ceres's cautious
+  // default radius, which costs a dozen iterations on a 72k-unknown problem.
+  so.initial_trust_region_radius = 1e12;
+  if (so.linear_solver_type == ceres::SPARSE_SCHUR) {
+    // Eliminate every other epoch's state: an independent set, since the
+    // process residuals couple only neighbours.
+    auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+    for (std::size_t e = 0; e < E; ++e) ordering->AddElementToGroup(&(*x)[6 * e], e % 2 == 0 ? 0 : 1);
+    ordering->AddElementToGroup(theta_free->data(), 1);
+    so.linear_solver_ordering = ordering;
+  }
+  return so;
+}
+
+// Residuals at the solution, raw and whitened, and their summaries.
+void CollectResiduals(const RunProblem& p, const RunData& data, const BatchLinearization& lin,
+                      const LinearisedProblem& lp, const std::vector<double>& x,
+                      const Eigen::VectorXd& theta_free, BatchResult* res) {
+  const std::size_t E = p.epochs.size();
+  const int nf = static_cast<int>(theta_free.size());
+  res->epoch_t.resize(E);
+  res->epoch_samples = p.epochs;
+  res->measurement_residual.assign(E, Vec6::Zero());
+  res->process_residual.assign(E, Vec6::Zero());
+  res->measurement_whitened.assign(E, Vec6::Zero());
+  res->process_whitened.assign(E, Vec6::Zero());
+  Vec6 mss = Vec6::Zero(), pss = Vec6::Zero();
+  double mw = 0.0, pw = 0.0;
+  for (std::size_t e = 0; e < E; ++e) {
+    res->epoch_t[e] = data.t_s[p.epochs[e]];
+    const Vec6 rm = lp.measurement[e]->Raw(&x[6 * e], theta_free.data());
+    res->measurement_residual[e] = rm;
+    mss += rm.cwiseAbs2();
+    res->measurement_whitened[e] = lin.LR[e] * rm;
+    mw += res->measurement_whitened[e].squaredNorm();
+    if (e > 0) {
+      const Vec6 rp = lp.process[e - 1]->Raw(&x[6 * (e - 1)], &x[6 * e], theta_free.data());
+      res->process_residual[e] = rp;
+      pss += rp.cwiseAbs2();
+      res->process_whitened[e] = lin.LQ[e - 1] * rp;
+      pw += res->process_whitened[e].squaredNorm();
+    }
+  }
+  res->residuals.measurement_rms = (mss / E).cwiseSqrt();
+  res->residuals.process_rms = (pss / (E - 1)).cwiseSqrt();
+  res->residuals.measurement_whitened_rms = std::sqrt(mw / (6.0 * E));
+  res->residuals.process_whitened_rms = std::sqrt(pw / (6.0 * (E - 1)));
+  const int nc = static_cast<int>(p.constraints.size());
+  res->residual_count = static_cast<int>(12 * E - 6 + nf + nc);
+  res->degrees_of_freedom = res->residual_count - static_cast<int>(6 * E) - nf;
+  res->chi2_per_dof = 2.0 * res->final_cost / std::max(1, res->degrees_of_freedom);
+}
+
+// Covariance of the free parameters at the solution.
+Eigen::MatrixXd FreeCovariance(const RunProblem& p, const BatchLinearization& lin,
+                               const LinearisedProblem& lp, const Eigen::VectorXd& theta,
+                               Eigen::VectorXd* theta_free, const Eigen::MatrixXd& A,
+                               const BatchOptions& opt, int threads) {
+  const int nf = static_cast<int>(theta_free->size());
+  const bool use_ceres = opt.covariance_method == "ceres" || !opt.robust_loss.empty();
+  if (!use_ceres && opt.covariance_method != "schur") {
+    throw InputError("covariance method: unknown '" + opt.covariance_method + "' (schur, ceres)");
+  }
+  if (!use_ceres) return ThetaCovariance(p, lin, theta, A, threads);
+  // Ceres's sparse QR on the whole Jacobian (applies the robust loss's
+  // weights). The priors keep the Jacobian full rank.
+  ceres::Covariance::Options co;
+  co.algorithm_type = ceres::SPARSE_QR;
+  co.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
+  co.num_threads = threads;
+  ceres::Covariance cov(co);
+  std::vector<std::pair<const double*, const double*>> blocks = {
+      {theta_free->data(), theta_free->data()}};
+  if (!cov.Compute(blocks, lp.problem.get())) {
+    throw std::runtime_error("covariance of theta: Ceres could not factor the Jacobian");
+  }
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> C(nf, nf);
+  cov.GetCovarianceBlock(theta_free->data(), theta_free->data(), C.data());
+  return C;
+}
+
+}  // namespace
+
 BatchResult SolveBatch(const RunDescription& run, const RunData& data,
                        const ParameterLayout& layout, const BatchOptions& opt) {
   const auto t_start = std::chrono::steady_clock::now();
   const int threads = opt.threads > 0 ? opt.threads : DefaultThreads();
-  const ceres::LinearSolverType solver_type = SolverType(opt.linear_solver);
+  SolverType(opt.linear_solver);  // checks the name before the work
   RunProblem p = BuildRunProblem(run, data, layout, opt.epoch_s, opt.derivatives);
-  const int n = p.n;
   const std::size_t E = p.epochs.size();
   auto say = [&](const std::string& s) {
     if (opt.progress) opt.progress(s);
@@ -167,48 +309,40 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   res.prior = p.prior;
   res.epochs = static_cast<int>(E);
   res.linear_solver = opt.linear_solver;
-  RunDescription run_held = run;
+
+  // 1. Which parameters are estimated: the held ones leave the problem.
   if (opt.holding.auto_hold || !opt.holding.hold.empty()) {
     say("choosing the parameters this run supports");
     const HoldDecision hd = ChooseHeldParameters(run, data, layout, opt.holding, opt.epoch_s,
                                                  opt.derivatives, opt.init_decimation_hz, threads);
     res.unsupported_at_start = hd.unsupported;
     res.held = hd.held;
-    for (const std::string& name : hd.held) {
-      const int i = layout.IndexOf(name);
-      // Pinned with a prior a million times tighter, here and in the start.
-      p.prior.sigma[i] *= 1e-6;
-      run_held.prior_sigma[name] = p.prior.sigma[i] / layout.info(i).si_per_unit;
-    }
+    std::vector<int> held;
+    for (const std::string& name : hd.held) held.push_back(layout.IndexOf(name));
+    p.Hold(held);
   }
+  const StateSpaceModel model(p);
 
+  // 2. The start.
   say("initialising (" + std::string(opt.init == BatchInit::kRts ? "RTS smoother" : "nominal") +
       ")");
-  res.initial = Initialise(run_held, data, layout, p, opt);
-  for (int i = 0; i < n; ++i) {
-    if (p.prior.sigma[i] < res.prior.sigma[i]) res.initial.theta[i] = p.prior.mean[i];
-  }
+  res.initial = Initialise(run, data, layout, p, opt, res.held);
   res.init_seconds = Seconds(t_start);
-
-  // Unknowns: theta and the trajectory, started on the B2 reference motion.
-  Eigen::VectorXd theta = res.initial.theta;
+  Eigen::VectorXd theta_free = model.Free(res.initial.theta);
+  // The trajectory starts on the B2 reference motion.
   std::vector<double> x(6 * E);
   for (std::size_t e = 0; e < E; ++e) {
-    const ReferenceSample r = EvaluateReference(p.cfg, theta, p.series.recorded[p.epochs[e]], false);
-    Eigen::Map<Vec6>(&x[6 * e]) << r.v_mps, r.p_m;
+    Eigen::Map<Vec6> x_e(&x[6 * e]);
+    x_e = model.Measurement(e, res.initial.theta, false, false).h;
   }
-
-  // Priors and constraints: fixed linear rows over theta.
   Eigen::MatrixXd A;
   Eigen::VectorXd b;
-  ThetaRows(p, true, &A, &b);
-  const int nc = static_cast<int>(p.constraints.size());
+  model.ThetaRows(true, &A, &b);
 
+  // 3. Relinearise and solve until the linearisation point stops moving.
   const auto t_solve = std::chrono::steady_clock::now();
   BatchLinearization lin;
-  std::unique_ptr<ceres::Problem> problem;
-  std::vector<ProcessCost*> process_costs(E - 1);
-  std::vector<MeasurementCost*> measurement_costs(E);
+  LinearisedProblem lp;
   double last_step = 0.0;
   // Backtracking: the cost at a new linearisation point is the true cost
   // there; if a step made it worse than at the previous point, go half way back.
@@ -218,66 +352,23 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   int halvings = 0;
   for (int outer = 0; outer < opt.max_outer_iterations + halvings; ++outer) {
     say("relinearising pass " + std::to_string(outer + 1));
-    lin = Linearize(p, theta, !opt.exact_increments, threads);
-    const std::vector<IntervalIncrement>& inc = lin.increments;
-    const std::vector<Mat6>& LQ = lin.LQ;
-    const std::vector<Mat6>& LR = lin.LR;
-
-    ceres::Problem::Options po;
-    po.cost_function_ownership = ceres::TAKE_OWNERSHIP;
-    po.loss_function_ownership = ceres::TAKE_OWNERSHIP;
-    problem = std::make_unique<ceres::Problem>(po);
-    for (std::size_t e = 0; e < E; ++e) problem->AddParameterBlock(&x[6 * e], 6);
-    problem->AddParameterBlock(theta.data(), n);
-    for (std::size_t e = 0; e + 1 < E; ++e) {
-      process_costs[e] = new ProcessCost(&inc[e], &lin.theta_lin, LQ[e],
-                                         opt.exact_increments ? &p : nullptr, p.epochs[e],
-                                         p.epochs[e + 1]);
-      problem->AddResidualBlock(process_costs[e], MakeLoss(opt).release(), &x[6 * e],
-                                &x[6 * (e + 1)], theta.data());
-    }
-    for (std::size_t e = 0; e < E; ++e) {
-      measurement_costs[e] = new MeasurementCost(&p, p.epochs[e], LR[e]);
-      problem->AddResidualBlock(measurement_costs[e], MakeLoss(opt).release(), &x[6 * e],
-                                theta.data());
-    }
-    problem->AddResidualBlock(new LinearThetaCost(A, b), nullptr, theta.data());
-
-    ceres::Solver::Options so;
-    so.linear_solver_type = solver_type;
-    so.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
-    so.max_num_iterations = opt.max_ceres_iterations;
-    so.num_threads = threads;
-    so.function_tolerance = 1e-12;
-    so.gradient_tolerance = 1e-12;
-    so.parameter_tolerance = 1e-12;
-    so.logging_type = ceres::SILENT;
-    // The problem is close to linear (B1 enters linearised, B2 is smooth in
-    // theta): start with a Gauss-Newton-sized step instead of Ceres's cautious
-    // default radius, which costs a dozen iterations on a 72k-unknown problem.
-    so.initial_trust_region_radius = 1e12;
-    if (solver_type == ceres::SPARSE_SCHUR) {
-      // Eliminate every other epoch's state: an independent set, since the
-      // process residuals couple only neighbours.
-      auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
-      for (std::size_t e = 0; e < E; ++e) ordering->AddElementToGroup(&x[6 * e], e % 2 == 0 ? 0 : 1);
-      ordering->AddElementToGroup(theta.data(), 1);
-      so.linear_solver_ordering = ordering;
-    }
+    lin = Linearize(p, model.Expand(theta_free), !opt.exact_increments, threads);
+    lp = BuildCeresProblem(model, lin, A, b, opt, &x, &theta_free);
+    const ceres::Solver::Options so = SolverOptions(opt, threads, E, &x, &theta_free);
     // The true cost at this point (before solving), to judge the last step.
     double cost_here = 0.0;
-    problem->Evaluate(ceres::Problem::EvaluateOptions(), &cost_here, nullptr, nullptr, nullptr);
+    lp.problem->Evaluate(ceres::Problem::EvaluateOptions(), &cost_here, nullptr, nullptr, nullptr);
     if (cost_here > cost_prev * (1.0 + 1e-9) && halvings < 20 && !opt.exact_increments) {
       ++halvings;
-      theta = 0.5 * (theta + theta_prev);
+      theta_free = 0.5 * (theta_free + theta_prev);
       for (std::size_t i = 0; i < x.size(); ++i) x[i] = 0.5 * (x[i] + x_prev[i]);
       continue;
     }
-    theta_prev = theta;
+    theta_prev = theta_free;
     x_prev = x;
     cost_prev = cost_here;
     ceres::Solver::Summary summary;
-    ceres::Solve(so, problem.get(), &summary);
+    ceres::Solve(so, lp.problem.get(), &summary);
     if (summary.termination_type == ceres::FAILURE) {
       throw std::runtime_error("Ceres failed: " + summary.message);
     }
@@ -302,68 +393,17 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
     }
   }
   res.solve_seconds = Seconds(t_solve);
-
-  // Residuals at the solution.
+  const Eigen::VectorXd theta = model.Expand(theta_free);
   res.estimate.theta = theta;
-  res.epoch_t.resize(E);
-  res.epoch_samples = p.epochs;
-  res.measurement_residual.assign(E, Vec6::Zero());
-  res.process_residual.assign(E, Vec6::Zero());
-  res.measurement_whitened.assign(E, Vec6::Zero());
-  res.process_whitened.assign(E, Vec6::Zero());
-  Vec6 mss = Vec6::Zero(), pss = Vec6::Zero();
-  double mw = 0.0, pw = 0.0;
-  for (std::size_t e = 0; e < E; ++e) {
-    res.epoch_t[e] = data.t_s[p.epochs[e]];
-    const Vec6 rm = measurement_costs[e]->Raw(&x[6 * e], theta.data());
-    res.measurement_residual[e] = rm;
-    mss += rm.cwiseAbs2();
-    res.measurement_whitened[e] = lin.LR[e] * rm;
-    mw += res.measurement_whitened[e].squaredNorm();
-    if (e > 0) {
-      const Vec6 rp = process_costs[e - 1]->Raw(&x[6 * (e - 1)], &x[6 * e], theta.data());
-      res.process_residual[e] = rp;
-      pss += rp.cwiseAbs2();
-      res.process_whitened[e] = lin.LQ[e - 1] * rp;
-      pw += res.process_whitened[e].squaredNorm();
-    }
-  }
-  res.residuals.measurement_rms = (mss / E).cwiseSqrt();
-  res.residuals.process_rms = (pss / (E - 1)).cwiseSqrt();
-  res.residuals.measurement_whitened_rms = std::sqrt(mw / (6.0 * E));
-  res.residuals.process_whitened_rms = std::sqrt(pw / (6.0 * (E - 1)));
-  res.residual_count = static_cast<int>(12 * E - 6 + n + nc);
-  res.degrees_of_freedom = res.residual_count - static_cast<int>(6 * E) - n;
-  res.chi2_per_dof = 2.0 * res.final_cost / std::max(1, res.degrees_of_freedom);
 
-  res.estimate.cov = Eigen::MatrixXd::Zero(n, n);
+  // 4. Residuals and covariance at the solution.
+  CollectResiduals(p, data, lin, lp, x, theta_free, &res);
+  res.estimate.cov = Eigen::MatrixXd::Zero(p.n, p.n);
   if (opt.compute_covariance) {
     say("covariance");
     const auto t_cov = std::chrono::steady_clock::now();
-    const bool use_ceres = opt.covariance_method == "ceres" || !opt.robust_loss.empty();
-    if (!use_ceres && opt.covariance_method != "schur") {
-      throw InputError("--covariance: unknown method '" + opt.covariance_method +
-                       "' (schur, ceres)");
-    }
-    if (use_ceres) {
-      // Ceres's sparse QR on the whole Jacobian (applies the robust loss's
-      // weights). The priors keep the Jacobian full rank.
-      ceres::Covariance::Options co;
-      co.algorithm_type = ceres::SPARSE_QR;
-      co.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
-      co.num_threads = threads;
-      ceres::Covariance cov(co);
-      std::vector<std::pair<const double*, const double*>> blocks = {
-          {theta.data(), theta.data()}};
-      if (!cov.Compute(blocks, problem.get())) {
-        throw std::runtime_error("covariance of theta: Ceres could not factor the Jacobian");
-      }
-      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> C(n, n);
-      cov.GetCovarianceBlock(theta.data(), theta.data(), C.data());
-      res.estimate.cov = C;
-    } else {
-      res.estimate.cov = ThetaCovariance(p, lin, theta, A, threads);
-    }
+    res.estimate.cov =
+        ExpandCovariance(p, FreeCovariance(p, lin, lp, theta, &theta_free, A, opt, threads));
     res.covariance_seconds = Seconds(t_cov);
   }
   return res;

@@ -49,6 +49,7 @@
 #include "core/model/run_description.h"
 #include "solvers/estimation/kalman_smoother.h"
 #include "core/model/priors.h"
+#include "solvers/estimation/run_problem.h"
 #include "solvers/estimation/separability.h"
 
 namespace triadcal {
@@ -72,7 +73,7 @@ struct HoldPolicy {
 };
 
 struct BatchOptions {
-  double epoch_s = 0.2;
+  double epoch_s = kDefaultEpoch_s;
   AngleDerivativeOptions derivatives;
   BatchInit init = BatchInit::kRts;
   Eigen::VectorXd init_theta;   // for kGiven (SI, in the layout)

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "solvers/estimation/batch_costs.h"
+#include "solvers/estimation/state_space_model.h"
 #include "solvers/estimation/batch_solver.h"
 #include "tests/sim_fixtures.h"
 
@@ -36,37 +37,44 @@ double MaxAbsZ(const BatchResult& r, const Eigen::VectorXd& truth, std::string* 
   return m;
 }
 
+// The Ceres costs (state-space model residuals) against numeric derivatives,
+// with every parameter free and with some held (absent from theta_free).
 TEST(BatchCosts, JacobiansMatchNumericDerivatives) {
   const Scenario s = PaperScenario(100.0, 6.0, 2.0, 15.0, 1);
   const RunData data = Simulate(s);
-  const RunProblem p = BuildRunProblem(s.run, data, ParameterLayout(), 0.2, {});
-  Eigen::VectorXd theta = s.truth;
-  const int n = p.n;
-  IntervalIncrement inc = IntegrateInterval(p.cfg, theta, p.series, p.epochs[3], p.epochs[4], true);
-  Mat6 cov = Mat6::Identity() * 1e-6;
-  cov(0, 3) = cov(3, 0) = 3e-7;
-  const Mat6 L = WhiteningOf(cov);
-  EXPECT_LT((L.transpose() * L - cov.inverse()).norm(), 1e-6 * cov.inverse().norm());
+  for (const bool some_held : {false, true}) {
+    RunProblem p = BuildRunProblem(s.run, data, ParameterLayout(), 0.2, {});
+    p.theta_held = s.truth;
+    if (some_held) p.Hold({kDlambda2, kKxy, kDz2});
+    const StateSpaceModel model(p);
+    const Eigen::VectorXd theta_free = model.Free(s.truth);
+    const ProcessStep step = model.Process(3, s.truth, true);
+    ASSERT_EQ(step.U.cols(), model.num_free());
+    Mat6 cov = Mat6::Identity() * 1e-6;
+    cov(0, 3) = cov(3, 0) = 3e-7;
+    const Mat6 L = WhiteningOf(cov);
+    EXPECT_LT((L.transpose() * L - cov.inverse()).norm(), 1e-6 * cov.inverse().norm());
 
-  std::vector<double> xa = {0.1, -0.2, 0.05, 0.13, 0.02, 0.03};
-  std::vector<double> xb = {0.12, -0.19, 0.04, 0.15, 0.01, 0.02};
-  Eigen::VectorXd th = theta;
-  th[kAlphaX] += 1e-3;
-  ceres::NumericDiffOptions nd;
-  nd.relative_step_size = 1e-7;
-  for (const bool exact : {false, true}) {
-    ProcessCost cost(&inc, &theta, L, exact ? &p : nullptr, p.epochs[3], p.epochs[4]);
-    ceres::GradientChecker checker(&cost, static_cast<const std::vector<const ceres::Manifold*>*>(nullptr), nd);
-    ceres::GradientChecker::ProbeResults results;
-    std::vector<const double*> params = {xa.data(), xb.data(), th.data()};
-    EXPECT_TRUE(checker.Probe(params.data(), 1e-6, &results)) << results.error_log;
+    std::vector<double> xa = {0.1, -0.2, 0.05, 0.13, 0.02, 0.03};
+    std::vector<double> xb = {0.12, -0.19, 0.04, 0.15, 0.01, 0.02};
+    Eigen::VectorXd th = theta_free;
+    th[0] += 1e-3;
+    th[5] += 1e-3;
+    ceres::NumericDiffOptions nd;
+    nd.relative_step_size = 1e-7;
+    for (const bool exact : {false, true}) {
+      ProcessCost cost(&step, &theta_free, L, exact ? &model : nullptr, 3);
+      ceres::GradientChecker checker(&cost, static_cast<const std::vector<const ceres::Manifold*>*>(nullptr), nd);
+      ceres::GradientChecker::ProbeResults results;
+      std::vector<const double*> params = {xa.data(), xb.data(), th.data()};
+      EXPECT_TRUE(checker.Probe(params.data(), 1e-6, &results)) << results.error_log;
+    }
+    MeasurementCost mcost(&model, 5, L);
+    ceres::GradientChecker mchecker(&mcost, static_cast<const std::vector<const ceres::Manifold*>*>(nullptr), nd);
+    ceres::GradientChecker::ProbeResults mres;
+    std::vector<const double*> mparams = {xa.data(), th.data()};
+    EXPECT_TRUE(mchecker.Probe(mparams.data(), 1e-6, &mres)) << mres.error_log;
   }
-  MeasurementCost mcost(&p, p.epochs[5], L);
-  ceres::GradientChecker mchecker(&mcost, static_cast<const std::vector<const ceres::Manifold*>*>(nullptr), nd);
-  ceres::GradientChecker::ProbeResults mres;
-  std::vector<const double*> mparams = {xa.data(), th.data()};
-  EXPECT_TRUE(mchecker.Probe(mparams.data(), 1e-6, &mres)) << mres.error_log;
-  (void)n;
 }
 
 TEST(BatchSolver, SchurCovarianceEqualsCeresCovariance) {

@@ -6,25 +6,23 @@
 
 #include "core/model/errors.h"
 #include "solvers/estimation/inertial_increments.h"
+#include "solvers/estimation/batch_linearization.h"
 #include "solvers/estimation/run_problem.h"
+#include "solvers/estimation/state_space_model.h"
 
 namespace triadcal {
 namespace {
 
-using Vec6 = Eigen::Matrix<double, 6, 1>;
-using Mat6 = Eigen::Matrix<double, 6, 6>;
 
-// The process step of the interval that ends at an epoch.
+// The process step of the interval that ends at an epoch, with where it was
+// linearised (theta_lin_free empty: at the filtered theta of the epoch before).
 struct Interval {
-  double T = 0.0;
-  Eigen::Vector3d dv = Eigen::Vector3d::Zero(), ds = Eigen::Vector3d::Zero();
-  Eigen::MatrixXd Jv, Js;  // 3 x n
-  double qa2 = 0.0, qab = 0.0, qb2 = 0.0;  // Q = accel variance * [qa2 qab; qab qb2] (x) I3
-  Eigen::VectorXd theta_lin;  // where dv, ds were evaluated (empty: the filtered theta)
+  ProcessStep step;
+  Eigen::VectorXd theta_lin_free;
 };
 
 struct EpochStore {
-  Eigen::VectorXd x;           // filtered state
+  Eigen::VectorXd x;           // filtered state [V, S, theta_free]
   std::vector<double> P_upper;  // packed upper triangle of the filtered covariance
   Interval in;                  // interval from the previous epoch (empty at 0)
 };
@@ -46,41 +44,28 @@ Eigen::MatrixXd Unpack(const std::vector<double>& v, int N) {
   return P;
 }
 
-using Context = RunProblem;
-
+// The augmented transition of [x; theta_free]: x_b = F x_a + u + U dtheta.
 Eigen::MatrixXd TransitionMatrix(const Interval& in, int n) {
   Eigen::MatrixXd F = Eigen::MatrixXd::Identity(6 + n, 6 + n);
-  F.block(0, 6, 3, n) = in.Jv;
-  F.block(3, 0, 3, 3) = in.T * Eigen::Matrix3d::Identity();
-  F.block(3, 6, 3, n) = in.Js;
+  F.topLeftCorner<6, 6>() = in.step.F();
+  F.block(0, 6, 6, n) = in.step.U;
   return F;
 }
 
-Mat6 ProcessNoise(const Interval& in, double accel_var) {
-  Mat6 Q = Mat6::Zero();
-  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
-  Q.block<3, 3>(0, 0) = accel_var * in.qa2 * I;
-  Q.block<3, 3>(0, 3) = accel_var * in.qab * I;
-  Q.block<3, 3>(3, 0) = accel_var * in.qab * I;
-  Q.block<3, 3>(3, 3) = accel_var * in.qb2 * I;
-  return Q;
-}
-
-// x_b = f(x_a): the process model linearised at in.theta_lin (or x_a's theta).
+// x_b = f(x_a): the process model of state_space_model.h.
 Eigen::VectorXd Propagate(const Interval& in, const Eigen::VectorXd& x, int n) {
   Eigen::VectorXd y = x;
   Eigen::VectorXd delta = Eigen::VectorXd::Zero(n);
-  if (in.theta_lin.size() == n) delta = x.tail(n) - in.theta_lin;
-  y.head<3>() = x.head<3>() + in.dv + in.Jv * delta;
-  y.segment<3>(3) = x.segment<3>(3) + x.head<3>() * in.T + in.ds + in.Js * delta;
+  if (in.theta_lin_free.size() == n) delta = x.tail(n) - in.theta_lin_free;
+  // r_p = x_b - F x_a - u - U delta = 0
+  y.head<6>() = in.step.F() * x.head<6>() + in.step.u + in.step.U * delta;
   return y;
 }
 
-Eigen::MatrixXd PropagateCov(const Interval& in, const Eigen::MatrixXd& P, double accel_var,
-                             int n) {
+Eigen::MatrixXd PropagateCov(const Interval& in, const Eigen::MatrixXd& P, int n) {
   const Eigen::MatrixXd F = TransitionMatrix(in, n);
   Eigen::MatrixXd Pp = F * P * F.transpose();
-  Pp.topLeftCorner<6, 6>() += ProcessNoise(in, accel_var);
+  Pp.topLeftCorner<6, 6>() += in.step.Q;
   return 0.5 * (Pp + Pp.transpose());
 }
 
@@ -91,57 +76,47 @@ struct PassResult {
   double nis_sum = 0.0;
 };
 
-PassResult ForwardPass(const Context& c, const Eigen::VectorXd* theta_lin, bool keep_series,
-                       const std::function<void(double)>& progress) {
-  const int n = c.n, N = 6 + n;
+PassResult ForwardPass(const StateSpaceModel& model, const Eigen::VectorXd* theta_lin_free,
+                       bool keep_series, const std::function<void(double)>& progress) {
+  const RunProblem& c = model.problem();
+  const int n = model.num_free(), N = 6 + n;
   PassResult out;
   out.store.reserve(c.epochs.size());
   Eigen::VectorXd x(N);
   Eigen::MatrixXd P = Eigen::MatrixXd::Zero(N, N);
-  x.tail(n) = c.prior.mean;
-  P.bottomRightCorner(n, n) = c.prior.sigma.array().square().matrix().asDiagonal();
+  x.tail(n) = model.Free(c.prior.mean);
+  P.bottomRightCorner(n, n) =
+      model.Free(c.prior.sigma).array().square().matrix().asDiagonal();
   {
-    const ReferenceSample r0 = EvaluateReference(
-        c.cfg, theta_lin ? *theta_lin : c.prior.mean, c.series.recorded[c.epochs[0]], false);
-    x.head<3>() = r0.v_mps;
-    x.segment<3>(3) = r0.p_m;
-    P.topLeftCorner<3, 3>() = 0.01 * Eigen::Matrix3d::Identity();   // 0.1 m/s
-    P.block<3, 3>(3, 3) = 0.01 * Eigen::Matrix3d::Identity();       // 0.1 m
+    const Eigen::VectorXd th0 = model.Expand(theta_lin_free ? *theta_lin_free : x.tail(n));
+    x.head<6>() = model.Measurement(0, th0, false, false).h;
+    // The model has no prior on x_0 (the batch solves for it freely): the
+    // filter starts diffuse, (100 m/s)^2 and (100 m)^2, which the first B2
+    // update collapses to the measurement's precision (the Joseph form below
+    // keeps that step well conditioned).
+    P.topLeftCorner<6, 6>() = 1e4 * Mat6::Identity();
   }
   const std::size_t E = c.epochs.size();
   std::size_t next_report = 0;
   for (std::size_t e = 0; e < E; ++e) {
     EpochStore st;
     if (e > 0) {
-      const Eigen::VectorXd th_l = theta_lin ? *theta_lin : Eigen::VectorXd(x.tail(n));
-      const IntervalIncrement inc =
-          IntegrateInterval(c.cfg, th_l, c.series, c.epochs[e - 1], c.epochs[e], true);
-      Interval& in = st.in;
-      in.T = inc.T_s;
-      in.dv = inc.dv_mps;
-      in.ds = inc.ds_m;
-      in.Jv = inc.ddv_dtheta;
-      in.Js = inc.dds_dtheta;
-      in.qa2 = inc.sum_alpha2;
-      in.qab = inc.sum_alpha_beta;
-      in.qb2 = inc.sum_beta2;
-      if (theta_lin) in.theta_lin = *theta_lin;
-      x = Propagate(in, x, n);
-      P = PropagateCov(in, P, c.accel_var, n);
+      const Eigen::VectorXd th_l = theta_lin_free ? *theta_lin_free : Eigen::VectorXd(x.tail(n));
+      st.in.step = model.Process(e - 1, model.Expand(th_l), true);
+      if (theta_lin_free) st.in.theta_lin_free = *theta_lin_free;
+      x = Propagate(st.in, x, n);
+      P = PropagateCov(st.in, P, n);
     }
-    // Measurement update with z_V, z_S (block B2).
+    // Measurement update with z = x - h(theta) = 0 (block B2).
     const std::size_t k = c.epochs[e];
-    const Eigen::VectorXd th_l = theta_lin ? *theta_lin : Eigen::VectorXd(x.tail(n));
-    const ReferenceSample ref = EvaluateReference(c.cfg, th_l, c.series.recorded[k], true);
+    const Eigen::VectorXd th_l = theta_lin_free ? *theta_lin_free : Eigen::VectorXd(x.tail(n));
+    const MeasurementStep m = model.Measurement(e, model.Expand(th_l), true, true);
     const Eigen::VectorXd dth = x.tail(n) - th_l;
-    Vec6 h;
-    h.head<3>() = x.head<3>() - (ref.v_mps + ref.dref_dtheta.topRows(3) * dth);
-    h.tail<3>() = x.segment<3>(3) - (ref.p_m + ref.dref_dtheta.bottomRows(3) * dth);
+    const Vec6 h = StateSpaceModel::MeasurementResidual(m, x.head<6>()) - m.H * dth;
     Eigen::MatrixXd H(6, N);
     H.leftCols(6).setIdentity();
-    H.rightCols(n) = -ref.dref_dtheta;
-    const Mat6 R =
-        ReferenceNoiseCovariance(c.cfg, th_l, c.series.recorded[k], c.sigma_angle, c.sigma_rate);
+    H.rightCols(n) = -m.H;
+    const Mat6& R = m.R;
     const Eigen::MatrixXd PHt = P * H.transpose();
     const Mat6 S = H * PHt + R;
     const Eigen::LLT<Mat6> llt(S);
@@ -157,12 +132,17 @@ PassResult ForwardPass(const Context& c, const Eigen::VectorXd* theta_lin, bool 
     out.nis_sum += y.dot(llt.solve(y));
     out.innovation_ss += y.cwiseAbs2();
     if (e == 0) {
-      for (const ConstraintRow& cr : c.constraints) {
+      // Every constraint is one scalar pseudo-measurement (its rows over the
+      // free parameters, state_space_model.h), applied once.
+      Eigen::MatrixXd A;
+      Eigen::VectorXd b;
+      model.ThetaRows(true, &A, &b);
+      for (int r = n; r < A.rows(); ++r) {
         Eigen::VectorXd hrow = Eigen::VectorXd::Zero(N);
-        hrow.tail(n) = cr.c;
+        hrow.tail(n) = A.row(r).transpose();
         const Eigen::VectorXd Ph = P * hrow;
-        const double s = hrow.dot(Ph) + cr.sigma * cr.sigma;
-        const double innov = cr.value - cr.c.dot(x.tail(n));
+        const double s = hrow.dot(Ph) + 1.0;  // whitened rows: unit variance
+        const double innov = b[r] - hrow.dot(x);
         x += Ph * (innov / s);
         P -= Ph * Ph.transpose() / s;
         P = 0.5 * (P + P.transpose());
@@ -171,8 +151,10 @@ PassResult ForwardPass(const Context& c, const Eigen::VectorXd* theta_lin, bool 
     if (keep_series) {
       FilterSeriesRow row;
       row.t_s = c.series.run->t_s[k];
-      row.theta = x.tail(n);
-      row.sigma = P.diagonal().tail(n).cwiseMax(0.0).cwiseSqrt();
+      row.theta = model.Expand(x.tail(n));
+      row.sigma = Eigen::VectorXd::Zero(c.n);
+      const Eigen::VectorXd sd = P.diagonal().tail(n).cwiseMax(0.0).cwiseSqrt();
+      for (int j = 0; j < n; ++j) row.sigma[c.free[j]] = sd[j];
       row.innovation = y;
       row.innovation_sigma = S.diagonal().cwiseSqrt();
       out.series.push_back(std::move(row));
@@ -188,10 +170,17 @@ PassResult ForwardPass(const Context& c, const Eigen::VectorXd* theta_lin, bool 
   return out;
 }
 
+// theta and its covariance over all n parameters (held ones at their values,
+// with zero covariance) from the free part.
+Estimate FullEstimate(const StateSpaceModel& model, const Eigen::VectorXd& theta_free,
+                      const Eigen::MatrixXd& cov_free) {
+  return Estimate{model.Expand(theta_free), ExpandCovariance(model.problem(), cov_free)};
+}
+
 // Fixed-interval RTS smoother; returns the smoothed state and covariance at
 // the first epoch.
-Estimate Smooth(const Context& c, const PassResult& pass) {
-  const int n = c.n, N = 6 + n;
+Estimate Smooth(const StateSpaceModel& model, const PassResult& pass) {
+  const int n = model.num_free(), N = 6 + n;
   const std::size_t E = pass.store.size();
   Eigen::VectorXd xs = pass.store[E - 1].x;
   Eigen::MatrixXd Ps = Unpack(pass.store[E - 1].P_upper, N);
@@ -201,7 +190,7 @@ Estimate Smooth(const Context& c, const PassResult& pass) {
     const Eigen::MatrixXd Pf = Unpack(cur.P_upper, N);
     const Eigen::MatrixXd F = TransitionMatrix(in, n);
     const Eigen::VectorXd x_pred = Propagate(in, cur.x, n);
-    const Eigen::MatrixXd P_pred = PropagateCov(in, Pf, c.accel_var, n);
+    const Eigen::MatrixXd P_pred = PropagateCov(in, Pf, n);
     // G = Pf F^T P_pred^-1, solved in the scaled coordinates of P_pred.
     const Eigen::VectorXd d = P_pred.diagonal().cwiseMax(1e-300).cwiseSqrt();
     const Eigen::MatrixXd Pn = d.cwiseInverse().asDiagonal() * P_pred * d.cwiseInverse().asDiagonal();
@@ -213,7 +202,7 @@ Estimate Smooth(const Context& c, const PassResult& pass) {
     Ps = Pf + G * (Ps - P_pred) * G.transpose();
     Ps = 0.5 * (Ps + Ps.transpose());
   }
-  return Estimate{xs.tail(n), Ps.bottomRightCorner(n, n)};
+  return FullEstimate(model, xs.tail(n), Ps.bottomRightCorner(n, n));
 }
 
 }  // namespace
@@ -221,6 +210,13 @@ Estimate Smooth(const Context& c, const PassResult& pass) {
 FilterResult RunFilterSmoother(const RunDescription& run, const RunData& data,
                                const ParameterLayout& layout, const FilterOptions& options) {
   RunProblem c = BuildRunProblem(run, data, layout, options.epoch_s, options.derivatives);
+  std::vector<int> held;
+  for (const std::string& name : options.held) {
+    const int i = layout.IndexOf(name);
+    if (i < 0) throw InputError("held parameter '" + name + "' is not in the layout");
+    held.push_back(i);
+  }
+  c.Hold(held);
   // The covariance form of the filter spans the prior (degrees, tens of mV)
   // down to what the data pin (um/s): with almost noise-free data that range
   // exceeds double precision and P stops being positive definite. A floor of
@@ -228,26 +224,27 @@ FilterResult RunFilterSmoother(const RunDescription& run, const RunData& data,
   // MEMS noise is far above it, and the batch solver has no such floor.
   const double floor_mps2 = 50e-6 * run.g_mps2;
   c.accel_var = std::max(c.accel_var, floor_mps2 * floor_mps2);
+  const StateSpaceModel model(c);
   FilterResult res;
   res.prior = c.prior;
   res.epochs = static_cast<int>(c.epochs.size());
   res.rate_noise_rad_s = c.sigma_rate;
   const int passes = std::max(1, options.smoother_iterations);
-  Eigen::VectorXd theta_lin;
+  const int n = model.num_free();
+  Eigen::VectorXd theta_lin_free;
   for (int p = 0; p < passes; ++p) {
     auto prog = [&](double f) {
       if (options.progress) options.progress(p + 1, f);
     };
-    PassResult pass = ForwardPass(c, p == 0 ? nullptr : &theta_lin,
+    PassResult pass = ForwardPass(model, p == 0 ? nullptr : &theta_lin_free,
                                   options.keep_series && p == 0, prog);
     if (p == 0) {
-      const int N = 6 + c.n;
-      const Eigen::MatrixXd P_end = Unpack(pass.store.back().P_upper, N);
-      res.ekf = Estimate{pass.store.back().x.tail(c.n), P_end.bottomRightCorner(c.n, c.n)};
+      const Eigen::MatrixXd P_end = Unpack(pass.store.back().P_upper, 6 + n);
+      res.ekf = FullEstimate(model, pass.store.back().x.tail(n), P_end.bottomRightCorner(n, n));
       res.series = std::move(pass.series);
     }
-    res.rts = Smooth(c, pass);
-    theta_lin = res.rts.theta;
+    res.rts = Smooth(model, pass);
+    theta_lin_free = model.Free(res.rts.theta);
     const double E = static_cast<double>(pass.store.size());
     res.innovation_rms = (pass.innovation_ss / E).cwiseSqrt();
     res.mean_nis = pass.nis_sum / E;

@@ -47,7 +47,9 @@
 namespace triadcal {
 
 struct FilterOptions {
-  double epoch_s = 0.2;  // measurement epochs; also the rate-fit window length
+  double epoch_s = kDefaultEpoch_s;  // measurement epochs
+  // Held at their nominal values: absent from the filter's state.
+  std::vector<std::string> held;
   AngleDerivativeOptions derivatives;
   int smoother_iterations = 2;
   bool keep_series = false;

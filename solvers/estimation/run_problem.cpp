@@ -80,6 +80,8 @@ RunProblem BuildRunProblem(const RunDescription& run, const RunData& data,
       data, derivatives, NeedsRatesAtEverySample(layout) ? nullptr : &p.epochs);
   p.prior = MakePrior(run, layout);
   p.n = layout.size();
+  p.theta_held = p.prior.mean;
+  p.Hold({});
   p.constraints = ResolveConstraints(run, layout);
   const double min_scale = run.scale_mV_per_g.cwiseAbs().minCoeff();
   p.accel_var = AccelSampleVariance(run.noise_mV, min_scale, run.angle_noise_rad, run.g_mps2);
@@ -88,6 +90,14 @@ RunProblem BuildRunProblem(const RunDescription& run, const RunData& data,
       (data.t_s.back() - data.t_s.front()) / std::max<std::size_t>(1, data.size() - 1);
   p.sigma_rate = data.has_rates() ? 0.0 : RateNoiseGain(dt, derivatives) * p.sigma_angle;
   return p;
+}
+
+void RunProblem::Hold(const std::vector<int>& indices) {
+  std::vector<bool> is_held(n, false);
+  for (int i : indices) is_held.at(i) = true;
+  free.clear();
+  held.clear();
+  for (int i = 0; i < n; ++i) (is_held[i] ? held : free).push_back(i);
 }
 
 }  // namespace triadcal

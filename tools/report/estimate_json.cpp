@@ -12,9 +12,16 @@ nlohmann::json ParametersJson(const ParameterLayout& layout, const Eigen::Vector
     const ParameterInfo& info = layout.info(i);
     nlohmann::json p;
     p["value"] = theta[i] / info.si_per_unit;
-    p["sigma"] = std::sqrt(std::max(0.0, cov(i, i))) / info.si_per_unit;
+    const bool estimable = not_estimable.count(info.name) == 0;
+    // A held parameter has no sigma: it was not estimated (zero covariance).
+    if (!estimable && cov(i, i) <= 0.0) {
+      p["sigma"] = nullptr;
+      p["held"] = true;
+    } else {
+      p["sigma"] = std::sqrt(std::max(0.0, cov(i, i))) / info.si_per_unit;
+    }
     p["unit"] = info.unit;
-    p["estimable"] = not_estimable.count(info.name) == 0;
+    p["estimable"] = estimable;
     out[info.name] = p;
   }
   return out;

@@ -1,0 +1,106 @@
+#include "solvers/estimation/state_space_model.h"
+
+#include <Eigen/Cholesky>
+
+namespace triadcal {
+
+Mat6 ProcessStep::F() const {
+  Mat6 F = Mat6::Identity();
+  F.block<3, 3>(3, 0) = T_s * Eigen::Matrix3d::Identity();
+  return F;
+}
+
+Mat6 WhiteningOf(const Mat6& cov) {
+  const Eigen::LLT<Mat6> llt(cov);
+  const Mat6 Lc = llt.matrixL();
+  return Lc.triangularView<Eigen::Lower>().solve(Mat6::Identity());
+}
+
+Eigen::VectorXd StateSpaceModel::Expand(const Eigen::VectorXd& theta_free) const {
+  Eigen::VectorXd theta = p_.theta_held;
+  for (std::size_t j = 0; j < p_.free.size(); ++j) theta[p_.free[j]] = theta_free[j];
+  return theta;
+}
+
+Eigen::VectorXd StateSpaceModel::Free(const Eigen::VectorXd& theta) const {
+  Eigen::VectorXd f(p_.free.size());
+  for (std::size_t j = 0; j < p_.free.size(); ++j) f[j] = theta[p_.free[j]];
+  return f;
+}
+
+Eigen::MatrixXd StateSpaceModel::FreeColumns(const Eigen::MatrixXd& J) const {
+  if (static_cast<int>(p_.free.size()) == J.cols()) return J;
+  Eigen::MatrixXd out(J.rows(), p_.free.size());
+  for (std::size_t j = 0; j < p_.free.size(); ++j) out.col(j) = J.col(p_.free[j]);
+  return out;
+}
+
+ProcessStep StateSpaceModel::Process(std::size_t e, const Eigen::VectorXd& theta,
+                                     bool with_jacobian) const {
+  const IntervalIncrement inc =
+      IntegrateInterval(p_.cfg, theta, p_.series, p_.epochs[e], p_.epochs[e + 1], with_jacobian);
+  ProcessStep s;
+  s.T_s = inc.T_s;
+  s.u << inc.dv_mps, inc.ds_m;
+  if (with_jacobian) {
+    Eigen::MatrixXd U(6, theta.size());
+    U << inc.ddv_dtheta, inc.dds_dtheta;
+    s.U = FreeColumns(U);
+  }
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+  s.Q.block<3, 3>(0, 0) = p_.accel_var * inc.sum_alpha2 * I;
+  s.Q.block<3, 3>(0, 3) = s.Q.block<3, 3>(3, 0) = p_.accel_var * inc.sum_alpha_beta * I;
+  s.Q.block<3, 3>(3, 3) = p_.accel_var * inc.sum_beta2 * I;
+  return s;
+}
+
+MeasurementStep StateSpaceModel::Measurement(std::size_t e, const Eigen::VectorXd& theta,
+                                             bool with_jacobian, bool with_noise) const {
+  const BenchAngles<double>& recorded = p_.series.recorded[p_.epochs[e]];
+  const ReferenceSample ref = EvaluateReference(p_.cfg, theta, recorded, with_jacobian);
+  MeasurementStep m;
+  m.h << ref.v_mps, ref.p_m;
+  if (with_jacobian) m.H = FreeColumns(ref.dref_dtheta);
+  if (with_noise) {
+    m.R = ReferenceNoiseCovariance(p_.cfg, theta, recorded, p_.sigma_angle, p_.sigma_rate);
+  }
+  return m;
+}
+
+Vec6 StateSpaceModel::ProcessResidual(const ProcessStep& s, const Vec6& xa, const Vec6& xb,
+                                      const Eigen::VectorXd& dtheta_free) {
+  Vec6 r = xb - s.F() * xa - s.u;
+  if (s.U.size() > 0) r -= s.U * dtheta_free;
+  return r;
+}
+
+void StateSpaceModel::ThetaRows(bool with_constraints, Eigen::MatrixXd* A,
+                                Eigen::VectorXd* b) const {
+  const int nf = num_free();
+  // A constraint over held parameters only carries no information on the
+  // free ones: it is dropped. Held terms move to the right-hand side.
+  std::vector<std::pair<Eigen::VectorXd, double>> rows;  // (c_free / sigma, rhs / sigma)
+  if (with_constraints) {
+    for (const ConstraintRow& k : p_.constraints) {
+      const Eigen::VectorXd c_free = Free(k.c);
+      if (c_free.cwiseAbs().maxCoeff() == 0.0) continue;
+      double rhs = k.value;
+      for (int i : p_.held) rhs -= k.c[i] * p_.theta_held[i];
+      rows.emplace_back(c_free / k.sigma, rhs / k.sigma);
+    }
+  }
+  const int nc = static_cast<int>(rows.size());
+  A->setZero(nf + nc, nf);
+  b->resize(nf + nc);
+  for (int j = 0; j < nf; ++j) {
+    const int i = p_.free[j];
+    (*A)(j, j) = 1.0 / p_.prior.sigma[i];
+    (*b)[j] = p_.prior.mean[i] / p_.prior.sigma[i];
+  }
+  for (int k = 0; k < nc; ++k) {
+    A->row(nf + k) = rows[k].first.transpose();
+    (*b)[nf + k] = rows[k].second;
+  }
+}
+
+}  // namespace triadcal

@@ -1,0 +1,105 @@
+// The state-space model shared by the estimators: where the model is linear
+// in the free parameters, the EKF + RTS smoother and the batch solver must
+// reach the same optimum and covariance (they consume the same process,
+// measurement, prior and constraint terms); held parameters are absent from
+// both problems.
+#include "solvers/estimation/state_space_model.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "solvers/estimation/batch_solver.h"
+#include "solvers/estimation/kalman_smoother.h"
+#include "tests/sim_fixtures.h"
+
+namespace triadcal {
+namespace {
+
+using testing_fixtures::PaperScenario;
+
+// Zero offsets enter B1 linearly and the lever arm enters B2 linearly, so with
+// everything else held (at its true value) the run is a linear-Gaussian model.
+TEST(StateSpaceModel, FilterAndBatchCoincideOnALinearGaussianRun) {
+  Scenario s = PaperScenario(50.0, 20.0, 2.0, 15.0, 7);
+  const ParameterLayout layout;
+  // The truth: scale factors nominal, no misalignment or nonlinearity, bench
+  // zeros 0; biases and lever arm off their nominal values.
+  s.truth = NominalTheta(s.run, layout);
+  SetFromFileUnits(layout, {{"W0x", 1503.1}, {"W0y", 1501.7}, {"W0z", 1498.9},
+                            {"dx2", -7}, {"dy2", 16}, {"dz2", 4}}, &s.truth);
+  const RunData data = Simulate(s);
+  const std::vector<std::string> free = {"W0x", "W0y", "W0z", "dx2", "dy2", "dz2"};
+  std::vector<std::string> held;
+  for (int i = 0; i < layout.size(); ++i) {
+    const std::string& name = layout.info(i).name;
+    if (std::find(free.begin(), free.end(), name) == free.end()) held.push_back(name);
+  }
+
+  FilterOptions fo;
+  fo.held = held;
+  fo.smoother_iterations = 2;
+  const FilterResult fr = RunFilterSmoother(s.run, data, layout, fo);
+
+  BatchOptions bo;
+  bo.init = BatchInit::kNominal;
+  bo.holding.auto_hold = false;
+  bo.holding.hold = held;
+  const BatchResult br = SolveBatch(s.run, data, layout, bo);
+  ASSERT_TRUE(br.converged);
+  ASSERT_EQ(br.held.size(), held.size());
+
+  for (const std::string& name : free) {
+    const int i = layout.IndexOf(name);
+    const double sigma = std::sqrt(br.estimate.cov(i, i));
+    ASSERT_GT(sigma, 0.0) << name;
+    EXPECT_LT(std::abs(fr.rts.theta[i] - br.estimate.theta[i]) / sigma, 1e-6) << name;
+    EXPECT_LT(std::abs(std::sqrt(fr.rts.cov(i, i)) / sigma - 1.0), 1e-6) << name;
+    // And both recover the truth within their sigma's usual range.
+    EXPECT_LT(std::abs(br.estimate.theta[i] - s.truth[i]) / sigma, 4.0) << name;
+  }
+  // Held parameters are absent: exactly their values, no covariance.
+  for (const std::string& name : held) {
+    const int i = layout.IndexOf(name);
+    EXPECT_EQ(br.estimate.theta[i], s.truth[i]) << name;
+    EXPECT_EQ(fr.rts.theta[i], s.truth[i]) << name;
+    EXPECT_EQ(br.estimate.cov(i, i), 0.0) << name;
+    EXPECT_EQ(fr.rts.cov(i, i), 0.0) << name;
+  }
+}
+
+// The rows of priors and constraints over the free parameters: a constraint on
+// held parameters only is dropped, held terms move to the right-hand side.
+TEST(StateSpaceModel, ThetaRowsOverTheFreeParameters) {
+  Scenario s = PaperScenario(20.0, 6.0, 2.0, 15.0, 1);
+  const RunData data = Simulate(s);
+  RunProblem p = BuildRunProblem(s.run, data, ParameterLayout(), 0.5, {});
+  p.theta_held[kDlambda2] = 1e-3;
+  Eigen::MatrixXd A;
+  Eigen::VectorXd b;
+  StateSpaceModel(p).ThetaRows(true, &A, &b);
+  EXPECT_EQ(A.rows(), p.n + 1);
+  EXPECT_EQ(A.cols(), p.n);
+
+  p.Hold({kDlambda2});  // dpsi - dlambda2 = 0: dpsi = 1e-3 +- 30"
+  StateSpaceModel(p).ThetaRows(true, &A, &b);
+  ASSERT_EQ(A.rows(), p.n);  // n - 1 priors + 1 constraint
+  ASSERT_EQ(A.cols(), p.n - 1);
+  const double sigma = 30.0 * kArcsecToRad;
+  EXPECT_NEAR(A(p.n - 1, kDpsi), 1.0 / sigma, 1e-9 / sigma);
+  EXPECT_NEAR(b[p.n - 1], 1e-3 / sigma, 1e-12 / sigma);
+
+  p.Hold({kDlambda2, kDpsi});  // nothing left free in the constraint
+  StateSpaceModel(p).ThetaRows(true, &A, &b);
+  EXPECT_EQ(A.rows(), p.n - 2);
+}
+
+// One set of defaults: every estimator and analysis uses the same epochs
+// unless told otherwise.
+TEST(StateSpaceModel, EstimatorsShareTheDefaultEpochs) {
+  EXPECT_EQ(BatchOptions().epoch_s, kDefaultEpoch_s);
+  EXPECT_EQ(FilterOptions().epoch_s, kDefaultEpoch_s);
+}
+
+}  // namespace
+}  // namespace triadcal
