@@ -98,6 +98,10 @@ int RunDiagnose(const DiagnoseArgs& a) {
   opt.alpha = a.alpha;
   opt.max_effects = a.max_effects;
   opt.fit.epoch_s = a.epoch_s;
+  // The likelihood-ratio tests compare fits under one noise model: the noise
+  // is the declared one throughout (re-estimating it per candidate would let
+  // the noise absorb the very structure under test).
+  opt.fit.estimate_noise = false;
   opt.candidates = ParseEffectList(a.candidates, "--candidates");
   opt.progress = [](const std::string& s) { ShowProgress("diagnose: " + s, 0.0); };
   if (!(a.alpha > 0.0 && a.alpha < 1.0)) throw InputError("--alpha: must be in (0, 1)");

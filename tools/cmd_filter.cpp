@@ -96,6 +96,7 @@ int RunFilter(const FilterArgs& a) {
   const std::vector<WeakDirection> weak = UnsupportedDirections(layout, r.rts.cov, prior.sigma);
   std::vector<std::string> held = ParametersIn(weak);
   held.insert(held.end(), hd.held.begin(), hd.held.end());
+  for (const auto& [name, anchors] : hd.relative_to) held.push_back(name);
   const std::set<std::string> held_set(held.begin(), held.end());
   const std::set<std::string> pinned(hd.held.begin(), hd.held.end());
 
@@ -104,8 +105,19 @@ int RunFilter(const FilterArgs& a) {
   out["run"] = a.run_yaml;
   out["ekf"] = {{"parameters", ParametersJson(layout, r.ekf.theta, r.ekf.cov, held_set)}};
   out["rts"] = {{"parameters", ParametersJson(layout, r.rts.theta, r.rts.cov, held_set)}};
+  MarkRelative(hd.relative_to, &out["ekf"]["parameters"]);
+  MarkRelative(hd.relative_to, &out["rts"]["parameters"]);
   if (a.correlations) out["rts"]["correlation"] = CorrelationJson(layout, r.rts.cov);
-  out["unobservable"] = WeakDirectionsJson(weak);
+  std::vector<WeakDirection> unobservable = weak;
+  for (const WeakDirection& d : hd.unsupported) {
+    for (const auto& [name, w] : d.weights) {
+      if (pinned.count(name)) {
+        unobservable.push_back(d);
+        break;
+      }
+    }
+  }
+  out["unobservable"] = WeakDirectionsJson(unobservable);
   out["not_estimable"] = held;
   out["held"] = hd.held;
   out["unobservable_at_nominal"] = WeakDirectionsJson(hd.unsupported);

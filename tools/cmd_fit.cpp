@@ -26,11 +26,17 @@ struct FitArgs {
   int threads = 0;
   bool correlations = false, no_auto_hold = false;
   std::string hold, free;
+  std::string require;
 };
 
 int RunFit(const FitArgs& a) {
   if (a.init != "rts" && a.init != "nominal") {
     throw InputError("--init: expected rts or nominal, got '" + a.init + "'");
+  }
+  for (const std::string& req : SplitList(a.require)) {
+    if (req != "converged" && req != "white" && req != "noise" && req != "pass") {
+      throw InputError("--require: unknown check '" + req + "' (converged, white, noise, pass)");
+    }
   }
   CheckOutputPath(a.out_json);
   if (!a.residuals_csv.empty()) CheckOutputPath(a.residuals_csv);
@@ -53,6 +59,18 @@ int RunFit(const FitArgs& a) {
   EndProgress();
 
   const FitReport rep = MakeFitReport(layout, r);
+  if (!r.noise_check.consistent && !run.description.noise_auto) {
+    const Eigen::Vector3d& d = r.noise_declared_mV;
+    const Eigen::Vector3d& e = r.noise_check.estimated_mV;
+    const Eigen::Vector3d& sd = r.noise_check.sd_mV;
+    char w[400];
+    std::snprintf(w, sizeof(w),
+                  "triadcal: warning: %s: triad.noise_mV: declared %.3g %.3g %.3g mV, the "
+                  "residuals hold %.3g %.3g %.3g mV (+- %.2g %.2g %.2g); sigma use the estimate "
+                  "(say noise_mV: auto to silence this)\n",
+                  a.run_yaml.c_str(), d[0], d[1], d[2], e[0], e[1], e[2], sd[0], sd[1], sd[2]);
+    std::fputs(w, stderr);
+  }
   nlohmann::json out = FitJson(layout, r, rep, a.correlations);
   out["command"] = "fit";
   out["run"] = a.run_yaml;
@@ -78,6 +96,24 @@ int RunFit(const FitArgs& a) {
   std::printf("time: init %.2f s, solve %.2f s, covariance %.2f s\n", r.init_seconds,
               r.solve_seconds, r.covariance_seconds);
   std::printf("wrote %s\n", a.out_json.c_str());
+  // Failure must not look like success: a documented status for a fit that
+  // did not converge, and for a --require check that failed.
+  if (!r.converged) {
+    std::fprintf(stderr, "triadcal: error: %s: the fit did not converge (exit %d)\n",
+                 a.run_yaml.c_str(), kExitNotConverged);
+    return kExitNotConverged;
+  }
+  for (const std::string& req : SplitList(a.require)) {
+    const bool ok = req == "converged" ? r.converged
+                    : req == "white"   ? rep.residual_white
+                    : req == "noise"   ? rep.noise_consistent
+                                       : rep.pass;
+    if (!ok) {
+      std::fprintf(stderr, "triadcal: error: %s: --require %s failed (exit %d)\n",
+                   a.run_yaml.c_str(), req.c_str(), kExitRequirementFailed);
+      return kExitRequirementFailed;
+    }
+  }
   return 0;
 }
 
@@ -92,6 +128,9 @@ Command AddFitCommand(CLI::App& app) {
   c.app->add_option("--init", a->init, "starting point: rts (EKF+RTS smoother) or nominal")
       ->capture_default_str();
   c.app->add_option("--effects", a->effects, "catalogue effects to estimate too, e.g. a,b");
+  c.app->add_option("--require", a->require,
+                    "checks that must hold, else exit 5: converged, white (residuals), noise "
+                    "(declared = estimated), pass (converged and white); e.g. converged,white");
   c.app->add_option("--robust", a->robust, "robust loss on whitened residuals: huber or cauchy");
   c.app->add_option("--robust-scale", a->robust_scale, "robust loss scale [whitened units]")
       ->capture_default_str();

@@ -2,6 +2,9 @@
 // constraints, and the column mapping and mounting for foreign data files.
 #include "core/io/run_description_io.h"
 
+#include <cmath>
+#include <cstdlib>
+
 #include "core/io/column_mapping.h"
 #include "core/io/constraint_parser.h"
 #include "core/model/errors.h"
@@ -24,6 +27,25 @@ void ParseBench(const YAML::Node& node, const YamlPlace& at, RunDescription* run
   if (node["g_mps2"]) run->g_mps2 = ReadPositive(node["g_mps2"], at.Child("g_mps2"));
 }
 
+// noise_mV: a number (every channel), [x, y, z] (per channel) or `auto`
+// (estimated from the run's residuals).
+void ParseNoise(const YAML::Node& node, const YamlPlace& at, RunDescription* run) {
+  if (node.IsScalar() && node.Scalar() == "auto") {
+    run->noise_auto = true;
+    return;
+  }
+  if (node.IsSequence()) {
+    const Eigen::Vector3d v = ReadVector3(node, at);
+    for (int i = 0; i < 3; ++i) {
+      if (!(v[i] > 0.0)) at.Index(i).Fail("must be > 0, got " + FormatDouble(v[i]));
+    }
+    run->noise_channel_mV = v;
+    run->noise_mV = std::sqrt(v.squaredNorm() / 3.0);
+    return;
+  }
+  run->noise_mV = ReadPositive(node, at);
+}
+
 void ParseTriad(const YAML::Node& node, const YamlPlace& at, RunDescription* run) {
   CheckKeys(node, at, {"scale_mV_per_g", "bias_mV", "noise_mV"});
   if (node["scale_mV_per_g"]) {
@@ -37,7 +59,7 @@ void ParseTriad(const YAML::Node& node, const YamlPlace& at, RunDescription* run
     }
   }
   if (node["bias_mV"]) run->bias_mV = ReadVector3(node["bias_mV"], at.Child("bias_mV"));
-  if (node["noise_mV"]) run->noise_mV = ReadPositive(node["noise_mV"], at.Child("noise_mV"));
+  if (node["noise_mV"]) ParseNoise(node["noise_mV"], at.Child("noise_mV"), run);
 }
 
 // Readings in g or mg become mV at 1000 mV/g: without a triad section saying
@@ -165,7 +187,14 @@ std::string RunDescriptionToYaml(const RunDescription& run, const std::string& d
   EmitVector(out, run.scale_mV_per_g);
   out << YAML::Key << "bias_mV" << YAML::Value;
   EmitVector(out, run.bias_mV);
-  out << YAML::Key << "noise_mV" << YAML::Value << FormatDouble(run.noise_mV);
+  if (run.noise_auto) {
+    out << YAML::Key << "noise_mV" << YAML::Value << "auto";
+  } else if (run.noise_channel_mV) {
+    out << YAML::Key << "noise_mV" << YAML::Value;
+    EmitVector(out, *run.noise_channel_mV);
+  } else {
+    out << YAML::Key << "noise_mV" << YAML::Value << FormatDouble(run.noise_mV);
+  }
   out << YAML::EndMap;
 
   out << YAML::Key << "constraints" << YAML::Value;

@@ -59,7 +59,15 @@ struct RunDescription {
   // triad (nominal values, start and prior mean)
   Eigen::Vector3d scale_mV_per_g{174.0, 174.0, 174.0};
   Eigen::Vector3d bias_mV{1500.0, 1500.0, 1500.0};
+  // The reading noise, 1 sigma per sample [mV]: one figure for every
+  // channel (noise_mV), or one per channel (noise_channel_mV, when given),
+  // or `auto`: estimated from the run (noise_mV is then only the start).
   double noise_mV = 2.0;
+  std::optional<Eigen::Vector3d> noise_channel_mV;
+  bool noise_auto = false;
+  Eigen::Vector3d ChannelNoise_mV() const {
+    return noise_channel_mV ? *noise_channel_mV : Eigen::Vector3d::Constant(noise_mV);
+  }
 
   std::vector<Constraint> constraints;
 

@@ -151,6 +151,8 @@ TEST(Diagnose, OuterSineEncoderErrorIsABaseModelReparametrisation) {
   const RunData data = Simulate(sc);
   BatchOptions opt;
   opt.holding.auto_hold = false;
+  opt.estimate_noise = false;  // chi2 against the declared noise below
+  opt.epoch_s = 0.2;           // the epochs this bound was set with
   const BatchResult r = SolveBatch(sc.run, data, ParameterLayout(), opt);
   const Eigen::VectorXd& th = r.estimate.theta;
   EXPECT_NEAR(th[kW0x] - sc.truth[kW0x], sc.truth[kKx] * s, 0.05 * sc.truth[kKx] * s);

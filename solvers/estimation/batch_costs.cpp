@@ -14,8 +14,8 @@ void Store(const M& m, double* out) {
 }  // namespace
 
 ProcessCost::ProcessCost(const ProcessStep* step, const Eigen::VectorXd* theta_lin_free,
-                         const Mat6& L, const StateSpaceModel* exact_model, std::size_t e)
-    : step_(step), theta_lin_(theta_lin_free), L_(L), exact_(exact_model), e_(e) {
+                         const StateSpaceModel* model, bool exact, std::size_t e)
+    : step_(step), theta_lin_(theta_lin_free), model_(model), exact_(exact), e_(e) {
   n_ = static_cast<int>(theta_lin_free->size());
   set_num_residuals(6);
   mutable_parameter_block_sizes()->push_back(6);
@@ -27,7 +27,7 @@ Vec6 ProcessCost::Raw(const double* xa, const double* xb, const double* theta_fr
   Eigen::Map<const Vec6> a(xa), b(xb);
   Eigen::Map<const Eigen::VectorXd> th(theta_free, n_);
   if (exact_) {
-    const ProcessStep s = exact_->Process(e_, exact_->Expand(th), false);
+    const ProcessStep s = model_->Process(e_, model_->Expand(th), false);
     return StateSpaceModel::ProcessResidual(s, a, b, Eigen::VectorXd());
   }
   return StateSpaceModel::ProcessResidual(*step_, a, b, th - *theta_lin_);
@@ -37,20 +37,33 @@ bool ProcessCost::Evaluate(double const* const* p, double* residuals, double** j
   Eigen::Map<const Vec6> a(p[0]), b(p[1]);
   Eigen::Map<const Eigen::VectorXd> th(p[2], n_);
   const bool want_theta = jacobians && jacobians[2];
+  const Eigen::VectorXd theta = model_->Expand(th);
   ProcessStep exact_step;
   const ProcessStep* s = step_;
   Eigen::VectorXd d = th - *theta_lin_;
   if (exact_) {
-    exact_step = exact_->Process(e_, exact_->Expand(th), want_theta);
+    exact_step = model_->Process(e_, theta, want_theta);
     s = &exact_step;
     d.setZero();
   }
+  std::vector<Mat6> dL;
+  // The noise model's make-up (channel directions) stays at theta_lin; its
+  // variances follow theta's scale factors.
+  const Mat6 L = model_->ProcessWhitening(*step_, theta, want_theta ? &dL : nullptr);
+  if (!L.allFinite()) return false;  // a scale factor at 0: Ceres steps back
+  const Vec6 r = StateSpaceModel::ProcessResidual(*s, a, b, d);
   Eigen::Map<Vec6> res(residuals);
-  res = L_ * StateSpaceModel::ProcessResidual(*s, a, b, d);
+  res = L * r;
   if (!jacobians) return true;
-  if (jacobians[0]) Store(L_ * StateSpaceModel::ProcessJacobianXa(*s), jacobians[0]);
-  if (jacobians[1]) Store(L_, jacobians[1]);
-  if (want_theta) Store(-L_ * s->U, jacobians[2]);
+  if (jacobians[0]) Store(L * StateSpaceModel::ProcessJacobianXa(*s), jacobians[0]);
+  if (jacobians[1]) Store(L, jacobians[1]);
+  if (want_theta) {
+    Eigen::MatrixXd J = -L * s->U;
+    for (int j = 0; j < n_; ++j) {
+      J.col(j) += dL[j] * r;  // zero unless theta_j is a scale factor
+    }
+    Store(J, jacobians[2]);
+  }
   return true;
 }
 

@@ -13,13 +13,15 @@
 
 namespace triadcal {
 
-// Process residual of the interval e -> e+1, r = L r_p (state_space_model.h),
-// first order about the step's theta_lin. In exact mode (model non-null) the
-// step is recomputed at theta in every evaluation.
+// Process residual of the interval e -> e+1, r = L(theta) r_p
+// (state_space_model.h), r_p first order about the step's theta_lin, L the
+// whitening at the current theta (StateSpaceModel::ProcessWhitening) with its
+// derivative by the scale factors. In exact mode the step is recomputed at
+// theta in every evaluation.
 class ProcessCost : public ceres::CostFunction {
  public:
-  ProcessCost(const ProcessStep* step, const Eigen::VectorXd* theta_lin_free, const Mat6& L,
-              const StateSpaceModel* exact_model, std::size_t e);
+  ProcessCost(const ProcessStep* step, const Eigen::VectorXd* theta_lin_free,
+              const StateSpaceModel* model, bool exact, std::size_t e);
   bool Evaluate(double const* const* p, double* residuals, double** jacobians) const override;
 
   // Raw (unwhitened) residual at the given states.
@@ -28,8 +30,8 @@ class ProcessCost : public ceres::CostFunction {
  private:
   const ProcessStep* step_;
   const Eigen::VectorXd* theta_lin_;
-  Mat6 L_;
-  const StateSpaceModel* exact_;  // non-null: exact mode
+  const StateSpaceModel* model_;
+  bool exact_;
   std::size_t e_;
   int n_;
 };

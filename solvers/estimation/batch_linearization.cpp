@@ -32,7 +32,8 @@ void ThetaRows(const RunProblem& p, bool with_constraints, Eigen::MatrixXd* A,
 
 Eigen::MatrixXd ThetaCovariance(const RunProblem& p, const BatchLinearization& lin,
                                 const Eigen::VectorXd& theta, const Eigen::MatrixXd& A,
-                                int threads) {
+                                int threads,
+                                const std::vector<Eigen::MatrixXd>* process_theta_jacobians) {
   const StateSpaceModel model(p);
   const std::size_t E = p.epochs.size();
   std::vector<ProcessBlock> pb(E - 1);
@@ -42,7 +43,8 @@ Eigen::MatrixXd ThetaCovariance(const RunProblem& p, const BatchLinearization& l
       const ProcessStep& s = lin.process[e];
       pb[e].A = lin.LQ[e] * StateSpaceModel::ProcessJacobianXa(s);
       pb[e].B = lin.LQ[e];
-      pb[e].C = -lin.LQ[e] * s.U;
+      pb[e].C = process_theta_jacobians ? (*process_theta_jacobians)[e]
+                                        : Eigen::MatrixXd(-lin.LQ[e] * s.U);
     }
     const MeasurementStep m = model.Measurement(e, theta, true, false);
     mb[e].M = lin.LR[e];

@@ -37,9 +37,13 @@ void ThetaRows(const RunProblem& p, bool with_constraints, Eigen::MatrixXd* A,
 // with the priors, and the constraints when they are in A) from the Jacobians
 // of the linearisation, with the B2 Jacobians evaluated at theta. This is the
 // Cramer-Rao bound of the model at theta for the run's motion and timing.
+// process_theta_jacobians, when given, are the whitened d r_p / d theta_free
+// of each interval at the solution (the batch's process costs, which include
+// the derivative of the whitening by the scale factors) in place of -L_Q U.
 Eigen::MatrixXd ThetaCovariance(const RunProblem& p, const BatchLinearization& lin,
                                 const Eigen::VectorXd& theta, const Eigen::MatrixXd& A,
-                                int threads);
+                                int threads,
+                                const std::vector<Eigen::MatrixXd>* process_theta_jacobians = nullptr);
 
 // The free-parameter covariance placed in an n x n matrix (zero rows and
 // columns for the held parameters).

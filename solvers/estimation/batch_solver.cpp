@@ -2,7 +2,9 @@
 
 #include <ceres/ceres.h>
 
+#include <algorithm>
 #include <chrono>
+#include <set>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -12,6 +14,7 @@
 #include "solvers/estimation/parallel.h"
 #include "solvers/estimation/run_problem.h"
 #include "solvers/estimation/batch_linearization.h"
+#include "solvers/estimation/noise_estimation.h"
 #include "solvers/estimation/state_space_model.h"
 #include "solvers/estimation/observability.h"
 
@@ -156,6 +159,23 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
   for (int i = 0; i < n; ++i) {
     if (held[i]) d.held.push_back(layout.info(i).name);
   }
+  // What the held parameters stand for: the other members of their
+  // undetermined directions are estimated relative to them.
+  const std::set<std::string> held_set(d.held.begin(), d.held.end());
+  for (const WeakDirection& w : d.unsupported) {
+    std::vector<std::string> anchors;
+    for (const auto& [name, weight] : w.weights) {
+      if (held_set.count(name) && std::abs(weight) >= 0.1) anchors.push_back(name);
+    }
+    if (anchors.empty()) continue;
+    for (const auto& [name, weight] : w.weights) {
+      if (held_set.count(name) || std::abs(weight) < 0.1) continue;
+      std::vector<std::string>& r = d.relative_to[name];
+      for (const std::string& a : anchors) {
+        if (std::find(r.begin(), r.end(), a) == r.end()) r.push_back(a);
+      }
+    }
+  }
   return d;
 }
 
@@ -185,8 +205,8 @@ LinearisedProblem BuildCeresProblem(const StateSpaceModel& model, const BatchLin
   for (std::size_t e = 0; e < E; ++e) lp.problem->AddParameterBlock(&(*x)[6 * e], 6);
   lp.problem->AddParameterBlock(theta_free->data(), model.num_free());
   for (std::size_t e = 0; e + 1 < E; ++e) {
-    lp.process[e] = new ProcessCost(&lin.process[e], &lin.theta_lin_free, lin.LQ[e],
-                                    opt.exact_increments ? &model : nullptr, e);
+    lp.process[e] =
+        new ProcessCost(&lin.process[e], &lin.theta_lin_free, &model, opt.exact_increments, e);
     lp.problem->AddResidualBlock(lp.process[e], MakeLoss(opt).release(), &(*x)[6 * e],
                                  &(*x)[6 * (e + 1)], theta_free->data());
   }
@@ -196,6 +216,21 @@ LinearisedProblem BuildCeresProblem(const StateSpaceModel& model, const BatchLin
                                  theta_free->data());
   }
   lp.problem->AddResidualBlock(new LinearThetaCost(A, b), nullptr, theta_free->data());
+  // Scale factors stay within [1/5, 5] of their nominal values: beyond that the
+  // run.yaml's nominal is wrong, and on motion that hardly excites an axis the
+  // flat cost would otherwise let a trust-region step reach K = 0, where the
+  // noise weight g sigma / K (state_space_model.h) is undefined.
+  const RunProblem& p = model.problem();
+  for (std::size_t j = 0; j < p.free.size(); ++j) {
+    const int i = p.free[j];
+    if (i < kKx || i > kKz) continue;
+    const double k0 = std::abs(p.prior.mean[i]);
+    const bool negative = p.prior.mean[i] < 0.0;
+    lp.problem->SetParameterLowerBound(theta_free->data(), static_cast<int>(j),
+                                       negative ? -5.0 * k0 : 0.2 * k0);
+    lp.problem->SetParameterUpperBound(theta_free->data(), static_cast<int>(j),
+                                       negative ? -0.2 * k0 : 5.0 * k0);
+  }
   return lp;
 }
 
@@ -223,6 +258,75 @@ ceres::Solver::Options SolverOptions(const BatchOptions& opt, int threads, std::
     so.linear_solver_ordering = ordering;
   }
   return so;
+}
+
+// What the relinearisation loop carries from one pass to the next.
+struct SolveState {
+  Eigen::VectorXd theta_free;
+  std::vector<double> x;  // 6 per epoch
+  BatchLinearization lin;
+  LinearisedProblem lp;
+};
+
+// Relinearise and solve until the linearisation point stops moving.
+void Relinearise(const RunProblem& p, const StateSpaceModel& model, const Eigen::MatrixXd& A,
+                 const Eigen::VectorXd& b, const BatchOptions& opt, int threads,
+                 const std::function<void(const std::string&)>& say, SolveState* st,
+                 BatchResult* res) {
+  const std::size_t E = model.num_epochs();
+  Eigen::VectorXd& theta_free = st->theta_free;
+  std::vector<double>& x = st->x;
+  double last_step = 0.0;
+  // Backtracking: the cost at a new linearisation point is the true cost
+  // there; if a step made it worse than at the previous point, go half way back.
+  Eigen::VectorXd theta_prev;
+  std::vector<double> x_prev;
+  double cost_prev = std::numeric_limits<double>::infinity();
+  int halvings = 0;
+  res->converged = false;
+  for (int outer = 0; outer < opt.max_outer_iterations + halvings; ++outer) {
+    say("relinearising pass " + std::to_string(outer + 1));
+    st->lin = Linearize(p, model.Expand(theta_free), !opt.exact_increments, threads);
+    st->lp = BuildCeresProblem(model, st->lin, A, b, opt, &x, &theta_free);
+    const ceres::Solver::Options so = SolverOptions(opt, threads, E, &x, &theta_free);
+    // The true cost at this point (before solving), to judge the last step.
+    double cost_here = 0.0;
+    st->lp.problem->Evaluate(ceres::Problem::EvaluateOptions(), &cost_here, nullptr, nullptr,
+                             nullptr);
+    if (cost_here > cost_prev * (1.0 + 1e-9) && halvings < 20 && !opt.exact_increments) {
+      ++halvings;
+      theta_free = 0.5 * (theta_free + theta_prev);
+      for (std::size_t i = 0; i < x.size(); ++i) x[i] = 0.5 * (x[i] + x_prev[i]);
+      continue;
+    }
+    theta_prev = theta_free;
+    x_prev = x;
+    cost_prev = cost_here;
+    ceres::Solver::Summary summary;
+    ceres::Solve(so, st->lp.problem.get(), &summary);
+    if (summary.termination_type == ceres::FAILURE) {
+      throw std::runtime_error("Ceres failed: " + summary.message);
+    }
+    res->outer_iterations += 1;
+    res->ceres_iterations += static_cast<int>(summary.iterations.size()) - 1;
+    res->final_cost = summary.final_cost;
+    // Convergence of the relinearisation. The cost change of an inner solve is
+    // 0.5 |step|^2 in the metric of the information matrix, so s = sqrt(2
+    // change) is the step in sigma units. Relinearising converges
+    // quadratically, s_k ~ c s_{k-1}^2: the next step is predicted as
+    // (s_k / s_{k-1}^2) s_k^2, and once that is below 0.01 sigma another pass
+    // over the samples would not move the answer.
+    const double change = std::max(0.0, summary.initial_cost - summary.final_cost);
+    const double step = std::sqrt(2.0 * change);
+    const bool small = change < opt.outer_tolerance;
+    const bool predicted_small = last_step > 0.0 && step < 1.0 &&
+                                 (step / (last_step * last_step)) * step * step < 0.01;
+    last_step = step;
+    if (opt.exact_increments || small || predicted_small) {
+      res->converged = summary.termination_type == ceres::CONVERGENCE || small || predicted_small;
+      break;
+    }
+  }
 }
 
 // Residuals at the solution, raw and whitened, and their summaries.
@@ -267,14 +371,29 @@ void CollectResiduals(const RunProblem& p, const RunData& data, const BatchLinea
 // Covariance of the free parameters at the solution.
 Eigen::MatrixXd FreeCovariance(const RunProblem& p, const BatchLinearization& lin,
                                const LinearisedProblem& lp, const Eigen::VectorXd& theta,
-                               Eigen::VectorXd* theta_free, const Eigen::MatrixXd& A,
-                               const BatchOptions& opt, int threads) {
+                               Eigen::VectorXd* theta_free, const std::vector<double>* x,
+                               const Eigen::MatrixXd& A, const BatchOptions& opt, int threads) {
   const int nf = static_cast<int>(theta_free->size());
   const bool use_ceres = opt.covariance_method == "ceres" || !opt.robust_loss.empty();
   if (!use_ceres && opt.covariance_method != "schur") {
     throw InputError("covariance method: unknown '" + opt.covariance_method + "' (schur, ceres)");
   }
-  if (!use_ceres) return ThetaCovariance(p, lin, theta, A, threads);
+  if (!use_ceres) {
+    // The process costs' own Jacobians by theta (with the derivative of
+    // their whitening), so that both paths factor the same Jacobian.
+    const std::size_t E = p.epochs.size();
+    std::vector<Eigen::MatrixXd> C(E - 1);
+    ParallelFor(E - 1, threads, [&](std::size_t e) {
+      const ProcessCost* cost = lp.process[e];
+      Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::RowMajor> J(6, nf);
+      Vec6 r;
+      const double* params[3] = {&(*x)[6 * e], &(*x)[6 * (e + 1)], theta_free->data()};
+      double* jac[3] = {nullptr, nullptr, J.data()};
+      cost->Evaluate(params, r.data(), jac);
+      C[e] = J;
+    });
+    return ThetaCovariance(p, lin, theta, A, threads, &C);
+  }
   // Ceres's sparse QR on the whole Jacobian (applies the robust loss's
   // weights). The priors keep the Jacobian full rank.
   ceres::Covariance::Options co;
@@ -317,6 +436,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
                                                  opt.derivatives, opt.init_decimation_hz, threads);
     res.unsupported_at_start = hd.unsupported;
     res.held = hd.held;
+    res.relative_to = hd.relative_to;
     std::vector<int> held;
     for (const std::string& name : hd.held) held.push_back(layout.IndexOf(name));
     p.Hold(held);
@@ -341,69 +461,55 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
 
   // 3. Relinearise and solve until the linearisation point stops moving.
   const auto t_solve = std::chrono::steady_clock::now();
-  BatchLinearization lin;
-  LinearisedProblem lp;
-  double last_step = 0.0;
-  // Backtracking: the cost at a new linearisation point is the true cost
-  // there; if a step made it worse than at the previous point, go half way back.
-  Eigen::VectorXd theta_prev;
-  std::vector<double> x_prev;
-  double cost_prev = std::numeric_limits<double>::infinity();
-  int halvings = 0;
-  for (int outer = 0; outer < opt.max_outer_iterations + halvings; ++outer) {
-    say("relinearising pass " + std::to_string(outer + 1));
-    lin = Linearize(p, model.Expand(theta_free), !opt.exact_increments, threads);
-    lp = BuildCeresProblem(model, lin, A, b, opt, &x, &theta_free);
-    const ceres::Solver::Options so = SolverOptions(opt, threads, E, &x, &theta_free);
-    // The true cost at this point (before solving), to judge the last step.
-    double cost_here = 0.0;
-    lp.problem->Evaluate(ceres::Problem::EvaluateOptions(), &cost_here, nullptr, nullptr, nullptr);
-    if (cost_here > cost_prev * (1.0 + 1e-9) && halvings < 20 && !opt.exact_increments) {
-      ++halvings;
-      theta_free = 0.5 * (theta_free + theta_prev);
-      for (std::size_t i = 0; i < x.size(); ++i) x[i] = 0.5 * (x[i] + x_prev[i]);
-      continue;
-    }
-    theta_prev = theta_free;
-    x_prev = x;
-    cost_prev = cost_here;
-    ceres::Solver::Summary summary;
-    ceres::Solve(so, lp.problem.get(), &summary);
-    if (summary.termination_type == ceres::FAILURE) {
-      throw std::runtime_error("Ceres failed: " + summary.message);
-    }
-    res.outer_iterations = outer + 1;
-    res.ceres_iterations += static_cast<int>(summary.iterations.size()) - 1;
-    res.final_cost = summary.final_cost;
-    // Convergence of the relinearisation. The cost change of an inner solve is
-    // 0.5 |step|^2 in the metric of the information matrix, so s = sqrt(2
-    // change) is the step in sigma units. Relinearising converges
-    // quadratically, s_k ~ c s_{k-1}^2: the next step is predicted as
-    // (s_k / s_{k-1}^2) s_k^2, and once that is below 0.01 sigma another pass
-    // over the samples would not move the answer.
-    const double change = std::max(0.0, summary.initial_cost - summary.final_cost);
-    const double step = std::sqrt(2.0 * change);
-    const bool small = change < opt.outer_tolerance;
-    const bool predicted_small = last_step > 0.0 && step < 1.0 &&
-                                 (step / (last_step * last_step)) * step * step < 0.01;
-    last_step = step;
-    if (opt.exact_increments || small || predicted_small) {
-      res.converged = summary.termination_type == ceres::CONVERGENCE || small || predicted_small;
-      break;
+  SolveState st{theta_free, std::move(x), {}, {}};
+  Relinearise(p, model, A, b, opt, threads, say, &st, &res);
+  CollectResiduals(p, data, st.lin, st.lp, st.x, st.theta_free, &res);
+
+  // 4. The noise from the residuals: refit with it when the run asks for it
+  // (noise_mV: auto) or when the declared noise is not what the residuals
+  // hold, so that sigma rests on the noise the run has.
+  res.noise_declared_mV = run.ChannelNoise_mV();
+  res.noise_source = "declared";
+  res.noise_check = EstimateChannelNoise(model, st.lin, res.process_residual,
+                                         res.degrees_of_freedom);
+  if (opt.estimate_noise) {
+    for (int pass = 0; pass < 4; ++pass) {
+      const NoiseEstimate ne = EstimateChannelNoise(model, st.lin, res.process_residual,
+                                                    res.degrees_of_freedom);
+      if (pass == 0) {
+        res.noise_check = ne;
+        if (run.noise_auto && ne.dof.minCoeff() < kMinNoiseDof) {
+          throw InputError(run.yaml_path + ": triad.noise_mV: auto needs a longer run: " +
+                           std::to_string(static_cast<int>(ne.dof.minCoeff())) +
+                           " degrees of freedom in the weakest channel, at least " +
+                           std::to_string(static_cast<int>(kMinNoiseDof)) +
+                           " (declare the noise instead)");
+        }
+        if (!run.noise_auto && ne.consistent) break;
+      }
+      res.noise_estimate = ne;
+      const double change =
+          (ne.estimated_mV - p.noise_mV).cwiseQuotient(p.noise_mV).cwiseAbs().maxCoeff();
+      if (pass > 0 && change < 0.01) break;
+      p.noise_mV = ne.estimated_mV;
+      res.noise_source = "estimated";
+      say("refitting with the noise estimated from the residuals");
+      Relinearise(p, model, A, b, opt, threads, say, &st, &res);
+      CollectResiduals(p, data, st.lin, st.lp, st.x, st.theta_free, &res);
     }
   }
+  res.noise_used_mV = p.noise_mV;
   res.solve_seconds = Seconds(t_solve);
-  const Eigen::VectorXd theta = model.Expand(theta_free);
+  const Eigen::VectorXd theta = model.Expand(st.theta_free);
   res.estimate.theta = theta;
 
-  // 4. Residuals and covariance at the solution.
-  CollectResiduals(p, data, lin, lp, x, theta_free, &res);
+  // 5. Covariance at the solution.
   res.estimate.cov = Eigen::MatrixXd::Zero(p.n, p.n);
   if (opt.compute_covariance) {
     say("covariance");
     const auto t_cov = std::chrono::steady_clock::now();
-    res.estimate.cov =
-        ExpandCovariance(p, FreeCovariance(p, lin, lp, theta, &theta_free, A, opt, threads));
+    res.estimate.cov = ExpandCovariance(
+        p, FreeCovariance(p, st.lin, st.lp, theta, &st.theta_free, &st.x, A, opt, threads));
     res.covariance_seconds = Seconds(t_cov);
   }
   return res;

@@ -39,6 +39,7 @@
 #pragma once
 
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -48,6 +49,7 @@
 #include "core/model/run_data.h"
 #include "core/model/run_description.h"
 #include "solvers/estimation/kalman_smoother.h"
+#include "solvers/estimation/noise_estimation.h"
 #include "core/model/priors.h"
 #include "solvers/estimation/run_problem.h"
 #include "solvers/estimation/separability.h"
@@ -61,14 +63,18 @@ enum class BatchInit { kRts, kNominal, kGiven };
 // units of the prior) at the nominal values keeps, most informative first,
 // every parameter with at least min_information left once the kept ones are
 // known, and holds the rest. `hold` adds to the held set, `free` removes.
+// Only structural nulls are held: directions along which the data carry no
+// information at all (the inner-axis rotation without its constraint, a lever
+// arm along the only shaft). A parameter that is merely weakly determined is
+// estimated and gets its honest, large sigma.
 struct HoldPolicy {
   bool auto_hold = true;
-  // Base parameters need 100 (posterior sigma <~ 0.1 prior sigma): below that
-  // a nearly flat direction lets the nonlinear fit wander (a single-axis run's
-  // dpsi trades against W0y and the scale factors). Effect parameters, whose
-  // priors are only a size scale, need 10 (<~ 0.3 prior sigma).
-  double min_information = 100.0;
-  double min_information_effects = 10.0;
+  // In prior units at the run's full rate: 0.01 is a data sigma ten times the
+  // prior's. A structural null has ~1e-4 or less at the nominal values
+  // (rounding and the K_ij coupling); a weak but real direction of a short or
+  // slow run has 1 or more.
+  double min_information = 1e-2;
+  double min_information_effects = 1e-2;
   std::vector<std::string> hold, free;
 };
 
@@ -89,6 +95,10 @@ struct BatchOptions {
   std::string covariance_method = "schur";  // | ceres (sparse QR; used with a robust loss)
   int threads = 0;                // 0: all cores
   HoldPolicy holding;            // which parameters to hold at nominal
+  // Estimate the reading noise from the residuals (noise_estimation.h) and
+  // refit with it when run.yaml says `noise_mV: auto` or when the declared
+  // noise is not what the residuals hold.
+  bool estimate_noise = true;
   std::function<void(const std::string&)> progress;  // one line per stage
 };
 
@@ -106,6 +116,7 @@ struct BatchResult {
   Estimate estimate;            // theta and its covariance (SI)
   Estimate initial;             // the starting point (with the RTS sigma when from RTS)
   std::vector<std::string> held;  // held at nominal (their sigma is not an estimate)
+  std::map<std::string, std::vector<std::string>> relative_to;  // HoldDecision
   // The directions the run cannot determine, found at the nominal values
   // before holding (what the held parameters stand for).
   std::vector<WeakDirection> unsupported_at_start;
@@ -120,6 +131,14 @@ struct BatchResult {
   bool converged = false;
   std::string linear_solver;
   ResidualStats residuals;
+  // The reading noise per channel [mV]: as declared in run.yaml, as used for
+  // the final fit and its sigma, and where that came from ("declared" |
+  // "estimated"); noise_check compares the declared noise with the residuals
+  // of the first fit, noise_estimate is the last estimate made.
+  Eigen::Vector3d noise_declared_mV = Eigen::Vector3d::Zero();
+  Eigen::Vector3d noise_used_mV = Eigen::Vector3d::Zero();
+  std::string noise_source = "declared";
+  NoiseEstimate noise_check, noise_estimate;
   // Per epoch, for diagnosis: times, measurement and process residuals (raw,
   // V m/s then S m; the process residual of the interval ending at the epoch,
   // zero at the first), and their whitening.
@@ -139,6 +158,10 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
 struct HoldDecision {
   std::vector<std::string> held;
   std::vector<WeakDirection> unsupported;  // at the nominal values, before holding
+  // Parameters of an undetermined direction that are estimated relative to
+  // the held ones of that direction (e.g. gamma_y, gamma_z relative to
+  // dlambda2 without the paper's constraint): not estimable on their own.
+  std::map<std::string, std::vector<std::string>> relative_to;
 };
 HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data,
                                   const ParameterLayout& layout, const HoldPolicy& policy,

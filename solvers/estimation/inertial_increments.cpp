@@ -57,10 +57,25 @@ IntervalIncrement IntegrateInterval(const ModelConfig& cfg, const Eigen::VectorX
     beta[j] += 0.5 * dt * remain + dt * dt / 3.0;
     beta[j + 1] += 0.5 * dt * remain + dt * dt / 6.0;
   }
+  for (Eigen::Matrix<double, 6, 6>& w : inc.channel_weight) w.setZero();
   for (std::size_t j = 0; j <= m; ++j) {
-    inc.sum_alpha2 += alpha[j] * alpha[j];
-    inc.sum_alpha_beta += alpha[j] * beta[j];
-    inc.sum_beta2 += beta[j] * beta[j];
+    const double a2 = alpha[j] * alpha[j], ab = alpha[j] * beta[j], b2 = beta[j] * beta[j];
+    inc.sum_alpha2 += a2;
+    inc.sum_alpha_beta += ab;
+    inc.sum_beta2 += b2;
+    const BenchAngles<double> b =
+        BenchAnglesFromRecorded<double>(cfg, theta.data(), s.recorded[k0 + j]);
+    const Eigen::Matrix3d C_L2 = ComputeBenchMotion<double>(cfg, theta.data(), b).C_L2;
+    for (int i = 0; i < 3; ++i) {
+      const Eigen::Matrix3d cc = C_L2.col(i) * C_L2.col(i).transpose();
+      Eigen::Matrix<double, 6, 6>& w = inc.channel_weight[i];
+      w.topLeftCorner<3, 3>() += a2 * cc;
+      w.topRightCorner<3, 3>() += ab * cc;
+      w.bottomRightCorner<3, 3>() += b2 * cc;
+    }
+  }
+  for (Eigen::Matrix<double, 6, 6>& w : inc.channel_weight) {
+    w.bottomLeftCorner<3, 3>() = w.topRightCorner<3, 3>().transpose();
   }
   const int n = static_cast<int>(theta.size());
   if (!with_jacobian) {
@@ -100,12 +115,10 @@ IntervalIncrement IntegrateInterval(const ModelConfig& cfg, const Eigen::VectorX
   return inc;
 }
 
-double AccelSampleVariance(double noise_mV, double min_scale_mV_per_g, double angle_noise_rad,
-                           double g_mps2) {
-  const double s_accel = g_mps2 * noise_mV / min_scale_mV_per_g;
+double IsotropicSampleVariance(double angle_noise_rad, double g_mps2) {
   const double s_angle = g_mps2 * angle_noise_rad;
   const double floor = 1e-6;  // m/s^2: keeps noise-free runs well posed
-  return s_accel * s_accel + s_angle * s_angle + floor * floor;
+  return s_angle * s_angle + floor * floor;
 }
 
 namespace {

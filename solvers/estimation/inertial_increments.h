@@ -20,6 +20,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <vector>
 
 #include "core/model/bench_model.h"
@@ -34,6 +35,10 @@ struct IntervalIncrement {
   Eigen::MatrixXd ddv_dtheta;  // 3 x n, empty when not asked
   Eigen::MatrixXd dds_dtheta;  // 3 x n
   double sum_alpha2 = 0.0, sum_alpha_beta = 0.0, sum_beta2 = 0.0;  // noise weights
+  // Covariance of (dv, ds) per unit variance [m^2/s^4] of channel i's
+  // acceleration noise, which acts along the triad axis c_i = C_L2 e_i of each
+  // sample: sum_j [a_j^2, a_j b_j; a_j b_j, b_j^2] (x) c_ij c_ij^T.
+  std::array<Eigen::Matrix<double, 6, 6>, 3> channel_weight;
 };
 
 // Per-sample data the increments need, prepared once per run.
@@ -48,10 +53,11 @@ IntervalIncrement IntegrateInterval(const ModelConfig& cfg, const Eigen::VectorX
                                     const SampleSeries& series, std::size_t k0, std::size_t k1,
                                     bool with_jacobian);
 
-// Variance of one acceleration sample [m^2/s^4]: accelerometer white noise
-// through the nominal scale, plus angle noise rotating g.
-double AccelSampleVariance(double noise_mV, double min_scale_mV_per_g, double angle_noise_rad,
-                           double g_mps2);
+// Variance of one acceleration sample [m^2/s^4] that acts alike on every axis
+// of L: the angle noise rotating g, and a floor of 1e-6 m/s^2 that keeps
+// noise-free runs well posed. (The reading noise acts along each triad axis:
+// IntervalIncrement::channel_weight.)
+double IsotropicSampleVariance(double angle_noise_rad, double g_mps2);
 
 // Reference motion of O (block B2) at sample k and its derivatives:
 // dref_dtheta is 6 x n (rows V_DU then S_DU).

@@ -57,8 +57,7 @@ Eigen::VectorXd Propagate(const Interval& in, const Eigen::VectorXd& x, int n) {
   Eigen::VectorXd y = x;
   Eigen::VectorXd delta = Eigen::VectorXd::Zero(n);
   if (in.theta_lin_free.size() == n) delta = x.tail(n) - in.theta_lin_free;
-  // r_p = x_b - F x_a - u - U delta = 0
-  y.head<6>() = in.step.F() * x.head<6>() + in.step.u + in.step.U * delta;
+  y.head<6>() = StateSpaceModel::Predict(in.step, x.head<6>(), delta);
   return y;
 }
 
@@ -223,8 +222,9 @@ FilterResult RunFilterSmoother(const RunDescription& run, const RunData& data,
   // 50 ug per sample on the process noise keeps it well conditioned; real
   // MEMS noise is far above it, and the batch solver has no such floor.
   const double floor_mps2 = 50e-6 * run.g_mps2;
-  c.accel_var = std::max(c.accel_var, floor_mps2 * floor_mps2);
   const StateSpaceModel model(c);
+  const double min_var = c.isotropic_var + model.ChannelVariance(c.prior.mean).minCoeff();
+  if (min_var < floor_mps2 * floor_mps2) c.isotropic_var += floor_mps2 * floor_mps2 - min_var;
   FilterResult res;
   res.prior = c.prior;
   res.epochs = static_cast<int>(c.epochs.size());

@@ -83,8 +83,8 @@ RunProblem BuildRunProblem(const RunDescription& run, const RunData& data,
   p.theta_held = p.prior.mean;
   p.Hold({});
   p.constraints = ResolveConstraints(run, layout);
-  const double min_scale = run.scale_mV_per_g.cwiseAbs().minCoeff();
-  p.accel_var = AccelSampleVariance(run.noise_mV, min_scale, run.angle_noise_rad, run.g_mps2);
+  p.noise_mV = run.ChannelNoise_mV();
+  p.isotropic_var = IsotropicSampleVariance(run.angle_noise_rad, run.g_mps2);
   p.sigma_angle = run.angle_noise_rad;
   const double dt =
       (data.t_s.back() - data.t_s.front()) / std::max<std::size_t>(1, data.size() - 1);

@@ -39,7 +39,11 @@ struct RunProblem {
   std::vector<std::size_t> epochs;  // sample index of each epoch
   Prior prior;
   std::vector<ConstraintRow> constraints;
-  double accel_var = 0.0;     // per sample [m^2/s^4]
+  // Noise of one sample: the reading noise of each channel [mV] (declared,
+  // or estimated: noise_estimation.h), and the part that acts alike on every
+  // axis of L [m^2/s^4] (angle noise rotating g).
+  Eigen::Vector3d noise_mV = Eigen::Vector3d::Constant(2.0);
+  double isotropic_var = 0.0;
   double sigma_angle = 0.0;   // [rad]
   double sigma_rate = 0.0;    // [rad/s], of lambda' from the angles
   int n = 0;                  // parameters of the layout

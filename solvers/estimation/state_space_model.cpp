@@ -1,5 +1,7 @@
 #include "solvers/estimation/state_space_model.h"
 
+#include <cmath>
+
 #include <Eigen/Cholesky>
 
 namespace triadcal {
@@ -14,6 +16,15 @@ Mat6 WhiteningOf(const Mat6& cov) {
   const Eigen::LLT<Mat6> llt(cov);
   const Mat6 Lc = llt.matrixL();
   return Lc.triangularView<Eigen::Lower>().solve(Mat6::Identity());
+}
+
+Eigen::Vector3d StateSpaceModel::ChannelVariance(const Eigen::VectorXd& theta) const {
+  Eigen::Vector3d var;
+  for (int i = 0; i < 3; ++i) {
+    const double s = p_.cfg.g_mps2 * p_.noise_mV[i] / std::abs(theta[kKx + i]);
+    var[i] = s * s;
+  }
+  return var;
 }
 
 Eigen::VectorXd StateSpaceModel::Expand(const Eigen::VectorXd& theta_free) const {
@@ -48,9 +59,16 @@ ProcessStep StateSpaceModel::Process(std::size_t e, const Eigen::VectorXd& theta
     s.U = FreeColumns(U);
   }
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
-  s.Q.block<3, 3>(0, 0) = p_.accel_var * inc.sum_alpha2 * I;
-  s.Q.block<3, 3>(0, 3) = s.Q.block<3, 3>(3, 0) = p_.accel_var * inc.sum_alpha_beta * I;
-  s.Q.block<3, 3>(3, 3) = p_.accel_var * inc.sum_beta2 * I;
+  s.Q.block<3, 3>(0, 0) = p_.isotropic_var * inc.sum_alpha2 * I;
+  s.Q.block<3, 3>(0, 3) = s.Q.block<3, 3>(3, 0) = p_.isotropic_var * inc.sum_alpha_beta * I;
+  s.Q.block<3, 3>(3, 3) = p_.isotropic_var * inc.sum_beta2 * I;
+  s.Q_iso = s.Q;
+  const Eigen::Vector3d var = ChannelVariance(theta);
+  for (int i = 0; i < 3; ++i) {
+    s.channel_weight[i] = inc.channel_weight[i];
+    s.channel_Q[i] = var[i] * inc.channel_weight[i];
+    s.Q += s.channel_Q[i];
+  }
   return s;
 }
 
@@ -67,11 +85,37 @@ MeasurementStep StateSpaceModel::Measurement(std::size_t e, const Eigen::VectorX
   return m;
 }
 
+Mat6 StateSpaceModel::ProcessWhitening(const ProcessStep& s, const Eigen::VectorXd& theta,
+                                       std::vector<Mat6>* dL) const {
+  const Eigen::Vector3d var = ChannelVariance(theta);
+  Mat6 Q = s.Q_iso;
+  for (int i = 0; i < 3; ++i) Q += var[i] * s.channel_weight[i];
+  const Mat6 L = WhiteningOf(Q);
+  if (!dL) return L;
+  dL->assign(p_.free.size(), Mat6::Zero());
+  for (std::size_t j = 0; j < p_.free.size(); ++j) {
+    const int i = p_.free[j] - kKx;
+    if (i < 0 || i > 2) continue;
+    // d var_i / d K_i = -2 var_i / K_i; dL / d var_i by a central difference
+    // of the 6 x 6 whitening (exact to ~1e-8 relative).
+    const double h = 1e-4 * var[i];
+    const Mat6 Lp = WhiteningOf(Q + h * s.channel_weight[i]);
+    const Mat6 Lm = WhiteningOf(Q - h * s.channel_weight[i]);
+    (*dL)[j] = (Lp - Lm) / (2.0 * h) * (-2.0 * var[i] / theta[kKx + i]);
+  }
+  return L;
+}
+
+Vec6 StateSpaceModel::Predict(const ProcessStep& s, const Vec6& xa,
+                              const Eigen::VectorXd& dtheta_free) {
+  Vec6 x = s.F() * xa + s.u;
+  if (s.U.size() > 0 && dtheta_free.size() > 0) x += s.U * dtheta_free;
+  return x;
+}
+
 Vec6 StateSpaceModel::ProcessResidual(const ProcessStep& s, const Vec6& xa, const Vec6& xb,
                                       const Eigen::VectorXd& dtheta_free) {
-  Vec6 r = xb - s.F() * xa - s.u;
-  if (s.U.size() > 0) r -= s.U * dtheta_free;
-  return r;
+  return xb - Predict(s, xa, dtheta_free);
 }
 
 void StateSpaceModel::ThetaRows(bool with_constraints, Eigen::MatrixXd* A,

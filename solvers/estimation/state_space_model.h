@@ -16,9 +16,15 @@
 //
 //   x_{e+1} = F_e x_e + u_e(theta) + w_e,    F_e = [ I    0 ]    w_e ~ N(0, Q_e)
 //                                                  [ T_e I  I ]
-//   u_e = (dv_e, ds_e),   Q_e = s^2 [ sum a^2  sum ab ; sum ab  sum b^2 ] (x) I3
+//   u_e = (dv_e, ds_e) = sum_j (a_j, b_j) acc_L,j   (trapezoid weights a_j, b_j)
+//   Q_e = sum_i s_i^2 sum_j [ a_j^2  a_j b_j ; a_j b_j  b_j^2 ] (x) c_ij c_ij^T
+//         + s_iso^2 [ sum a^2  sum ab ; sum ab  sum b^2 ] (x) I3
 //
-// with s^2 the variance of one acceleration sample. To first order about
+// with s_i = g sigma_i / K_i the acceleration noise of channel i (reading
+// noise sigma_i [mV] through the scale factor K_i of theta, so the weight
+// follows the estimate: inflating a scale factor cannot shrink the whitened
+// residual), c_ij = C_L2(t_j) e_i its sensitive axis in L, and s_iso the
+// angle noise rotating g. To first order about
 // theta_lin (u_e sums thousands of samples, so it is evaluated once per
 // linearisation, as inertial preintegration does):
 //
@@ -34,6 +40,7 @@
 // constraint c . theta = value +- sigma is one scalar row.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <vector>
 
@@ -52,6 +59,13 @@ struct ProcessStep {
   Vec6 u = Vec6::Zero();  // (dv [m/s], ds [m]) at theta_lin
   Eigen::MatrixXd U;      // 6 x n_free, du/dtheta (empty when not asked)
   Mat6 Q = Mat6::Zero();  // covariance of w_e
+  // The part of Q due to each channel's reading noise (the rest is the
+  // isotropic part): the variance components of noise_estimation.h.
+  std::array<Mat6, 3> channel_Q;
+  // Q's make-up, to re-evaluate it at another theta: the isotropic part and
+  // each channel's weight per unit variance (Q = Q_iso + sum_i s_i^2 W_i).
+  Mat6 Q_iso = Mat6::Zero();
+  std::array<Mat6, 3> channel_weight;
   Mat6 F() const;         // transition of x
 };
 
@@ -68,6 +82,8 @@ class StateSpaceModel {
   explicit StateSpaceModel(const RunProblem& problem) : p_(problem) {}
 
   const RunProblem& problem() const { return p_; }
+  // s_i^2 [m^2/s^4] of each channel at theta.
+  Eigen::Vector3d ChannelVariance(const Eigen::VectorXd& theta) const;
   std::size_t num_epochs() const { return p_.epochs.size(); }
   int num_free() const { return static_cast<int>(p_.free.size()); }
 
@@ -81,8 +97,22 @@ class StateSpaceModel {
   MeasurementStep Measurement(std::size_t e, const Eigen::VectorXd& theta, bool with_jacobian,
                               bool with_noise) const;
 
-  // r_p for the step linearised at theta_lin, dtheta_free = theta - theta_lin
-  // over the free parameters.
+  // The whitening of the step's process residual at theta (all n), with
+  // Q(theta) = Q_iso + sum_i s_i(theta)^2 W_i, and when asked its derivatives
+  // by the free parameters that are scale factors (dL[j] for free index j;
+  // zero for the others). Whitening with the weight of the current
+  // estimate makes the whitened residual the reading-unit residual
+  // (K_i r_i / (g sigma_i)): the noisy readings are then not a regressor whose
+  // noise shrinks as the scale grows, which removes the errors-in-variables
+  // pull on the scale factors and their runaway on motion that hardly
+  // excites an axis.
+  Mat6 ProcessWhitening(const ProcessStep& s, const Eigen::VectorXd& theta,
+                        std::vector<Mat6>* dL_dtheta_free) const;
+
+  // The process prediction x_{e+1} = F_e x_e + u_e + U_e dtheta_free for the
+  // step linearised at theta_lin, dtheta_free = theta - theta_lin.
+  static Vec6 Predict(const ProcessStep& s, const Vec6& xa, const Eigen::VectorXd& dtheta_free);
+  // r_p = x_{e+1} - Predict(x_e).
   static Vec6 ProcessResidual(const ProcessStep& s, const Vec6& xa, const Vec6& xb,
                               const Eigen::VectorXd& dtheta_free);
   // d r_p / d x_a = -F_e, d r_p / d x_b = I, d r_p / d theta = -U_e.

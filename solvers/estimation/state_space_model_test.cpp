@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "solvers/estimation/batch_solver.h"
+#include "solvers/analysis/experiment_design.h"
 #include "solvers/estimation/kalman_smoother.h"
 #include "tests/sim_fixtures.h"
 
@@ -99,6 +100,7 @@ TEST(StateSpaceModel, ThetaRowsOverTheFreeParameters) {
 TEST(StateSpaceModel, EstimatorsShareTheDefaultEpochs) {
   EXPECT_EQ(BatchOptions().epoch_s, kDefaultEpoch_s);
   EXPECT_EQ(FilterOptions().epoch_s, kDefaultEpoch_s);
+  EXPECT_EQ(DesignOptions().epoch_s, kDefaultEpoch_s);
 }
 
 }  // namespace

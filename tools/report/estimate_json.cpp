@@ -27,6 +27,15 @@ nlohmann::json ParametersJson(const ParameterLayout& layout, const Eigen::Vector
   return out;
 }
 
+void MarkRelative(const std::map<std::string, std::vector<std::string>>& relative_to,
+                  nlohmann::json* parameters) {
+  for (const auto& [name, anchors] : relative_to) {
+    if (!parameters->contains(name)) continue;
+    (*parameters)[name]["relative_to"] = anchors;
+    (*parameters)[name]["estimable"] = false;
+  }
+}
+
 nlohmann::json WeakDirectionsJson(const std::vector<WeakDirection>& dirs) {
   nlohmann::json out = nlohmann::json::array();
   for (const WeakDirection& d : dirs) {

@@ -4,6 +4,7 @@
 // run cannot separate (their value is the prior's).
 #pragma once
 
+#include <map>
 #include <set>
 #include <string>
 
@@ -18,6 +19,11 @@ namespace triadcal {
 nlohmann::json ParametersJson(const ParameterLayout& layout, const Eigen::VectorXd& theta,
                               const Eigen::MatrixXd& cov,
                               const std::set<std::string>& not_estimable);
+
+// Marks each parameter estimated only relative to held ones:
+// "relative_to": [held names], "estimable": false.
+void MarkRelative(const std::map<std::string, std::vector<std::string>>& relative_to,
+                  nlohmann::json* parameters);
 
 nlohmann::json WeakDirectionsJson(const std::vector<WeakDirection>& dirs);
 

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "core/io/file_util.h"
+#include "solvers/diagnosis/statistics.h"
 #include "solvers/estimation/observability.h"
 #include "tools/report/estimate_json.h"
 
@@ -19,14 +20,42 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
   rep.weak = UnsupportedDirections(layout, r.estimate.cov, r.prior.sigma);
   for (const std::string& s : ParametersIn(rep.weak)) rep.not_estimable.insert(s);
   rep.not_estimable.insert(rep.held.begin(), rep.held.end());
+  for (const auto& [name, anchors] : r.relative_to) rep.not_estimable.insert(name);
   for (int i = 0; i < layout.size(); ++i) {
     const double z = (r.estimate.theta[i] - r.prior.mean[i]) / r.prior.sigma[i];
     if (std::abs(z) > 3.0) rep.at_prior_bound.push_back(layout.info(i).name);
   }
+  // Whiteness of the whitened process residuals, channel by channel.
+  const std::size_t E = r.process_whitened.size();
+  if (E > 20) {
+    double p_min = 1.0;
+    const int lags = static_cast<int>(std::min<std::size_t>(20, E / 5));
+    for (int c = 0; c < 6; ++c) {
+      std::vector<double> x;
+      for (std::size_t e = 1; e < E; ++e) x.push_back(r.process_whitened[e][c]);
+      p_min = std::min(p_min, LjungBox(x, lags).p_value);
+    }
+    rep.whiteness_p_value = std::min(1.0, 6.0 * p_min);
+    rep.residual_white = rep.whiteness_p_value >= 0.01;
+  }
+  rep.noise_consistent = r.noise_check.consistent;
+  rep.pass = r.converged && rep.residual_white;
   std::ostringstream v;
   v << (r.converged ? "converged" : "NOT CONVERGED") << " in " << r.outer_iterations
     << " relinearisation(s), " << r.ceres_iterations << " Ceres iterations";
   v << "; chi2/dof " << std::round(1000 * r.chi2_per_dof) / 1000 << " (1 expected)";
+  const Eigen::Vector3d& nd = r.noise_declared_mV;
+  const Eigen::Vector3d& ne = r.noise_check.estimated_mV;
+  char noise[200];
+  std::snprintf(noise, sizeof(noise), "; reading noise from the residuals %.3g %.3g %.3g mV",
+                ne[0], ne[1], ne[2]);
+  v << noise;
+  if (r.noise_source == "estimated") {
+    std::snprintf(noise, sizeof(noise), " (declared %.3g %.3g %.3g: sigma rest on the estimate)",
+                  nd[0], nd[1], nd[2]);
+    v << noise;
+  }
+  v << (rep.residual_white ? "; residuals white" : "; RESIDUALS NOT WHITE (sigma may be optimistic)");
   if (rep.at_prior_bound.empty()) {
     v << "; no parameter at a prior bound";
   } else {
@@ -58,15 +87,41 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
                        bool correlations) {
   nlohmann::json out;
   out["parameters"] = ParametersJson(layout, r.estimate.theta, r.estimate.cov, rep.not_estimable);
+  MarkRelative(r.relative_to, &out["parameters"]);
   out["initial"] = {{"parameters", ParametersJson(layout, r.initial.theta, r.initial.cov, {})}};
   if (correlations) out["correlation"] = CorrelationJson(layout, r.estimate.cov);
-  out["unobservable"] = WeakDirectionsJson(rep.weak);
+  // The directions the run cannot determine: those still weak in the fit's
+  // covariance, and those removed by holding a parameter (structural nulls).
+  std::vector<WeakDirection> unobservable = rep.weak;
+  for (const WeakDirection& d : r.unsupported_at_start) {
+    for (const auto& [name, weight] : d.weights) {
+      if (rep.held.count(name)) {
+        unobservable.push_back(d);
+        break;
+      }
+    }
+  }
+  out["unobservable"] = WeakDirectionsJson(unobservable);
   out["not_estimable"] = std::vector<std::string>(rep.not_estimable.begin(), rep.not_estimable.end());
   out["held"] = r.held;
   out["unobservable_at_nominal"] = WeakDirectionsJson(r.unsupported_at_start);
   out["at_prior_bound"] = rep.at_prior_bound;
-  out["verdict"] = rep.verdict;
+  out["verdict"] = {{"converged", r.converged},
+                    {"chi2_per_dof", r.chi2_per_dof},
+                    {"noise_consistent", rep.noise_consistent},
+                    {"residual_white", rep.residual_white},
+                    {"whiteness_p_value", rep.whiteness_p_value},
+                    {"held", r.held},
+                    {"pass", rep.pass},
+                    {"sentence", rep.verdict}};
   out["converged"] = r.converged;
+  auto vec = [](const Eigen::Vector3d& v) { return std::vector<double>{v[0], v[1], v[2]}; };
+  out["noise"] = {{"declared_mV", vec(r.noise_declared_mV)},
+                  {"estimated_mV", vec(r.noise_check.estimated_mV)},
+                  {"estimated_sd_mV", vec(r.noise_check.sd_mV)},
+                  {"estimated_dof", vec(r.noise_check.dof)},
+                  {"used_mV", vec(r.noise_used_mV)},
+                  {"source", r.noise_source}};
   out["final_cost"] = r.final_cost;
   out["residual_count"] = r.residual_count;
   out["iterations"] = {{"relinearisations", r.outer_iterations}, {"ceres", r.ceres_iterations}};

@@ -19,8 +19,20 @@ struct FitReport {
   std::set<std::string> not_estimable;      // held, or in a weak direction
   std::set<std::string> held;
   std::vector<std::string> at_prior_bound;  // > 3 prior sigma from the nominal value
-  std::string verdict;
+  std::string verdict;  // the sentence
+  // The verdict machines read: residual_white is a Ljung-Box test of each
+  // whitened process-residual channel (Bonferroni over the 6, alpha 1 %);
+  // pass = converged and residual_white.
+  bool residual_white = true;
+  double whiteness_p_value = 1.0;  // smallest channel p-value x 6 (capped at 1)
+  bool noise_consistent = true;
+  bool pass = true;
 };
+
+// Exit status of a fit that did not converge, and of a failed --require
+// check (bad input exits 2, an internal error 3).
+constexpr int kExitNotConverged = 4;
+constexpr int kExitRequirementFailed = 5;
 
 FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r);
 nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, const FitReport& rep,
