@@ -2,12 +2,14 @@
 // the --effects list, a progress line, and writing JSON outputs whole.
 #pragma once
 
+#include <map>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "core/model/effects.h"
+#include "core/model/errors.h"
 #include "core/model/run_data.h"
 #include "core/model/run_description.h"
 
@@ -24,6 +26,21 @@ LoadedRun LoadRunOrThrow(const std::string& run_yaml);
 
 // "a,b" -> {"a", "b"} (empty items dropped).
 std::vector<std::string> SplitList(const std::string& list);
+
+// Runs f. An OptionError (errors.h) whose option is a key of `flags` (setting
+// -> flag, e.g. {"static_positions", "--static-positions"}) is rethrown as
+// InputError("FLAG: problem"): solvers speak of the setting, the command of
+// its flag.
+template <typename F>
+auto WithFlags(const std::map<std::string, std::string>& flags, F&& f) -> decltype(f()) {
+  try {
+    return f();
+  } catch (const OptionError& e) {
+    const auto it = flags.find(e.option());
+    if (it == flags.end()) throw;
+    throw InputError(it->second + ": " + e.problem());
+  }
+}
 
 // "a,b" -> effects; throws InputError("OPTION: unknown effect ...").
 std::vector<Effect> ParseEffectList(const std::string& list,
