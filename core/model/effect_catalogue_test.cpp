@@ -15,6 +15,7 @@
 #include <ceres/jet.h>
 #include <gtest/gtest.h>
 
+#include "core/model/angle_derivatives.h"
 #include "core/model/b1_jacobian.h"
 #include "core/model/bench_model.h"
 

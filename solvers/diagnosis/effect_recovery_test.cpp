@@ -7,7 +7,9 @@
 // auto-hold and is then reported, not judged; at least one parameter of every
 // effect must be estimated.
 //
-// Short runs (40 s at 50 Hz) keep this at about a second per effect.
+// Short runs (40 s at 100 Hz, 1 mV) keep this at about a second per effect;
+// at 50 Hz and 2 mV axis_nonintersection.d (sigma ~4 mm against a 10-mm prior)
+// falls below the auto-hold's information threshold and is held.
 #include <cmath>
 #include <sstream>
 
@@ -25,7 +27,7 @@ using testing_fixtures::PaperScenario;
 constexpr int kSeeds = 3;
 
 Scenario InjectTypical(const EffectSpec& e, std::uint64_t seed) {
-  Scenario s = PaperScenario(50.0, 40.0, 2.0, 15.0, seed);
+  Scenario s = PaperScenario(100.0, 40.0, 1.0, 15.0, seed);
   s.truth_layout = ParameterLayout({e.id});
   Eigen::VectorXd t = Eigen::VectorXd::Zero(s.truth_layout.size());
   t.head(kNumBaseParams) = s.truth;
@@ -69,8 +71,8 @@ TEST(EffectRecovery, EveryRegisteredEffectIsRecoveredWithinItsSigma) {
     }
     std::printf("[ recovery ] %-26s %d estimates, sum z^2 %.2f, worst |z| %.2f:%s\n",
                 e.name.c_str(), n, sum_z2, worst, detail.str().c_str());
-    ASSERT_GT(n, 0) << "no parameter of the effect is estimable on this run:" << detail.str();
-    EXPECT_GT(ChiSquareSurvival(sum_z2, n), 1e-3) << detail.str();
+    EXPECT_GT(n, 0) << "no parameter of the effect is estimable on this run:" << detail.str();
+    if (n > 0) EXPECT_GT(ChiSquareSurvival(sum_z2, n), 1e-3) << detail.str();
     EXPECT_LT(worst, 4.5) << detail.str();
   }
 }
