@@ -14,7 +14,6 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
-
 #include <nlohmann/json.hpp>
 
 #include "core/io/file_util.h"
@@ -163,8 +162,9 @@ Command AddDesignCommand(CLI::App& app) {
   auto a = std::make_shared<DesignArgs>();
   Command c;
   c.app = app.add_subcommand(
-      "design", "Experiment design: Cramer-Rao sigma against duration, periods, amplitudes; "
-                "quasi-harmonic against static");
+      "design",
+      "Experiment design: Cramer-Rao sigma against duration, periods, amplitudes; "
+      "quasi-harmonic against static");
   c.app->add_option("scenario", a->scenario, "SCENARIO.yaml (profile, truth, declared noise)")
       ->required();
   c.app->add_option("-o,--output", a->out_json, "output JSON")->required();
@@ -177,15 +177,17 @@ Command AddDesignCommand(CLI::App& app) {
   c.app->add_option("--amplitudes", a->amplitudes,
                     "profile amplitudes OUTER:INNER [deg], comma-separated (default: the "
                     "scenario's x 0.25, 0.5, 1)");
-  c.app->add_option("--target", a->targets,
-                    "NAME=SIGMA in file units, comma-separated; NAME a parameter or a group "
-                    "(K, W0, angles, K_ij, bench, dR: the worst member)")
+  c.app
+      ->add_option("--target", a->targets,
+                   "NAME=SIGMA in file units, comma-separated; NAME a parameter or a group "
+                   "(K, W0, angles, K_ij, bench, dR: the worst member)")
       ->capture_default_str();
   c.app->add_option("--design-duration", a->design_duration_s,
                     "duration of the profile grid and the comparison [s] (default: the "
                     "scenario's)");
-  c.app->add_option("--static-duration", a->static_duration_s,
-                    "total time of the static method in the comparison [s]")
+  c.app
+      ->add_option("--static-duration", a->static_duration_s,
+                   "total time of the static method in the comparison [s]")
       ->capture_default_str();
   c.app->add_option("--static-positions", a->static_positions, "static orientations: 6, 12 or 18")
       ->capture_default_str();

@@ -46,6 +46,13 @@ auto WithFlags(const std::map<std::string, std::string>& flags, F&& f) -> declty
 std::vector<Effect> ParseEffectList(const std::string& list,
                                     const std::string& option = "--effects");
 
+// The same for effects to be estimated from `data`: also throws
+// InputError("OPTION: EFFECT needs a temp_C column, which this run does not
+// have (columns.temp_C in run.yaml)") when the data lack what the effect's
+// catalogue entry needs (EffectSpec::needs).
+std::vector<Effect> ParseEffectList(const std::string& list, const RunData& data,
+                                    const std::string& option = "--effects");
+
 // Fails early (before long work) when an output file's folder is missing or
 // not writable: InputError("PATH: cannot write (folder missing or not writable)").
 void CheckOutputPath(const std::string& path);

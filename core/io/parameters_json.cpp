@@ -1,7 +1,6 @@
 #include "core/io/parameters_json.h"
 
 #include <cmath>
-
 #include <nlohmann/json.hpp>
 
 #include "core/io/file_util.h"
@@ -62,8 +61,8 @@ ParametersFile ReadParametersJson(const std::string& path, const std::vector<std
   }
   const json* params = nullptr;
   for (const std::string& s : sections) {
-    const json* holder = s.empty() ? &root : (root.is_object() && root.contains(s) ? &root[s]
-                                                                                   : nullptr);
+    const json* holder =
+        s.empty() ? &root : (root.is_object() && root.contains(s) ? &root[s] : nullptr);
     if (holder && holder->is_object() && holder->contains("parameters") &&
         (*holder)["parameters"].is_object()) {
       params = &(*holder)["parameters"];

@@ -8,12 +8,12 @@
 //     bench angles back (latency: to second order in tau).
 // The simulate -> fit recovery over seeds is in
 // solvers/diagnosis/effect_recovery_test.cpp (it needs the estimators).
+#include <ceres/jet.h>
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <random>
 #include <set>
-
-#include <ceres/jet.h>
-#include <gtest/gtest.h>
 
 #include "core/model/angle_derivatives.h"
 #include "core/model/b1_jacobian.h"
@@ -99,8 +99,8 @@ Point RandomPoint(Effect effect, std::mt19937_64& rng) {
   const int o = p.cfg.layout.offset(effect);
   for (size_t j = 0; j < e.params.size(); ++j) {
     const double sign = nrm(rng) < 0 ? -1.0 : 1.0;
-    th[o + j] = sign * uni(rng) * TypicalValue(e, e.params[j], kNominalScale) *
-                e.params[j].si_per_unit;
+    th[o + j] =
+        sign * uni(rng) * TypicalValue(e, e.params[j], kNominalScale) * e.params[j].si_per_unit;
   }
   for (int i = 0; i < 2; ++i) {
     p.recorded.axis[i].angle = 3 * nrm(rng);

@@ -17,9 +17,11 @@ const std::vector<EffectSpec>& EffectCatalogue() {
   static const std::vector<EffectSpec> catalogue = [] {
     std::vector<EffectSpec> c;
     {
-      EffectSpec e{Effect::kAngleLatency, "angle_latency",
+      EffectSpec e{Effect::kAngleLatency,
+                   "angle_latency",
                    "recorded angles lag the bench by tau (both angle sensors)",
-                   EffectStage::kAngle, {{"tau", "ms", kMsToS, 20.0, -100.0, 100.0, 2.0}}};
+                   EffectStage::kAngle,
+                   {{"tau", "ms", kMsToS, 20.0, -100.0, 100.0, 2.0}}};
       e.plausible_reason =
           "the angle and acceleration channels of a bench recorder agree to a few samples; a "
           "lag beyond 0.1 s is a broken time base, not a latency";
@@ -27,7 +29,8 @@ const std::vector<EffectSpec>& EffectCatalogue() {
       c.push_back(e);
     }
     {
-      EffectSpec e{Effect::kEncoderHarmonic, "encoder_harmonic",
+      EffectSpec e{Effect::kEncoderHarmonic,
+                   "encoder_harmonic",
                    "angle-sensor error periodic in the angle (first harmonic, both axes)",
                    EffectStage::kAngle,
                    {{"l1_sin", "arcmin", kArcminToRad, 10.0, -60.0, 60.0, 1.0},
@@ -41,9 +44,11 @@ const std::vector<EffectSpec>& EffectCatalogue() {
       c.push_back(e);
     }
     {
-      EffectSpec e{Effect::kAxisNonintersection, "axis_nonintersection",
+      EffectSpec e{Effect::kAxisNonintersection,
+                   "axis_nonintersection",
                    "inner bench axis passes at a distance d (along z1) from the outer axis",
-                   EffectStage::kGeometry, {{"d", "mm", kMmToM, 10.0, -20.0, 20.0, 1.0}}};
+                   EffectStage::kGeometry,
+                   {{"d", "mm", kMmToM, 10.0, -20.0, 20.0, 1.0}}};
       e.plausible_reason =
           "the axes of a two-axis bench meet to machining tolerance (below 1 mm); 20 mm is a "
           "mis-assembled bench";
@@ -51,7 +56,8 @@ const std::vector<EffectSpec>& EffectCatalogue() {
       c.push_back(e);
     }
     {
-      EffectSpec e{Effect::kAxisNonperpendicularity, "axis_nonperpendicularity",
+      EffectSpec e{Effect::kAxisNonperpendicularity,
+                   "axis_nonperpendicularity",
                    "inner bench axis tilted by eps towards the outer axis (about z1)",
                    EffectStage::kGeometry,
                    {{"eps", "arcmin", kArcminToRad, 30.0, -60.0, 60.0, 5.0}}};
@@ -61,7 +67,8 @@ const std::vector<EffectSpec>& EffectCatalogue() {
       c.push_back(e);
     }
     {
-      EffectSpec e{Effect::kSizeEffect, "size_effect",
+      EffectSpec e{Effect::kSizeEffect,
+                   "size_effect",
                    "y and z accelerometers sense at their own points R + r_y, R + r_z (frame 2)",
                    EffectStage::kGeometry,
                    {{"ry_x", "mm", kMmToM, 20.0, -50.0, 50.0, 3.0},
@@ -75,8 +82,10 @@ const std::vector<EffectSpec>& EffectCatalogue() {
       c.push_back(e);
     }
     {
-      EffectSpec e{Effect::kThermalDrift, "thermal_drift",
-                   "zero offsets drift linearly in time: W0_i + rate_i * t", EffectStage::kSensor,
+      EffectSpec e{Effect::kThermalDrift,
+                   "thermal_drift",
+                   "zero offsets drift linearly in time: W0_i + rate_i * t",
+                   EffectStage::kSensor,
                    {{"rate_x", "mV/min", kPerMin, 10.0, -30.0, 30.0, 0.5},
                     {"rate_y", "mV/min", kPerMin, 10.0, -30.0, 30.0, 0.5},
                     {"rate_z", "mV/min", kPerMin, 10.0, -30.0, 30.0, 0.5}}};
@@ -88,7 +97,8 @@ const std::vector<EffectSpec>& EffectCatalogue() {
       c.push_back(e);
     }
     {
-      EffectSpec e{Effect::kThermalDriftTemp, "thermal_drift_temp",
+      EffectSpec e{Effect::kThermalDriftTemp,
+                   "thermal_drift_temp",
                    "zero offsets linear in temp_C: W0_i + coef_i * (temp_C - first temp_C)",
                    EffectStage::kSensor,
                    {{"coef_x", "mV/degC", 1.0, 10.0, -30.0, 30.0, 0.5},
@@ -103,7 +113,8 @@ const std::vector<EffectSpec>& EffectCatalogue() {
       c.push_back(e);
     }
     {
-      EffectSpec e{Effect::kScaleAsymmetry, "scale_asymmetry",
+      EffectSpec e{Effect::kScaleAsymmetry,
+                   "scale_asymmetry",
                    "scale K_i + dK_i for positive input, K_i - dK_i for negative",
                    EffectStage::kSensor,
                    {{"dKx", "mV/g", 1.0, 0.05, -0.1, 0.1, 0.005},
@@ -122,9 +133,12 @@ const std::vector<EffectSpec>& EffectCatalogue() {
 
 const char* StageName(EffectStage stage) {
   switch (stage) {
-    case EffectStage::kAngle: return "angle";
-    case EffectStage::kGeometry: return "geometry";
-    case EffectStage::kSensor: return "sensor";
+    case EffectStage::kAngle:
+      return "angle";
+    case EffectStage::kGeometry:
+      return "geometry";
+    case EffectStage::kSensor:
+      return "sensor";
   }
   return "?";
 }

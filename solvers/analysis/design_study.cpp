@@ -48,8 +48,8 @@ DesignStudy RunDesignStudy(const Scenario& s, const ParameterLayout& layout,
   }
   if (amplitudes.empty()) {
     for (double f : {0.25, 0.5, 1.0}) {
-      amplitudes.push_back({f * s.profile.amplitude_rad[0] / kDegToRad,
-                            f * s.profile.amplitude_rad[1] / kDegToRad});
+      amplitudes.push_back(
+          {f * s.profile.amplitude_rad[0] / kDegToRad, f * s.profile.amplitude_rad[1] / kDegToRad});
     }
   }
   const ObservabilityThresholds& thr = o.design.observability.thresholds;

@@ -37,8 +37,8 @@ struct DesignStudyOptions {
   std::vector<DesignTarget> targets;
   double design_duration_s = 0.0;  // 0: the scenario's
   double static_duration_s = 2400.0;
-  int static_positions = 12;       // 6, 12 or 18 (StaticPositions)
-  DesignOptions design;            // epoch_s, derivatives, observability
+  int static_positions = 12;  // 6, 12 or 18 (StaticPositions)
+  DesignOptions design;       // epoch_s, derivatives, observability
   // Called before each step with what it does and the fraction done.
   std::function<void(const std::string&, double)> progress;
 };
@@ -54,10 +54,10 @@ struct DesignStudy {
   double design_duration_s = 0.0, static_duration_s = 0.0;
   std::vector<DesignPoint> quasi_harmonic, static_test;  // per duration
   std::vector<DesignGridPoint> grid;
-  DesignPoint qh_design;      // the profile at the design duration
-  DesignPoint static_long;    // static test, static_duration_s
-  DesignPoint static_design;  // static test, design duration
-  std::vector<TargetResult> targets;  // per options.targets
+  DesignPoint qh_design;                          // the profile at the design duration
+  DesignPoint static_long;                        // static test, static_duration_s
+  DesignPoint static_design;                      // static test, design duration
+  std::vector<TargetResult> targets;              // per options.targets
   double target_min_s = 0.0, target_max_s = 0.0;  // the bisection's range
 };
 

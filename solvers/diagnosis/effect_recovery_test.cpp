@@ -10,10 +10,13 @@
 // Short runs (40 s at 100 Hz, 1 mV) keep this at about a second per effect;
 // at 50 Hz and 2 mV axis_nonintersection.d (sigma ~4 mm against a 10-mm prior)
 // falls below the auto-hold's information threshold and is held.
-#include <cmath>
-#include <sstream>
-
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 
 #include "solvers/diagnosis/statistics.h"
 #include "solvers/estimation/batch_solver.h"
@@ -75,6 +78,38 @@ TEST(EffectRecovery, EveryRegisteredEffectIsRecoveredWithinItsSigma) {
     if (n > 0) EXPECT_GT(ChiSquareSurvival(sum_z2, n), 1e-3) << detail.str();
     EXPECT_LT(worst, 4.5) << detail.str();
   }
+}
+
+// What an effect needs (EffectSpec::needs) is checked before any fit: every
+// effect whose entry needs temp_C is refused on a run without it, with one
+// line, exit 2 and no output.
+TEST(EffectNeeds, FitRefusesAnEffectWhoseDataTheRunLacks) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(testing::TempDir()) / "effect_needs";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string bin = TRIADCAL_BIN;
+  const std::string scen = std::string(TRIADCAL_SOURCE_DIR) + "/examples/noise-free/scenario.yaml";
+  ASSERT_EQ(
+      std::system(
+          (bin + " simulate " + scen + " -o " + (dir / "run").string() + " > /dev/null").c_str()),
+      0);
+  int tested = 0;
+  for (const EffectSpec& e : EffectCatalogue()) {
+    if (!e.needs.temp_C) continue;
+    ++tested;
+    const std::string cmd = bin + " fit " + (dir / "run" / "run.yaml").string() + " -o " +
+                            (dir / "out.json").string() + " --effects " + e.name + " 2> " +
+                            (dir / "err.txt").string() + " > /dev/null";
+    EXPECT_EQ(WEXITSTATUS(std::system(cmd.c_str())), 2) << e.name;
+    EXPECT_FALSE(fs::exists(dir / "out.json"));
+    std::ifstream in(dir / "err.txt");
+    const std::string err((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(err, "triadcal: error: --effects: " + e.name +
+                       " needs a temp_C column, which this run does not have (columns.temp_C in "
+                       "run.yaml)\n");
+  }
+  EXPECT_GT(tested, 0);
 }
 
 }  // namespace

@@ -164,9 +164,11 @@ void PrintTargets(const ParameterLayout& layout, const DesignStudyOptions& o,
     const TargetResult& tr = r.targets[k];
     const std::string unit = layout.info(t.indices[0]).unit;
     if (tr.reached) {
-      std::printf("target sigma(%s) <= %g %s: reached after %.3g s of the profile (sigma %.3g; %d CRB evaluations)\n",
-                  t.key.c_str(), t.sigma_file, unit.c_str(), tr.duration_s,
-                  tr.sigma_at_duration / layout.info(t.indices[0]).si_per_unit, tr.evaluations);
+      std::printf(
+          "target sigma(%s) <= %g %s: reached after %.3g s of the profile (sigma %.3g; %d CRB "
+          "evaluations)\n",
+          t.key.c_str(), t.sigma_file, unit.c_str(), tr.duration_s,
+          tr.sigma_at_duration / layout.info(t.indices[0]).si_per_unit, tr.evaluations);
     } else {
       std::printf("target sigma(%s) <= %g %s: NOT reached within %g s (sigma %.3g there)\n",
                   t.key.c_str(), t.sigma_file, unit.c_str(), tr.duration_s,
@@ -178,8 +180,9 @@ void PrintTargets(const ParameterLayout& layout, const DesignStudyOptions& o,
 void PrintComparison(const ParameterLayout& layout, const DesignStudy& r,
                      const DesignReportSettings& settings) {
   const double Td = r.design_duration_s, Ts = r.static_duration_s;
-  std::printf("\nquasi-harmonic %g s against the static %d-position method, %g s (* not determined)\n",
-              Td, settings.static_positions, Ts);
+  std::printf(
+      "\nquasi-harmonic %g s against the static %d-position method, %g s (* not determined)\n", Td,
+      settings.static_positions, Ts);
   std::printf("%-9s %-7s %14s %14s %14s %10s\n", "parameter", "unit", "quasi-harm.", "static",
               "static same T", "ratio");
   for (int i = 0; i < layout.size(); ++i) {
@@ -196,7 +199,9 @@ void PrintComparison(const ParameterLayout& layout, const DesignStudy& r,
                 r.qh_design.sigma[i] / f, held(r.qh_design), r.static_long.sigma[i] / f,
                 held(r.static_long), r.static_design.sigma[i] / f, held(r.static_design), ratio);
   }
-  std::printf("(ratio: static %g s sigma / quasi-harmonic %g s sigma; -: not determined by one of them)\n", Ts, Td);
+  std::printf(
+      "(ratio: static %g s sigma / quasi-harmonic %g s sigma; -: not determined by one of them)\n",
+      Ts, Td);
 }
 
 }  // namespace
@@ -228,9 +233,15 @@ std::string DesignPlotSvg(const Scenario& s, const ParameterLayout& layout, cons
     panel.title = g.label;
     panel.y_label = "sigma [" + layout.info(g.members[0]).unit + "]";
     PlotSeries sq{"quasi-harmonic " + PairText(s.profile.period_s[0], s.profile.period_s[1]) + " s",
-                  "#1f77b4", false, {}, {}};
-    PlotSeries ss{"static, " + std::to_string(settings.static_positions) + " positions", "#d62728",
-                  true, {}, {}};
+                  "#1f77b4",
+                  false,
+                  {},
+                  {}};
+    PlotSeries ss{"static, " + std::to_string(settings.static_positions) + " positions",
+                  "#d62728",
+                  true,
+                  {},
+                  {}};
     PlotSeries sq_best = sq, ss_best = ss;
     for (PlotSeries* b : {&sq_best, &ss_best}) {
       b->width = 1.0;
@@ -267,12 +278,11 @@ std::string DesignPlotSvg(const Scenario& s, const ParameterLayout& layout, cons
   std::snprintf(title, sizeof(title),
                 "Cramer-Rao sigma against run duration, %s (%g Hz, %g mV); thick: worst of "
                 "the group, thin: best",
-                path.substr(path.find_last_of('/') + 1).c_str(), s.profile.rate_hz,
-                s.run.noise_mV);
+                path.substr(path.find_last_of('/') + 1).c_str(), s.profile.rate_hz, s.run.noise_mV);
   const double Td = r.design_duration_s, Ts = r.static_duration_s;
-  return LogLogPanelsSvg(title, "run duration [s]", panels,
-                         {{Td, FormatDouble(Td) + " s design"}, {Ts, FormatDouble(Ts) + " s static"}},
-                         3);
+  return LogLogPanelsSvg(
+      title, "run duration [s]", panels,
+      {{Td, FormatDouble(Td) + " s design"}, {Ts, FormatDouble(Ts) + " s static"}}, 3);
 }
 
 void PrintDesign(const Scenario& s, const ParameterLayout& layout,

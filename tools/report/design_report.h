@@ -2,9 +2,8 @@
 // the log-log SVG plot of sigma against duration, and the tables on stdout.
 #pragma once
 
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "core/simulation/simulator.h"
 #include "solvers/analysis/design_study.h"
