@@ -30,7 +30,7 @@ double Seconds(std::chrono::steady_clock::time_point t0) {
 int RunCompare(const CompareArgs& a) {
   CheckOutputPath(a.out_json);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
-  const ParameterLayout layout(ParseEffectList(a.effects));
+  const ParameterLayout layout(ParseEffectList(a.effects, run.data));
 
   FilterOptions fo;
   fo.epoch_s = a.epoch_s;

@@ -7,6 +7,7 @@
 
 #include "core/model/errors.h"
 #include "core/io/file_util.h"
+#include "core/io/parameters_json.h"
 #include "core/simulation/simulator.h"
 #include "solvers/diagnosis/effect_discovery.h"
 #include "tools/report/estimate_json.h"
@@ -28,28 +29,7 @@ struct DiagnoseArgs {
 // Truth values in file units keyed by layout parameter name; keys the file
 // has that we do not know are ignored (SPEC section 7).
 std::map<std::string, double> ReadTruth(const std::string& path) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(ReadFile(path));
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(path + ": not valid JSON (" + std::string(e.what()) + ")");
-  }
-  if (!j.contains("parameters") || !j["parameters"].is_object()) {
-    throw InputError(path + ": parameters: missing (expected {\"parameters\": {name: value}})");
-  }
-  std::map<std::string, double> out;
-  // Every effect, so that injected effects not selected are known too.
-  std::vector<Effect> all;
-  for (const EffectSpec& e : EffectCatalogue()) all.push_back(e.id);
-  const ParameterLayout every(all);
-  for (int i = 0; i < every.size(); ++i) {
-    for (const std::string& key : {every.info(i).name, TruthFileKey(every, i)}) {
-      if (j["parameters"].contains(key) && j["parameters"][key].is_number()) {
-        out[every.info(i).name] = j["parameters"][key].get<double>();
-      }
-    }
-  }
-  return out;
+  return FileValues(ReadParametersJson(path, {""}, "{\"parameters\": {name: value}}"));
 }
 
 nlohmann::json StateJson(const ParameterLayout& layout, const BatchResult& r,

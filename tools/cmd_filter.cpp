@@ -64,7 +64,7 @@ int RunFilter(const FilterArgs& a) {
   CheckOutputPath(a.out_json);
   if (!a.series_csv.empty()) CheckOutputPath(a.series_csv);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
-  const ParameterLayout layout(ParseEffectList(a.effects));
+  const ParameterLayout layout(ParseEffectList(a.effects, run.data));
   FilterOptions opt;
   opt.epoch_s = a.epoch_s;
   opt.derivatives.half_window_s = a.rate_window_s;

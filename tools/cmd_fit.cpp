@@ -41,7 +41,7 @@ int RunFit(const FitArgs& a) {
   CheckOutputPath(a.out_json);
   if (!a.residuals_csv.empty()) CheckOutputPath(a.residuals_csv);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
-  const ParameterLayout layout(ParseEffectList(a.effects));
+  const ParameterLayout layout(ParseEffectList(a.effects, run.data));
   BatchOptions opt;
   opt.epoch_s = a.epoch_s;
   opt.derivatives.half_window_s = a.rate_window_s;

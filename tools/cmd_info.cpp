@@ -1,5 +1,6 @@
 // `triadcal params`: the parameter names, units and effects that files use.
 #include <cstdio>
+#include <string>
 
 #include "core/model/effects.h"
 #include "core/model/parameters.h"
@@ -18,10 +19,20 @@ Command AddInfoCommand(CLI::App& app) {
     std::printf("\nEffects (SPEC section 8), parameters named effect.param:\n");
     for (const EffectSpec& e : EffectCatalogue()) {
       std::printf("  %-26s %s\n", e.name.c_str(), e.description.c_str());
+      std::string needs;
+      if (e.needs.temp_C) needs += ", needs temp_C";
+      if (e.needs.rates_at_every_sample) needs += ", needs rates at every sample";
+      std::printf("      stage %s%s; B1 Jacobian %s\n", StageName(e.stage), needs.c_str(),
+                  e.b1_analytic_jacobian ? "analytic" : "by Jets");
       for (const ParamSpec& p : e.params) {
-        std::printf("      %-10s %-8s (scenario key %s)\n", p.name.c_str(), p.unit.c_str(),
-                    UnitSuffixedKey(p).c_str());
+        // Sizes relative to the nominal scale factor print as percentages.
+        const double f = e.scale_relative ? 100.0 : 1.0;
+        const char* rel = e.scale_relative ? " % of K" : "";
+        std::printf("      %-10s %-8s (scenario key %s)  prior sigma %g%s, plausible %g .. %g%s\n",
+                    p.name.c_str(), p.unit.c_str(), UnitSuffixedKey(p).c_str(), f * p.prior_sigma,
+                    rel, f * p.plausible_min, f * p.plausible_max, rel);
       }
+      std::printf("      plausible range: %s\n", e.plausible_reason.c_str());
     }
     return 0;
   };

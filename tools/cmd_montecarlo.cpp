@@ -30,16 +30,6 @@ struct MonteCarloArgs {
   bool per_seed = false;
 };
 
-std::vector<std::string> SplitComma(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    if (!item.empty()) out.push_back(item);
-  }
-  return out;
-}
-
 int RunMonteCarloCommand(const MonteCarloArgs& a) {
   if (a.runs < 1) throw InputError("-n: at least 1 run, got " + std::to_string(a.runs));
   if (!(a.tolerance > 0)) throw InputError("--tolerance: must be > 0");
@@ -48,7 +38,7 @@ int RunMonteCarloCommand(const MonteCarloArgs& a) {
   opt.runs = a.runs;
   opt.first_seed = a.first_seed;
   opt.threads = a.threads;
-  opt.estimators = SplitComma(a.estimators);
+  opt.estimators = SplitList(a.estimators);
   opt.layout = ParameterLayout(ParseEffectList(a.effects));
   opt.filter.epoch_s = a.epoch_s;
   opt.batch.epoch_s = a.epoch_s;
@@ -57,7 +47,8 @@ int RunMonteCarloCommand(const MonteCarloArgs& a) {
     ShowProgress("montecarlo: " + std::to_string(done) + "/" + std::to_string(total) + " runs",
                  static_cast<double>(done) / total);
   };
-  const MonteCarloResult r = RunMonteCarlo(s, opt);
+  const MonteCarloResult r = WithFlags({{"runs", "-n"}, {"estimators", "--estimators"}},
+                                      [&] { return RunMonteCarlo(s, opt); });
   EndProgress();
   const ParameterLayout& L = r.layout;
   const int n = L.size();

@@ -14,6 +14,7 @@
 
 #include "core/model/errors.h"
 #include "core/io/file_util.h"
+#include "core/io/parameters_json.h"
 #include "core/simulation/simulator.h"
 #include "core/io/yaml_fields.h"
 #include "solvers/analysis/experiment_design.h"
@@ -37,33 +38,8 @@ struct ObservabilityArgs {
 // "parameters" of a fit/filter OUT ({"Kx": {"value": ...}}), of its "rts"
 // section, or of a truth.json ({"Kx": 171.5}). Unknown names are ignored.
 NamedValues ReadParameterValues(const std::string& path) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(ReadFile(path));
-  } catch (const nlohmann::json::parse_error& e) {
-    throw InputError(path + ": not valid JSON (" + std::string(e.what()) + ")");
-  }
-  const nlohmann::json* params = nullptr;
-  if (j.is_object() && j.contains("parameters")) {
-    params = &j["parameters"];
-  } else if (j.is_object() && j.contains("rts") && j["rts"].contains("parameters")) {
-    params = &j["rts"]["parameters"];
-  }
-  if (!params || !params->is_object()) {
-    throw InputError(path + ": parameters: missing (expected a fit or filter OUT, or truth.json)");
-  }
-  NamedValues out;
-  for (const auto& [name, v] : params->items()) {
-    if (v.is_number()) {
-      out[name] = v.get<double>();
-    } else if (v.is_object() && v.contains("value") && v["value"].is_number()) {
-      out[name] = v["value"].get<double>();
-    } else {
-      throw InputError(path + ": parameters." + name +
-                       ": expected a number or {\"value\": number}");
-    }
-  }
-  return out;
+  return FileValues(
+      ReadParametersJson(path, {"", "rts"}, "a fit or filter OUT, or truth.json"));
 }
 
 bool IsScenario(const std::string& path) {

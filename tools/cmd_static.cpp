@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <set>
 #include <sstream>
@@ -198,14 +199,42 @@ void PrintReport(const LoadedRun& run, const StaticResult& r) {
   std::printf("residual RMS over positions: %.3g mg\n", r.residual_rms_mg);
 }
 
+// The flags of the StaticOptions / StillOptions settings, for errors found below.
+const std::map<std::string, std::string>& StaticFlags() {
+  static const std::map<std::string, std::string> flags = {
+      {"reference", "--reference"},
+      {"fixed", "--fix"},
+      {"min_still_s", "--min-still-s"},
+      {"edge_s", "--edge-s"},
+      {"merge_gap_s", "--merge-gap-s"},
+      {"window_s", "--window-s"},
+      {"noise_factor", "--noise-factor"},
+      {"rate_threshold_deg_s", "--still-rate-deg-s"},
+      {"rate_half_window_s", "--rate-window-s"}};
+  return flags;
+}
+
+// --reference: a run that lacks what the reference needs is an error of the
+// run file, said after the flag that asked for it.
+StaticReference Reference(const StaticArgs& a, const LoadedRun& run) {
+  try {
+    return ChooseReference(run.description, run.data, a.reference);
+  } catch (const OptionError&) {
+    throw;
+  } catch (const InputError& e) {
+    throw InputError("--reference " + a.reference + ": " + e.what());
+  }
+}
+
 int RunStatic(const StaticArgs& a) {
   StaticOptions opt = a.options;
   opt.fixed = SplitList(a.fix);
   if (!(a.placement_sigma_deg >= 0.0)) throw InputError("--placement-sigma-deg: must be >= 0");
   opt.placement_sigma_rad = a.placement_sigma_deg * kDegToRad;
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
-  const StaticReference ref = ChooseReference(run.description, run.data, a.reference);
-  const StaticResult r = SolveStatic(run.description, run.data, ref, opt);
+  const StaticResult r = WithFlags(StaticFlags(), [&] {
+    return SolveStatic(run.description, run.data, Reference(a, run), opt);
+  });
   WriteJson(StaticJson(a, r, run.data.size()), a.out_json);
   PrintReport(run, r);
   std::printf("wrote %s\n", a.out_json.c_str());

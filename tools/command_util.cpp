@@ -44,6 +44,20 @@ std::vector<Effect> ParseEffectList(const std::string& list, const std::string& 
   return out;
 }
 
+std::vector<Effect> ParseEffectList(const std::string& list, const RunData& data,
+                                    const std::string& option) {
+  const std::vector<Effect> effects = ParseEffectList(list, option);
+  for (Effect e : effects) {
+    const EffectSpec& spec = GetEffectSpec(e);
+    if (spec.needs.temp_C && !data.has_temp()) {
+      throw InputError(option + ": " + spec.name +
+                       " needs a temp_C column, which this run does not have (columns.temp_C "
+                       "in run.yaml)");
+    }
+  }
+  return effects;
+}
+
 namespace {
 bool& ProgressShown() {
   static bool shown = false;

@@ -2,7 +2,6 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
-#include <algorithm>
 #include <cmath>
 
 namespace triadcal {
@@ -63,8 +62,10 @@ void FitAt(const RunData& run, std::size_t k, std::size_t lo, std::size_t hi, do
 }  // namespace
 
 bool NeedsRatesAtEverySample(const ParameterLayout& layout) {
-  return layout.has(Effect::kAngleLatency) || layout.has(Effect::kEncoderHarmonic) ||
-         layout.has(Effect::kSizeEffect);
+  for (Effect e : layout.effects()) {
+    if (GetEffectSpec(e).needs.rates_at_every_sample) return true;
+  }
+  return false;
 }
 
 std::vector<BenchAngles<double>> EstimateAngleDerivatives(const RunData& run,

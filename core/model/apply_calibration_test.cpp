@@ -213,7 +213,7 @@ TEST_F(ApplyTest, BadCalibrationFilesGiveOneLine) {
                 "'[', '{', or a literal)\n");
   EXPECT_EQ(error_of("{\"ekf\": {}}"),
             "triadcal: error: " + f +
-                ": no \"parameters\" object (expected an OUT of fit, static, filter (\"rts\"), "
+                ": parameters: missing (expected an OUT of fit, static, filter (\"rts\"), "
                 "compare (\"batch\") or a truth.json)\n");
   nlohmann::json j = nlohmann::json::parse(ParametersJsonText("fit"));
   j["parameters"].erase("Kyz");

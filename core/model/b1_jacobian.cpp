@@ -6,10 +6,7 @@ namespace triadcal {
 
 bool B1HasAnalyticJacobian(const ParameterLayout& layout) {
   for (Effect e : layout.effects()) {
-    if (e != Effect::kAxisNonintersection && e != Effect::kThermalDrift &&
-        e != Effect::kThermalDriftTemp) {
-      return false;
-    }
+    if (!GetEffectSpec(e).b1_analytic_jacobian) return false;
   }
   return true;
 }
@@ -60,15 +57,10 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) J.col(kKxx + 3 * i + j) = T.col(i) * (W[i] * W[j]);
   }
-  const int o_t = cfg.layout.offset(Effect::kThermalDrift);
-  if (o_t >= 0) {
-    for (int i = 0; i < 3; ++i) J.col(o_t + i) = T.col(i) * (ctx.t_s / Ks[i]);
-  }
-  const int o_T = cfg.layout.offset(Effect::kThermalDriftTemp);
-  if (o_T >= 0) {
-    for (int i = 0; i < 3; ++i) {
-      J.col(o_T + i) = T.col(i) * ((ctx.temp_C - cfg.temp_ref_C) / Ks[i]);
-    }
+  // Zero-offset effects (catalogue): dF/d theta_e,i = x_e / K_i e_i.
+  for (const ParameterLayout::ZeroOffsetTerm& term : cfg.layout.zero_offset_terms()) {
+    const double x = ZeroOffsetSignalValue(cfg, term.signal, ctx);
+    for (int i = 0; i < 3; ++i) J.col(term.offset + i) = T.col(i) * (x / Ks[i]);
   }
 }
 

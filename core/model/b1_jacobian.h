@@ -1,8 +1,9 @@
 // Block B1 (AccelerationFromReadings_L in bench_model.h) with its Jacobian with
 // respect to theta written out analytically, for the estimators' hot loop: an
 // order of magnitude faster than pushing Jets through the chain. It covers the
-// base model and the effects that act on B1 through the zero offsets
-// (thermal_drift, thermal_drift_temp); axis_nonintersection does not touch B1.
+// base model and the effects whose catalogue entry says b1_analytic_jacobian:
+// those that act on B1 through the zero offsets (zero_offset_signal: the
+// thermal drifts) and those that do not touch B1 (axis_nonintersection).
 // For other effects use the Jet path (B1HasAnalyticJacobian says which).
 //
 //   a = g C W - g e_x,   C = Rz(dpsi) Ry(l1 + dtheta_c) Rx(l2 + dlambda2)
@@ -19,7 +20,8 @@
 //   alpha_x: W_x e_y   alpha_y: -W_y e_x   beta_x: -W_x e_z
 //   beta_z: W_z e_x    gamma_y: W_y e_z    gamma_z: -W_z e_y
 //   K_ij: W_i W_j e_i
-//   thermal_drift rate_i: t / K_i e_i    thermal_drift_temp coef_i: (T - T_ref) / K_i e_i
+//   zero-offset effect theta_e,i: x_e / K_i e_i   (x = t for thermal_drift,
+//                                               T - T_ref for thermal_drift_temp)
 #pragma once
 
 #include <Eigen/Core>

@@ -115,6 +115,7 @@ template <typename T>
 BenchAngles<T> BenchAnglesFromRecorded(const ModelConfig& cfg, const T* theta,
                                        const BenchAngles<double>& recorded) {
   BenchAngles<T> b = CastAngles<T>(recorded);
+  if (!cfg.layout.has_stage(EffectStage::kAngle)) return b;
   if (cfg.layout.has(Effect::kAngleLatency)) {
     // bench(t) = recorded(t + tau) to second order in tau.
     const T tau = AngleLatency_s(cfg, theta);
@@ -274,7 +275,8 @@ Mat3<T> SpecificForceAtAxes_g(const ModelConfig& cfg, const T* theta, const Benc
 //        [ alpha_x,  1,       -gamma_z],
 //        [-beta_x,   gamma_y,  1      ]]
 //
-// W0_i(t) = W0_i + rate_i t + coef_i (temp_C - T_ref) with the drift effects.
+// W0_i(t) = W0_i + rate_i t + coef_i (temp_C - T_ref) with the drift effects
+// (each declares its signal t or temp_C - T_ref in the catalogue).
 // With the size effect, accelerometer i applies row i to the W at its own point.
 // ---------------------------------------------------------------------------
 
@@ -292,17 +294,26 @@ Mat3<T> NonlinearityMatrix(const T* theta) {
   return Eigen::Map<const Eigen::Matrix<T, 3, 3, Eigen::RowMajor>>(theta + kKxx);
 }
 
-// Zero offsets at this sample [mV].
+// The signal x(sample) of a zero-offset effect (effects.h ZeroOffsetSignal):
+//   thermal_drift: x = t [s];  thermal_drift_temp: x = temp_C - T_ref [degC].
+inline double ZeroOffsetSignalValue(const ModelConfig& cfg, ZeroOffsetSignal signal,
+                                    const SampleContext& ctx) {
+  switch (signal) {
+    case ZeroOffsetSignal::kTime_s: return ctx.t_s;
+    case ZeroOffsetSignal::kTempRise_C: return ctx.temp_C - cfg.temp_ref_C;
+    case ZeroOffsetSignal::kNone: break;
+  }
+  return 0.0;
+}
+
+// Zero offsets at this sample [mV]: W0_i + sum over the zero-offset effects of
+// theta_e,i x_e(sample), dispatched through the catalogue.
 template <typename T>
 Vec3<T> ZeroOffset_mV(const ModelConfig& cfg, const T* theta, const SampleContext& ctx) {
   Vec3<T> w0(theta[kW0x], theta[kW0y], theta[kW0z]);
-  const int o_t = cfg.layout.offset(Effect::kThermalDrift);
-  if (o_t >= 0) {
-    for (int i = 0; i < 3; ++i) w0[i] += theta[o_t + i] * T(ctx.t_s);
-  }
-  const int o_T = cfg.layout.offset(Effect::kThermalDriftTemp);
-  if (o_T >= 0) {
-    for (int i = 0; i < 3; ++i) w0[i] += theta[o_T + i] * T(ctx.temp_C - cfg.temp_ref_C);
+  for (const ParameterLayout::ZeroOffsetTerm& term : cfg.layout.zero_offset_terms()) {
+    const double x = ZeroOffsetSignalValue(cfg, term.signal, ctx);
+    for (int i = 0; i < 3; ++i) w0[i] += theta[term.offset + i] * T(x);
   }
   return w0;
 }

@@ -6,52 +6,141 @@
 
 namespace triadcal {
 
+// Each entry: stage, parameters {name, file unit, SI per unit, prior sigma,
+// plausible min, plausible max, typical}, the reason for the plausible range,
+// the data the effect needs, whether B1 has its analytic Jacobian, and the
+// zero-offset signal of drift effects. Prior sigmas are a size scale that the
+// data should beat; plausible ranges are physical limits (issue 12's loop
+// checks estimates against them).
 const std::vector<EffectSpec>& EffectCatalogue() {
-  static const std::vector<EffectSpec> catalogue = {
-      {Effect::kAngleLatency,
-       "angle_latency",
-       "recorded angles lag the bench by tau (both angle sensors)",
-       {{"tau", "ms", kMsToS}}},
-      {Effect::kEncoderHarmonic,
-       "encoder_harmonic",
-       "angle-sensor error periodic in the angle (first harmonic, both axes)",
-       {{"l1_sin", "arcmin", kArcminToRad},
-        {"l1_cos", "arcmin", kArcminToRad},
-        {"l2_sin", "arcmin", kArcminToRad},
-        {"l2_cos", "arcmin", kArcminToRad}}},
-      {Effect::kAxisNonintersection,
-       "axis_nonintersection",
-       "inner bench axis passes at a distance d (along z1) from the outer axis",
-       {{"d", "mm", kMmToM}}},
-      {Effect::kAxisNonperpendicularity,
-       "axis_nonperpendicularity",
-       "inner bench axis tilted by eps towards the outer axis (about z1)",
-       {{"eps", "arcmin", kArcminToRad}}},
-      {Effect::kSizeEffect,
-       "size_effect",
-       "y and z accelerometers sense at their own points R + r_y, R + r_z (frame 2)",
-       {{"ry_x", "mm", kMmToM},
-        {"ry_y", "mm", kMmToM},
-        {"ry_z", "mm", kMmToM},
-        {"rz_x", "mm", kMmToM},
-        {"rz_y", "mm", kMmToM},
-        {"rz_z", "mm", kMmToM}}},
-      {Effect::kThermalDrift,
-       "thermal_drift",
-       "zero offsets drift linearly in time: W0_i + rate_i * t",
-       {{"rate_x", "mV/min", 1.0 / 60.0},
-        {"rate_y", "mV/min", 1.0 / 60.0},
-        {"rate_z", "mV/min", 1.0 / 60.0}}},
-      {Effect::kThermalDriftTemp,
-       "thermal_drift_temp",
-       "zero offsets linear in temp_C: W0_i + coef_i * (temp_C - first temp_C)",
-       {{"coef_x", "mV/degC", 1.0}, {"coef_y", "mV/degC", 1.0}, {"coef_z", "mV/degC", 1.0}}},
-      {Effect::kScaleAsymmetry,
-       "scale_asymmetry",
-       "scale K_i + dK_i for positive input, K_i - dK_i for negative",
-       {{"dKx", "mV/g", 1.0}, {"dKy", "mV/g", 1.0}, {"dKz", "mV/g", 1.0}}},
-  };
+  constexpr double kPerMin = 1.0 / 60.0;
+  static const std::vector<EffectSpec> catalogue = [] {
+    std::vector<EffectSpec> c;
+    {
+      EffectSpec e{Effect::kAngleLatency,
+                   "angle_latency",
+                   "recorded angles lag the bench by tau (both angle sensors)",
+                   EffectStage::kAngle,
+                   {{"tau", "ms", kMsToS, 20.0, -100.0, 100.0, 2.0}}};
+      e.plausible_reason =
+          "the angle and acceleration channels of a bench recorder agree to a few samples; a "
+          "lag beyond 0.1 s is a broken time base, not a latency";
+      e.needs.rates_at_every_sample = true;
+      c.push_back(e);
+    }
+    {
+      EffectSpec e{Effect::kEncoderHarmonic,
+                   "encoder_harmonic",
+                   "angle-sensor error periodic in the angle (first harmonic, both axes)",
+                   EffectStage::kAngle,
+                   {{"l1_sin", "arcmin", kArcminToRad, 10.0, -60.0, 60.0, 1.0},
+                    {"l1_cos", "arcmin", kArcminToRad, 10.0, -60.0, 60.0, 1.0},
+                    {"l2_sin", "arcmin", kArcminToRad, 10.0, -60.0, 60.0, 1.0},
+                    {"l2_cos", "arcmin", kArcminToRad, 10.0, -60.0, 60.0, 1.0}}};
+      e.plausible_reason =
+          "encoder eccentricity on a calibration bench is arcseconds to a few arcmin; a degree "
+          "would show on the bench's own dial";
+      e.needs.rates_at_every_sample = true;
+      c.push_back(e);
+    }
+    {
+      EffectSpec e{Effect::kAxisNonintersection,
+                   "axis_nonintersection",
+                   "inner bench axis passes at a distance d (along z1) from the outer axis",
+                   EffectStage::kGeometry,
+                   {{"d", "mm", kMmToM, 10.0, -20.0, 20.0, 1.0}}};
+      e.plausible_reason =
+          "the axes of a two-axis bench meet to machining tolerance (below 1 mm); 20 mm is a "
+          "mis-assembled bench";
+      e.b1_analytic_jacobian = true;  // d moves O, not the triad's orientation: B2 only
+      c.push_back(e);
+    }
+    {
+      EffectSpec e{Effect::kAxisNonperpendicularity,
+                   "axis_nonperpendicularity",
+                   "inner bench axis tilted by eps towards the outer axis (about z1)",
+                   EffectStage::kGeometry,
+                   {{"eps", "arcmin", kArcminToRad, 30.0, -60.0, 60.0, 5.0}}};
+      e.plausible_reason =
+          "bench axes are perpendicular to machining tolerance (arcmin); a degree is a "
+          "mis-assembled bench";
+      c.push_back(e);
+    }
+    {
+      EffectSpec e{Effect::kSizeEffect,
+                   "size_effect",
+                   "y and z accelerometers sense at their own points R + r_y, R + r_z (frame 2)",
+                   EffectStage::kGeometry,
+                   {{"ry_x", "mm", kMmToM, 20.0, -50.0, 50.0, 3.0},
+                    {"ry_y", "mm", kMmToM, 20.0, -50.0, 50.0, 3.0},
+                    {"ry_z", "mm", kMmToM, 20.0, -50.0, 50.0, 3.0},
+                    {"rz_x", "mm", kMmToM, 20.0, -50.0, 50.0, 3.0},
+                    {"rz_y", "mm", kMmToM, 20.0, -50.0, 50.0, 3.0},
+                    {"rz_z", "mm", kMmToM, 20.0, -50.0, 50.0, 3.0}}};
+      e.plausible_reason = "the sensing points of a triad lie inside its housing, a few cm across";
+      e.needs.rates_at_every_sample = true;  // per-axis kinematics in block B1
+      c.push_back(e);
+    }
+    {
+      EffectSpec e{Effect::kThermalDrift,
+                   "thermal_drift",
+                   "zero offsets drift linearly in time: W0_i + rate_i * t",
+                   EffectStage::kSensor,
+                   {{"rate_x", "mV/min", kPerMin, 10.0, -30.0, 30.0, 0.5},
+                    {"rate_y", "mV/min", kPerMin, 10.0, -30.0, 30.0, 0.5},
+                    {"rate_z", "mV/min", kPerMin, 10.0, -30.0, 30.0, 0.5}}};
+      e.plausible_reason =
+          "MEMS zero offsets drift by mg per minute while warming (~0.2 mV/min at 175 mV/g); "
+          "30 mV/min crosses a +-2 g range in 20 min: a failing sensor";
+      e.b1_analytic_jacobian = true;
+      e.zero_offset_signal = ZeroOffsetSignal::kTime_s;
+      c.push_back(e);
+    }
+    {
+      EffectSpec e{Effect::kThermalDriftTemp,
+                   "thermal_drift_temp",
+                   "zero offsets linear in temp_C: W0_i + coef_i * (temp_C - first temp_C)",
+                   EffectStage::kSensor,
+                   {{"coef_x", "mV/degC", 1.0, 10.0, -30.0, 30.0, 0.5},
+                    {"coef_y", "mV/degC", 1.0, 10.0, -30.0, 30.0, 0.5},
+                    {"coef_z", "mV/degC", 1.0, 10.0, -30.0, 30.0, 0.5}}};
+      e.plausible_reason =
+          "MEMS offset temperature coefficients are ~1 mg/degC (~0.2 mV/degC at 175 mV/g); "
+          "30 mV/degC is a failing sensor";
+      e.needs.temp_C = true;
+      e.b1_analytic_jacobian = true;
+      e.zero_offset_signal = ZeroOffsetSignal::kTempRise_C;
+      c.push_back(e);
+    }
+    {
+      EffectSpec e{Effect::kScaleAsymmetry,
+                   "scale_asymmetry",
+                   "scale K_i + dK_i for positive input, K_i - dK_i for negative",
+                   EffectStage::kSensor,
+                   {{"dKx", "mV/g", 1.0, 0.05, -0.1, 0.1, 0.005},
+                    {"dKy", "mV/g", 1.0, 0.05, -0.1, 0.1, 0.005},
+                    {"dKz", "mV/g", 1.0, 0.05, -0.1, 0.1, 0.005}}};
+      e.scale_relative = true;
+      e.plausible_reason =
+          "the scale asymmetry of MEMS accelerometers is below 1 % of the scale; 10 % is a "
+          "damaged sensor";
+      c.push_back(e);
+    }
+    return c;
+  }();
   return catalogue;
+}
+
+const char* StageName(EffectStage stage) {
+  switch (stage) {
+    case EffectStage::kAngle:
+      return "angle";
+    case EffectStage::kGeometry:
+      return "geometry";
+    case EffectStage::kSensor:
+      return "sensor";
+  }
+  return "?";
 }
 
 const EffectSpec& GetEffectSpec(Effect id) { return EffectCatalogue()[static_cast<int>(id)]; }
@@ -63,6 +152,25 @@ Effect EffectFromName(const std::string& name) {
     known += (known.empty() ? "" : ", ") + e.name;
   }
   throw std::invalid_argument("unknown effect '" + name + "' (known: " + known + ")");
+}
+
+namespace {
+double Sized(const EffectSpec& e, double v, double nominal_scale_mV_per_g) {
+  return e.scale_relative ? v * nominal_scale_mV_per_g : v;
+}
+}  // namespace
+
+double DefaultPriorSigma(const EffectSpec& e, const ParamSpec& p, double nominal_scale_mV_per_g) {
+  return Sized(e, p.prior_sigma, nominal_scale_mV_per_g);
+}
+double PlausibleMin(const EffectSpec& e, const ParamSpec& p, double nominal_scale_mV_per_g) {
+  return Sized(e, p.plausible_min, nominal_scale_mV_per_g);
+}
+double PlausibleMax(const EffectSpec& e, const ParamSpec& p, double nominal_scale_mV_per_g) {
+  return Sized(e, p.plausible_max, nominal_scale_mV_per_g);
+}
+double TypicalValue(const EffectSpec& e, const ParamSpec& p, double nominal_scale_mV_per_g) {
+  return Sized(e, p.typical, nominal_scale_mV_per_g);
 }
 
 std::string UnitSuffixedKey(const ParamSpec& p) {

@@ -1,6 +1,16 @@
 // The effect catalogue (SPEC section 8): every effect that the base model of
 // SPEC sections 1-3 lacks, each with its own parameters and units.
 //
+// Every effect is declared once, in EffectCatalogue() (effects.cpp): its stage,
+// its parameters with their file units, default prior sigma, plausible range
+// (with the reason) and a typical size, the data it needs, and whether block B1
+// has its analytic Jacobian. The priors, the choice of rates at every sample,
+// the B1 Jacobian, the zero-offset sum, effect discovery and scenario checks all
+// read that description; bench_model.h holds the templated physics of each
+// effect. Adding an effect: an Effect id, one catalogue entry, its physics in
+// bench_model.h; effect_catalogue_test.cpp and effect_recovery_test.cpp then
+// test it (Jacobian against numeric, model <-> inverse, simulate -> fit).
+//
 // An effect is switched on by adding it to a ParameterLayout; its parameters are
 // then appended to the parameter vector theta and every model function in
 // bench_model.h takes them into account. The same definitions generate data in
@@ -48,19 +58,50 @@ enum class Effect {
 };
 constexpr int kNumEffects = 8;
 
+// Where in the measurement chain an effect acts (see the diagram above).
+enum class EffectStage { kAngle, kGeometry, kSensor };
+const char* StageName(EffectStage stage);
+
+// A sensor-stage effect that adds to the zero offsets as
+//   W0_i(sample) += theta_i * x(sample)
+// names its signal x here; bench_model.h (ZeroOffset_mV) and the analytic B1
+// Jacobian (b1_jacobian.cpp, column T_i x / K_i) dispatch on it.
+enum class ZeroOffsetSignal {
+  kNone,
+  kTime_s,      // x = t [s] from the start of the run
+  kTempRise_C,  // x = temp_C - temp_C of the first sample [degC]
+};
+
 // One scalar parameter as it appears in files: value_file * si_per_unit gives
-// the internal value.
+// the internal value. Sizes are in file units, or fractions of the run's
+// nominal scale factor (mV/g) when the effect is scale_relative.
 struct ParamSpec {
   std::string name;  // e.g. "tau"; full name in files is "effect.name"
   std::string unit;  // unit in files, e.g. "ms"
   double si_per_unit;
+  double prior_sigma = 0.0;    // default prior sigma (priors.h)
+  double plausible_min = 0.0;  // physically plausible range, see EffectSpec::plausible_reason
+  double plausible_max = 0.0;
+  double typical = 0.0;        // a typical size on a real bench (simulations, tests)
+};
+
+// What a run must carry for the effect to be simulated or estimated.
+struct EffectNeeds {
+  bool temp_C = false;                 // a temp_C column (a temperature section to simulate)
+  bool rates_at_every_sample = false;  // lambda', lambda'' at every sample, not only at epochs
 };
 
 struct EffectSpec {
   Effect id;
   std::string name;         // e.g. "angle_latency"
   std::string description;  // one line, for listings and reports
+  EffectStage stage;
   std::vector<ParamSpec> params;
+  bool scale_relative = false;   // prior_sigma, plausible range, typical x nominal scale
+  std::string plausible_reason;  // why values outside the plausible range are implausible
+  EffectNeeds needs;
+  bool b1_analytic_jacobian = false;  // AccelerationWithJacobian covers it (b1_jacobian.h)
+  ZeroOffsetSignal zero_offset_signal = ZeroOffsetSignal::kNone;
 };
 
 // The whole catalogue, in the order of the Effect enum.
@@ -68,6 +109,13 @@ const std::vector<EffectSpec>& EffectCatalogue();
 const EffectSpec& GetEffectSpec(Effect id);
 // Throws std::invalid_argument naming the effect and the known ones.
 Effect EffectFromName(const std::string& name);
+
+// Sizes of parameter p of effect e in file units, for a run whose nominal
+// scale factor is nominal_scale_mV_per_g (largest |K_i|).
+double DefaultPriorSigma(const EffectSpec& e, const ParamSpec& p, double nominal_scale_mV_per_g);
+double PlausibleMin(const EffectSpec& e, const ParamSpec& p, double nominal_scale_mV_per_g);
+double PlausibleMax(const EffectSpec& e, const ParamSpec& p, double nominal_scale_mV_per_g);
+double TypicalValue(const EffectSpec& e, const ParamSpec& p, double nominal_scale_mV_per_g);
 
 // The key under which a parameter may be written in a scenario or truth file:
 // the name with its unit appended ("tau" + "ms" -> "tau_ms",

@@ -12,4 +12,19 @@ class InputError : public std::runtime_error {
   explicit InputError(const std::string& what) : std::runtime_error(what) {}
 };
 
+// A bad setting found below the command layer. Solvers name the setting by
+// the field of their options struct ("static_positions"), never by a
+// command-line flag; the command that read it from a flag rethrows it naming
+// the flag (tools/command_util.h WithFlags): "--static-positions: expected ...".
+class OptionError : public InputError {
+ public:
+  OptionError(const std::string& option, const std::string& problem)
+      : InputError(option + ": " + problem), option_(option), problem_(problem) {}
+  const std::string& option() const { return option_; }
+  const std::string& problem() const { return problem_; }
+
+ private:
+  std::string option_, problem_;
+};
+
 }  // namespace triadcal

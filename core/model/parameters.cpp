@@ -35,6 +35,10 @@ ParameterLayout::ParameterLayout(const std::vector<Effect>& effects) {
     effects_.push_back(e);
     offset_[static_cast<int>(e)] = static_cast<int>(info_.size());
     const EffectSpec& spec = GetEffectSpec(e);
+    has_stage_[static_cast<int>(spec.stage)] = true;
+    if (spec.zero_offset_signal != ZeroOffsetSignal::kNone) {
+      zero_offset_terms_.push_back({offset_[static_cast<int>(e)], spec.zero_offset_signal});
+    }
     for (const ParamSpec& p : spec.params) {
       info_.push_back({spec.name + "." + p.name, p.unit, p.si_per_unit, e});
     }

@@ -58,10 +58,23 @@ class ParameterLayout {
   // Index of a parameter by its file name, or -1.
   int IndexOf(const std::string& name) const;
 
+  // True when some effect of this stage is on (bench_model.h skips a stage
+  // without effects).
+  bool has_stage(EffectStage s) const { return has_stage_[static_cast<int>(s)]; }
+  // The zero-offset terms (EffectSpec::zero_offset_signal) of the effects on:
+  // theta[offset + i] multiplies the signal in W0_i, i = 0..2.
+  struct ZeroOffsetTerm {
+    int offset;
+    ZeroOffsetSignal signal;
+  };
+  const std::vector<ZeroOffsetTerm>& zero_offset_terms() const { return zero_offset_terms_; }
+
  private:
   std::vector<Effect> effects_;
   std::vector<ParameterInfo> info_;
   int offset_[kNumEffects];
+  bool has_stage_[3] = {false, false, false};
+  std::vector<ZeroOffsetTerm> zero_offset_terms_;
   std::map<std::string, int> index_;
 };
 

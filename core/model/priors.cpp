@@ -25,16 +25,8 @@ Prior MakePrior(const RunDescription& run, const ParameterLayout& layout) {
     } else if (i <= kDz2) {
       s = 50.0;
     } else {
-      switch (*info.effect) {
-        case Effect::kAngleLatency: s = 20.0; break;
-        case Effect::kEncoderHarmonic: s = 10.0; break;
-        case Effect::kAxisNonintersection: s = 10.0; break;
-        case Effect::kAxisNonperpendicularity: s = 30.0; break;
-        case Effect::kSizeEffect: s = 20.0; break;
-        case Effect::kThermalDrift: s = 10.0; break;
-        case Effect::kThermalDriftTemp: s = 10.0; break;
-        case Effect::kScaleAsymmetry: s = 0.05 * k_nom; break;
-      }
+      const EffectSpec& e = GetEffectSpec(*info.effect);
+      s = DefaultPriorSigma(e, e.params[i - layout.offset(e.id)], k_nom);
     }
     p.sigma[i] = s * info.si_per_unit;
   }

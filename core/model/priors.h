@@ -10,10 +10,12 @@
 //   K_ij              0.02                                1/g
 //   dpsi dtheta_c dlambda2   180 (3 deg)                  arcmin
 //   dx2 dy2 dz2       50                                  mm
-//   effects: angle_latency.tau 20 ms; encoder_harmonic 10 arcmin;
-//   axis_nonintersection.d 10 mm; axis_nonperpendicularity.eps 30 arcmin;
-//   size_effect 20 mm; thermal_drift 10 mV/min; thermal_drift_temp 10 mV/degC;
-//   scale_asymmetry 5 % of the nominal scale.
+//   effects           ParamSpec::prior_sigma of the catalogue (effects.cpp):
+//                     angle_latency.tau 20 ms, encoder_harmonic 10 arcmin,
+//                     axis_nonintersection.d 10 mm, axis_nonperpendicularity.eps
+//                     30 arcmin, size_effect 20 mm, thermal_drift 10 mV/min,
+//                     thermal_drift_temp 10 mV/degC, scale_asymmetry 5 % of the
+//                     nominal scale (largest |K_i|).
 #pragma once
 
 #include <Eigen/Core>

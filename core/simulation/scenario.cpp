@@ -259,10 +259,12 @@ Scenario LoadScenario(const std::string& yaml_path) {
   if (!temp.IsNull() && temp["rate_C_per_h"]) {
     s.temp_rate_C_per_h = ReadNumber(temp["rate_C_per_h"], temp_at.Child("rate_C_per_h"));
   }
-  if (s.truth_layout.has(Effect::kThermalDriftTemp) && !has_temperature) {
-    top.Child("effects")
-        .Child("thermal_drift_temp")
-        .Fail("needs a section temperature: {start_C, rate_C_per_h} (the drift follows temp_C)");
+  for (Effect e : s.truth_layout.effects()) {
+    if (GetEffectSpec(e).needs.temp_C && !has_temperature) {
+      top.Child("effects")
+          .Child(GetEffectSpec(e).name)
+          .Fail("needs a section temperature: {start_C, rate_C_per_h} (the drift follows temp_C)");
+    }
   }
 
   const YAML::Node output = section("output");

@@ -98,7 +98,7 @@ DesignPoint EvaluateProfile(const Scenario& s, const HarmonicProfile& profile,
 
 std::vector<std::array<double, 2>> StaticPositions(int count) {
   if (count != 6 && count != 12 && count != 18) {
-    throw InputError("--static-positions: expected 6, 12 or 18, got " + std::to_string(count));
+    throw OptionError("static_positions", "expected 6, 12 or 18, got " + std::to_string(count));
   }
   // Gravity directions u in the platform frame; at rest W = (cos l1,
   // sin l1 sin l2, sin l1 cos l2), so l1 = acos(u_x), l2 = atan2(u_y, u_z).
@@ -194,8 +194,8 @@ std::vector<int> TargetIndices(const ParameterLayout& layout, const std::string&
   }
   std::string groups;
   for (const ParameterGroup& g : ParameterGroups()) groups += (groups.empty() ? "" : ", ") + g.name;
-  throw InputError("--target: unknown parameter or group '" + key + "' (a parameter name or " +
-                   groups + ")");
+  throw OptionError("targets", "unknown parameter or group '" + key + "' (a parameter name or " +
+                                 groups + ")");
 }
 
 TargetResult DurationForTarget(const Scenario& s, const ParameterLayout& layout,

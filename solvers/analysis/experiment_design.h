@@ -79,7 +79,7 @@ DesignPoint EvaluateProfile(const Scenario& s, const HarmonicProfile& profile,
 // each triad axis up and down; 18: those and the 12 orientations with gravity
 // at 45 deg between two axes (all sign combinations); 12: the 6 and the 6 of
 // those 12 with gravity in the first quadrant of each axis pair and its
-// opposite. Throws InputError for another count.
+// opposite. Throws OptionError("static_positions", ...) for another count.
 std::vector<std::array<double, 2>> StaticPositions(int count);
 
 // Fisher information of a static test (see above), SI.
@@ -102,7 +102,7 @@ struct ParameterGroup {
 const std::vector<ParameterGroup>& ParameterGroups();
 
 // Indices named by a target key: a parameter name or a group name.
-// Throws InputError naming the key when it is neither.
+// Throws OptionError("targets", ...) naming the key when it is neither.
 std::vector<int> TargetIndices(const ParameterLayout& layout, const std::string& key);
 
 // The shortest duration of the scenario's profile for which the worst sigma of

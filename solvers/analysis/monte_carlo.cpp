@@ -13,16 +13,16 @@ namespace triadcal {
 
 MonteCarloResult RunMonteCarlo(const Scenario& s, const MonteCarloOptions& opt) {
   const auto t0 = std::chrono::steady_clock::now();
-  if (opt.runs < 1) throw InputError("-n: at least 1 run, got " + std::to_string(opt.runs));
+  if (opt.runs < 1) throw OptionError("runs", "at least 1 run, got " + std::to_string(opt.runs));
   bool want_filter = false;
   for (const std::string& e : opt.estimators) {
     if (e == "ekf" || e == "rts") {
       want_filter = true;
     } else if (e != "batch") {
-      throw InputError("--estimators: unknown estimator '" + e + "' (ekf, rts, batch)");
+      throw OptionError("estimators", "unknown estimator '" + e + "' (ekf, rts, batch)");
     }
   }
-  if (opt.estimators.empty()) throw InputError("--estimators: none given (ekf, rts, batch)");
+  if (opt.estimators.empty()) throw OptionError("estimators", "none given (ekf, rts, batch)");
   const ParameterLayout& layout = opt.layout;
   const int n = layout.size();
   const std::size_t E = opt.estimators.size();

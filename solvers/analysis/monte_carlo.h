@@ -81,7 +81,8 @@ struct MonteCarloResult {
   double seconds = 0.0, crb_seconds = 0.0;
 };
 
-// Throws InputError for an unknown estimator name or runs < 1.
+// Throws OptionError("estimators" or "runs", ...) for an unknown estimator
+// name or runs < 1.
 MonteCarloResult RunMonteCarlo(const Scenario& s, const MonteCarloOptions& opt);
 
 }  // namespace triadcal

@@ -46,6 +46,14 @@ Eigen::VectorXd Embed(const ParameterLayout& a, const Eigen::VectorXd& theta,
   return out;
 }
 
+// The name of the catalogue effect with this zero-offset signal, or "".
+std::string SameZeroOffsetSignal(ZeroOffsetSignal signal) {
+  for (const EffectSpec& e : EffectCatalogue()) {
+    if (e.zero_offset_signal == signal) return e.name;
+  }
+  return "";
+}
+
 std::vector<Effect> WithEffect(std::vector<Effect> v, Effect e) {
   v.push_back(e);
   return v;
@@ -61,17 +69,21 @@ DiagnosisResult Diagnose(const RunDescription& run, const RunData& data,
   DiagnosisResult res;
   std::vector<Effect> candidates = opt.candidates;
   if (candidates.empty()) {
-    // With temp_C recorded and (nearly) linear in time, a drift in time and a
-    // drift in temperature are the same function of the samples: test the
+    // Effects need the data their catalogue entry names (temp_C). With temp_C
+    // recorded and (nearly) linear in time, a zero-offset drift in time and
+    // one in temperature are the same function of the samples: test the
     // temperature form only (SPEC section 8 lists them as one effect).
     const bool temp_linear_in_time =
         data.has_temp() && std::abs(Correlation(data.t_s, data.temp_C)) > 0.99;
     for (const EffectSpec& e : EffectCatalogue()) {
-      if (e.id == Effect::kThermalDriftTemp && !data.has_temp()) continue;
-      if (e.id == Effect::kThermalDrift && temp_linear_in_time) {
-        res.notes.push_back("thermal_drift not tested apart from thermal_drift_temp: temp_C is "
-                            "linear in time in this run, so the two are the same");
-        continue;
+      if (e.needs.temp_C && !data.has_temp()) continue;
+      if (e.zero_offset_signal == ZeroOffsetSignal::kTime_s && temp_linear_in_time) {
+        const std::string same = SameZeroOffsetSignal(ZeroOffsetSignal::kTempRise_C);
+        if (!same.empty()) {
+          res.notes.push_back(e.name + " not tested apart from " + same +
+                              ": temp_C is linear in time in this run, so the two are the same");
+          continue;
+        }
       }
       candidates.push_back(e.id);
     }

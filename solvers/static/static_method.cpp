@@ -220,8 +220,8 @@ std::vector<HeldParameter> HeldFor(StaticReference ref, const std::vector<std::s
     }
     const int i = layout.IndexOf(name);
     if (i < 0 || i >= kN) {
-      throw InputError("--fix: unknown parameter '" + name +
-                       "' (names of SPEC section 3, or K_ij for all nine)");
+      throw OptionError("fixed", "unknown parameter '" + name +
+                                     "' (names of SPEC section 3, or K_ij for all nine)");
     }
     held[name] = "held at nominal by --fix";
   }
@@ -346,35 +346,29 @@ StaticReference ChooseReference(const RunDescription& run, const RunData& data,
   }
   if (requested == "angles") {
     if (!angles) {
-      throw InputError("--reference angles: " + run.yaml_path +
+      throw InputError(run.yaml_path +
                        ": columns.lambda1/lambda2 are constants: no bench angles in this run");
     }
     return StaticReference::kAngles;
   }
   if (requested == "labels") {
     if (!labels) {
-      throw InputError("--reference labels: " + run.yaml_path +
-                       ": no label column (columns.label) in this run");
+      throw InputError(run.yaml_path + ": no label column (columns.label) in this run");
     }
     return StaticReference::kLabels;
   }
   if (requested == "none") return StaticReference::kNone;
-  throw InputError("--reference: expected auto, angles, labels or none, got '" + requested + "'");
+  throw OptionError("reference",
+                    "expected auto, angles, labels or none, got '" + requested + "'");
 }
 
-StaticResult SolveStatic(const RunDescription& run, const RunData& data,
-                         StaticReference reference, const StaticOptions& options) {
-  StaticResult r;
-  r.reference = reference;
-  r.layout = ParameterLayout();
-  const ParameterLayout& layout = r.layout;
-  r.held = HeldFor(reference, options.fixed, layout);
-  ModelConfig cfg = MakeModelConfig(run, layout);
-  if (data.has_temp()) cfg.temp_ref_C = data.temp_C.front();
+namespace {
 
-  // Still intervals and positions.
+// Step 1: the still intervals of the run and the positions they average to.
+void FindPositions(const RunDescription& run, const RunData& data, const StaticOptions& options,
+                   StaticResult* r) {
   std::set<std::string> position_labels;
-  if (reference == StaticReference::kLabels) {
+  if (r->reference == StaticReference::kLabels) {
     std::set<std::string> in_data(data.label.begin(), data.label.end());
     for (const auto& [label, up] : PositionsOf(run)) {
       if (in_data.count(label)) position_labels.insert(label);
@@ -390,65 +384,78 @@ StaticResult SolveStatic(const RunDescription& run, const RunData& data,
                        JoinSet(in_data) + ")");
     }
   }
-  const StillTest test = reference == StaticReference::kAngles ? StillTest::kAngleRates
-                                                               : StillTest::kReadingVariance;
-  r.still = FindStillIntervals(data, test, run.noise_mV, run.angle_noise_rad, position_labels,
-                               options.still);
-  r.positions = MakePositions(run, data, reference, r.still);
-  if (r.positions.empty()) {
+  const StillTest test = r->reference == StaticReference::kAngles ? StillTest::kAngleRates
+                                                                  : StillTest::kReadingVariance;
+  r->still = FindStillIntervals(data, test, run.noise_mV, run.angle_noise_rad, position_labels,
+                                options.still);
+  r->positions = MakePositions(run, data, r->reference, r->still);
+  if (r->positions.empty()) {
     throw InputError(run.data_path + ": no still interval of at least " +
                      Short(options.still.min_still_s) + " s found (" +
                      (test == StillTest::kAngleRates
-                          ? "angle rates below " + Short(r.still.threshold) +
-                                " deg/s; check --still-rate-deg-s"
-                          : "reading std below " + Short(r.still.threshold) +
-                                " mV; check triad.noise_mV or --noise-factor") +
+                          ? "angle rates below " + Short(r->still.threshold) +
+                                " deg/s; check the still-rate threshold"
+                          : "reading std below " + Short(r->still.threshold) +
+                                " mV; check triad.noise_mV or the noise factor") +
                      ")");
   }
+}
 
-  // The problem: theta, one residual block per position, constraints, priors.
-  r.prior = MakePrior(run, layout);
-  Eigen::VectorXd theta = NominalTheta(run, layout);
-  std::vector<int> held_idx;
-  for (const HeldParameter& h : r.held) held_idx.push_back(layout.IndexOf(h.name));
-  auto is_held = [&](int i) {
-    return std::find(held_idx.begin(), held_idx.end(), i) != held_idx.end();
-  };
-
-  ceres::Problem::Options popt;
-  ceres::Problem problem(popt);
+// The Ceres problem over theta and its residual blocks: data first (one per
+// position), then the constraints and the prior.
+struct StaticProblem {
+  ceres::Problem problem;
+  Eigen::VectorXd theta;  // SI, starts at the nominal values
+  std::vector<int> held_idx, free_idx;
   std::vector<ceres::ResidualBlockId> data_blocks, other_blocks;
+  bool held(int i) const {
+    return std::find(held_idx.begin(), held_idx.end(), i) != held_idx.end();
+  }
+};
+
+// sigma of |W| of a gravity-norm pose from the reading noise, at the nominal
+// scale and bias: the noise of each reading projected on the direction of W.
+double NormSigma(const Eigen::VectorXd& theta_nominal, const StaticPosition& p, double noise_mV) {
+  Eigen::Vector3d u = p.mean_mV - theta_nominal.segment<3>(kW0x);
+  for (int i = 0; i < 3; ++i) u[i] /= theta_nominal[kKx + i];
+  const double un = u.norm() > 0 ? u.norm() : 1.0;
+  double var = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    const double g = u[i] / un * noise_mV / theta_nominal[kKx + i];
+    var += g * g;
+  }
+  return std::sqrt(var) / std::sqrt(static_cast<double>(p.samples));
+}
+
+// Step 2a: one residual block per position, of the reference's kind.
+void AddPositionResiduals(const ModelConfig& cfg, const RunDescription& run, const RunData& data,
+                          const StaticOptions& options, StaticProblem* sp, StaticResult* r) {
   const double noise = run.noise_mV;
-  for (const StaticPosition& p : r.positions) {
-    const double sqrt_n = std::sqrt(static_cast<double>(p.samples));
+  for (const StaticPosition& p : r->positions) {
     const SampleContext ctx = ContextOf(data, p);
     ceres::CostFunction* cost = nullptr;
-    if (reference == StaticReference::kAngles) {
-      cost = AnglePositionCost::Create(&cfg, p.lambda_rad, p.mean_mV,
-                                       PositionSqrtInfo(cfg, theta, p, reference, noise, options),
-                                       ctx);
-      r.data_residuals += 3;
-    } else if (reference == StaticReference::kLabels) {
-      cost = LabelPositionCost::Create(&cfg, p.up, p.mean_mV,
-                                       PositionSqrtInfo(cfg, theta, p, reference, noise, options),
-                                       ctx);
-      r.data_residuals += 3;
+    if (r->reference == StaticReference::kAngles) {
+      cost = AnglePositionCost::Create(
+          &cfg, p.lambda_rad, p.mean_mV,
+          PositionSqrtInfo(cfg, sp->theta, p, r->reference, noise, options), ctx);
+      r->data_residuals += 3;
+    } else if (r->reference == StaticReference::kLabels) {
+      cost = LabelPositionCost::Create(
+          &cfg, p.up, p.mean_mV, PositionSqrtInfo(cfg, sp->theta, p, r->reference, noise, options),
+          ctx);
+      r->data_residuals += 3;
     } else {
-      // sigma of |W| from the reading noise, at the nominal scale and bias.
-      Eigen::Vector3d u = p.mean_mV - theta.segment<3>(kW0x);
-      for (int i = 0; i < 3; ++i) u[i] /= theta[kKx + i];
-      const double un = u.norm() > 0 ? u.norm() : 1.0;
-      double var = 0.0;
-      for (int i = 0; i < 3; ++i) {
-        const double g = u[i] / un * noise / theta[kKx + i];
-        var += g * g;
-      }
-      const double sigma = std::sqrt(var) / sqrt_n;
-      cost = NormPoseCost::Create(&cfg, p.mean_mV, 1.0 / sigma, ctx);
-      r.data_residuals += 1;
+      cost = NormPoseCost::Create(&cfg, p.mean_mV, 1.0 / NormSigma(sp->theta, p, noise), ctx);
+      r->data_residuals += 1;
     }
-    data_blocks.push_back(problem.AddResidualBlock(cost, nullptr, theta.data()));
+    sp->data_blocks.push_back(sp->problem.AddResidualBlock(cost, nullptr, sp->theta.data()));
   }
+}
+
+// Step 2b: the constraints of run.yaml that touch a free parameter, the weak
+// priors, and the held parameters fixed by a SubsetManifold.
+void AddPriorAndConstraints(const RunDescription& run, StaticProblem* sp, StaticResult* r) {
+  const ParameterLayout& layout = r->layout;
   for (const Constraint& k : run.constraints) {
     Eigen::VectorXd c = Eigen::VectorXd::Zero(kN);
     bool any_free = false;
@@ -459,22 +466,25 @@ StaticResult SolveStatic(const RunDescription& run, const RunData& data,
                          "', which the static method does not estimate");
       }
       c[i] += coef;
-      any_free = any_free || !is_held(i);
+      any_free = any_free || !sp->held(i);
     }
     if (!any_free) {
-      r.constraints_ignored.push_back(k.expr);
+      r->constraints_ignored.push_back(k.expr);
       continue;
     }
-    r.constraints_used.push_back(k.expr);
-    other_blocks.push_back(
-        problem.AddResidualBlock(new ConstraintCost(c, k.value_si, k.sigma_si), nullptr,
-                                 theta.data()));
+    r->constraints_used.push_back(k.expr);
+    sp->other_blocks.push_back(sp->problem.AddResidualBlock(
+        new ConstraintCost(c, k.value_si, k.sigma_si), nullptr, sp->theta.data()));
   }
-  other_blocks.push_back(problem.AddResidualBlock(new PriorCost(r.prior), nullptr, theta.data()));
-  if (!held_idx.empty()) {
-    problem.SetManifold(theta.data(), new ceres::SubsetManifold(kN, held_idx));
+  sp->other_blocks.push_back(
+      sp->problem.AddResidualBlock(new PriorCost(r->prior), nullptr, sp->theta.data()));
+  if (!sp->held_idx.empty()) {
+    sp->problem.SetManifold(sp->theta.data(), new ceres::SubsetManifold(kN, sp->held_idx));
   }
+}
 
+// Step 3: Levenberg-Marquardt to tight tolerances (27 parameters, dense).
+void Solve(const StaticOptions& options, StaticProblem* sp, StaticResult* r) {
   ceres::Solver::Options sopt;
   sopt.linear_solver_type = ceres::DENSE_QR;
   sopt.max_num_iterations = options.max_iterations;
@@ -483,24 +493,24 @@ StaticResult SolveStatic(const RunDescription& run, const RunData& data,
   sopt.parameter_tolerance = 1e-14;
   sopt.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
-  ceres::Solve(sopt, &problem, &summary);
-  r.converged = summary.termination_type == ceres::CONVERGENCE;
-  r.iterations = static_cast<int>(summary.iterations.size()) - 1;
-  r.theta = theta;
+  ceres::Solve(sopt, &sp->problem, &summary);
+  r->converged = summary.termination_type == ceres::CONVERGENCE;
+  r->iterations = static_cast<int>(summary.iterations.size()) - 1;
+  r->theta = sp->theta;
+}
 
-  // Covariance from the whitened Jacobian (tangent columns = free parameters
-  // in increasing index order, SubsetManifold).
-  std::vector<int> free_idx;
-  for (int i = 0; i < kN; ++i) {
-    if (!is_held(i)) free_idx.push_back(i);
-  }
+// Step 4: covariance from the whitened Jacobian at the solution (tangent
+// columns = free parameters in increasing index order, SubsetManifold), by a
+// pseudo-inverse; chi2, its degrees of freedom (data residuals minus the
+// effective number of parameters) and the sigma scale.
+void EstimateCovariance(StaticProblem* sp, StaticResult* r) {
   ceres::Problem::EvaluateOptions eopt;
-  eopt.residual_blocks = data_blocks;
-  eopt.residual_blocks.insert(eopt.residual_blocks.end(), other_blocks.begin(),
-                              other_blocks.end());
+  eopt.residual_blocks = sp->data_blocks;
+  eopt.residual_blocks.insert(eopt.residual_blocks.end(), sp->other_blocks.begin(),
+                              sp->other_blocks.end());
   std::vector<double> residuals;
   ceres::CRSMatrix crs;
-  problem.Evaluate(eopt, nullptr, &residuals, nullptr, &crs);
+  sp->problem.Evaluate(eopt, nullptr, &residuals, nullptr, &crs);
   Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
   for (int row = 0; row < crs.num_rows; ++row) {
     for (int k = crs.rows[row]; k < crs.rows[row + 1]; ++k) J(row, crs.cols[k]) = crs.values[k];
@@ -512,40 +522,45 @@ StaticResult SolveStatic(const RunDescription& run, const RunData& data,
     if (s[i] > 1e-12 * s[0]) s_inv2[i] = 1.0 / (s[i] * s[i]);
   }
   const Eigen::MatrixXd cov_free = svd.matrixV() * s_inv2.asDiagonal() * svd.matrixV().transpose();
-  r.cov_declared = Eigen::MatrixXd::Zero(kN, kN);
+  const std::vector<int>& free_idx = sp->free_idx;
+  r->cov_declared = Eigen::MatrixXd::Zero(kN, kN);
   for (std::size_t a = 0; a < free_idx.size(); ++a) {
     for (std::size_t b = 0; b < free_idx.size(); ++b) {
-      r.cov_declared(free_idx[a], free_idx[b]) = cov_free(a, b);
+      r->cov_declared(free_idx[a], free_idx[b]) = cov_free(a, b);
     }
   }
-  const Eigen::MatrixXd Jd = J.topRows(r.data_residuals);
-  r.effective_parameters = (Jd * cov_free * Jd.transpose()).trace();
-  for (int i = 0; i < r.data_residuals; ++i) r.chi2 += residuals[i] * residuals[i];
-  r.dof = r.data_residuals - r.effective_parameters;
-  if (r.dof >= 0.5) {
-    r.chi2_per_dof = r.chi2 / r.dof;
-    r.sigma_scale = std::max(1.0, std::sqrt(r.chi2_per_dof));
-    r.sigma_source = r.chi2_per_dof > 1.0 ? "residual scatter" : "declared noise";
+  const Eigen::MatrixXd Jd = J.topRows(r->data_residuals);
+  r->effective_parameters = (Jd * cov_free * Jd.transpose()).trace();
+  for (int i = 0; i < r->data_residuals; ++i) r->chi2 += residuals[i] * residuals[i];
+  r->dof = r->data_residuals - r->effective_parameters;
+  if (r->dof >= 0.5) {
+    r->chi2_per_dof = r->chi2 / r->dof;
+    r->sigma_scale = std::max(1.0, std::sqrt(r->chi2_per_dof));
+    r->sigma_source = r->chi2_per_dof > 1.0 ? "residual scatter" : "declared noise";
   } else {
-    r.sigma_source = "declared noise (no degrees of freedom left to measure the scatter)";
+    r->sigma_source = "declared noise (no degrees of freedom left to measure the scatter)";
   }
-  r.cov = r.cov_declared * (r.sigma_scale * r.sigma_scale);
-  r.weak = FindWeakDirections(layout, r.cov_declared, r.prior.sigma);
-  r.not_separable = ParametersIn(r.weak);
+  r->cov = r->cov_declared * (r->sigma_scale * r->sigma_scale);
+  r->weak = FindWeakDirections(r->layout, r->cov_declared, r->prior.sigma);
+  r->not_separable = ParametersIn(r->weak);
+}
 
-  // Residuals per position.
+// Step 5: the residual of every position at the solution, in mV and mg (the
+// norm residual for the gravity-norm fit), and their RMS.
+void PositionResiduals(const ModelConfig& cfg, const RunData& data, StaticResult* r) {
+  const Eigen::VectorXd& theta = r->theta;
   double sum2 = 0.0;
   int count = 0;
-  for (StaticPosition& p : r.positions) {
+  for (StaticPosition& p : r->positions) {
     const SampleContext ctx = ContextOf(data, p);
     p.W_g = SpecificForceFromReadings_g(cfg, theta.data(), Eigen::Vector3d(p.mean_mV), ctx);
     p.norm_residual_mg = (p.W_g.norm() - 1.0) * 1000.0;
-    if (reference == StaticReference::kNone) {
+    if (r->reference == StaticReference::kNone) {
       sum2 += p.norm_residual_mg * p.norm_residual_mg;
       ++count;
       continue;
     }
-    if (reference == StaticReference::kAngles) {
+    if (r->reference == StaticReference::kAngles) {
       BenchAngles<double> bench;
       bench.axis[0].angle = p.lambda_rad[0];
       bench.axis[1].angle = p.lambda_rad[1];
@@ -560,7 +575,35 @@ StaticResult SolveStatic(const RunDescription& run, const RunData& data,
       ++count;
     }
   }
-  r.residual_rms_mg = std::sqrt(sum2 / std::max(1, count));
+  r->residual_rms_mg = std::sqrt(sum2 / std::max(1, count));
+}
+
+}  // namespace
+
+StaticResult SolveStatic(const RunDescription& run, const RunData& data,
+                         StaticReference reference, const StaticOptions& options) {
+  StaticResult r;
+  r.reference = reference;
+  r.layout = ParameterLayout();
+  r.held = HeldFor(reference, options.fixed, r.layout);
+  ModelConfig cfg = MakeModelConfig(run, r.layout);
+  if (data.has_temp()) cfg.temp_ref_C = data.temp_C.front();
+
+  FindPositions(run, data, options, &r);
+
+  r.prior = MakePrior(run, r.layout);
+  StaticProblem sp;
+  sp.theta = NominalTheta(run, r.layout);
+  for (const HeldParameter& h : r.held) sp.held_idx.push_back(r.layout.IndexOf(h.name));
+  for (int i = 0; i < kN; ++i) {
+    if (!sp.held(i)) sp.free_idx.push_back(i);
+  }
+  AddPositionResiduals(cfg, run, data, options, &sp, &r);
+  AddPriorAndConstraints(run, &sp, &r);
+
+  Solve(options, &sp, &r);
+  EstimateCovariance(&sp, &r);
+  PositionResiduals(cfg, data, &r);
   return r;
 }
 

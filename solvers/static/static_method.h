@@ -66,7 +66,8 @@ const char* ReferenceName(StaticReference r);  // "angles", "labels", "none"
 
 // "auto" picks angles when the bench angles are recorded (not constant
 // channels), else labels when the run has a label column, else none. Throws
-// InputError when the requested reference is not in the run.
+// InputError "RUN.yaml: what is missing" when the requested reference is not
+// in the run, OptionError("reference", ...) for an unknown name.
 StaticReference ChooseReference(const RunDescription& run, const RunData& data,
                                 const std::string& requested);
 
@@ -127,7 +128,12 @@ struct StaticResult {
   double residual_rms_mg = 0.0;       // RMS over positions of residual_mg (or norm residual)
 };
 
-// Throws InputError when no position is found or an option is out of range.
+// The steps: held parameters for the reference; still intervals averaged into
+// positions; one Ceres problem (a residual block per position, constraints,
+// priors; held parameters fixed by a SubsetManifold); solve; covariance and
+// chi2 from the Jacobian at the solution; residual of every position.
+// Throws InputError when no position is found, OptionError (naming the
+// StaticOptions / StillOptions field) when an option is out of range.
 StaticResult SolveStatic(const RunDescription& run, const RunData& data,
                          StaticReference reference, const StaticOptions& options);
 

@@ -308,7 +308,7 @@ TEST(StaticStill, ReadingVarianceFindsEachHold) {
   EXPECT_EQ(none.dropped_short, holds.size());
   opt.min_still_s = -1.0;
   EXPECT_EQ(ErrorOf([&] { FindStillIntervals(d, StillTest::kReadingVariance, 2, 0, {}, opt); }),
-            "--min-still-s: must be > 0");
+            "min_still_s: must be > 0");
 }
 
 TEST(StaticStill, LabelsSplitAndSelect) {
@@ -826,7 +826,7 @@ TEST(StaticCommand, WritesOutAndRejectsBadInput) {
   EXPECT_EQ(error_of("static " + quiet),
             "triadcal: error: " + dir.Path("s.csv") +
                 ": no still interval of at least 1 s found (reading std below 1 mV; "
-                "check triad.noise_mV or --noise-factor)\n");
+                "check triad.noise_mV or the noise factor)\n");
   const std::string other = dir.Write(
       "other.yaml",
       "data: s.csv\ndata_format: {sort_by_time: true}\n"

@@ -20,17 +20,18 @@ double MedianInterval_s(const std::vector<double>& t) {
   return dt[dt.size() / 2];
 }
 
+// Bad settings name the StillOptions field (OptionError); the command adds its flag.
 void CheckOptions(const StillOptions& o) {
-  auto require = [](bool ok, const char* what) {
-    if (!ok) throw InputError(what);
+  auto require = [](bool ok, const char* option, const char* problem) {
+    if (!ok) throw OptionError(option, problem);
   };
-  require(o.min_still_s > 0.0, "--min-still-s: must be > 0");
-  require(o.edge_s >= 0.0, "--edge-s: must be >= 0");
-  require(o.merge_gap_s >= 0.0, "--merge-gap-s: must be >= 0");
-  require(o.window_s > 0.0, "--window-s: must be > 0");
-  require(o.noise_factor > 0.0, "--noise-factor: must be > 0");
-  require(o.rate_threshold_deg_s >= 0.0, "--still-rate-deg-s: must be >= 0 (0: automatic)");
-  require(o.rate_half_window_s > 0.0, "--rate-window-s: must be > 0");
+  require(o.min_still_s > 0.0, "min_still_s", "must be > 0");
+  require(o.edge_s >= 0.0, "edge_s", "must be >= 0");
+  require(o.merge_gap_s >= 0.0, "merge_gap_s", "must be >= 0");
+  require(o.window_s > 0.0, "window_s", "must be > 0");
+  require(o.noise_factor > 0.0, "noise_factor", "must be > 0");
+  require(o.rate_threshold_deg_s >= 0.0, "rate_threshold_deg_s", "must be >= 0 (0: automatic)");
+  require(o.rate_half_window_s > 0.0, "rate_half_window_s", "must be > 0");
 }
 
 // Moving standard deviation over the centred window of w samples (shorter at

@@ -62,7 +62,8 @@ struct StillResult {
 
 // position_labels: the labels that are positions (others are never still);
 // empty: labels are not used. angle_noise_rad sets the default rate
-// threshold. Throws InputError for options out of range.
+// threshold. Throws OptionError naming the StillOptions field for options
+// out of range.
 StillResult FindStillIntervals(const RunData& data, StillTest test, double noise_mV,
                                double angle_noise_rad, const std::set<std::string>& position_labels,
                                const StillOptions& options);

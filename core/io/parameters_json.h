@@ -1,0 +1,45 @@
+// The one reader of the "parameters" object of triadcal's JSON files (SPEC
+// section 7): the OUT of fit/static ("parameters"), filter ("rts.parameters"),
+// compare ("batch.parameters"), and truth.json ("parameters" with plain
+// numbers). Used by `apply` (LoadCalibration), `diagnose --truth` and
+// `observability --at`.
+//
+// An entry is {"value": v, "unit": u, ...} with u the unit of SPEC section 3
+// (checked when given), or a plain number in that unit. Effect parameters are
+// keyed "effect.name" or, as truth.json writes them, "effect.name_unit"
+// ("angle_latency.tau_ms"); both are read under the layout name
+// ("angle_latency.tau"). Names of no catalogue parameter are ignored.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace triadcal {
+
+struct ParametersFile {
+  std::string path;
+  std::string section;  // where the parameters were: "parameters", "rts.parameters", ...
+  std::string command;  // the file's "command", or ""
+  struct Entry {
+    std::string key;    // as written in the file (for messages)
+    double value_file;  // in the unit of SPEC section 3
+  };
+  std::map<std::string, Entry> entries;  // by parameter name (ParameterLayout names)
+  // "PATH: SECTION." for messages about one entry.
+  std::string At() const { return path + ": " + section + "."; }
+};
+
+// Reads PATH and the first of `sections` that holds a "parameters" object
+// ("" for the top level, "rts", "batch"). Throws InputError:
+//   "PATH: not valid JSON (...)", "PATH: parameters: missing (expected WHAT)",
+//   "PATH: SECTION.KEY: expected a number or {\"value\": number}" / "no \"value\"" /
+//   "unit U, expected \"V\" (SPEC section 3)" / "value is not a number: X" /
+//   "value is not finite".
+ParametersFile ReadParametersJson(const std::string& path, const std::vector<std::string>& sections,
+                                  const std::string& expected_what);
+
+// name -> value in file units (the form SetFromFileUnits takes).
+std::map<std::string, double> FileValues(const ParametersFile& p);
+
+}  // namespace triadcal
