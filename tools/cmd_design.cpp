@@ -23,6 +23,7 @@
 #include "solvers/analysis/experiment_design.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
+#include "tools/provenance.h"
 #include "tools/report/svg_plot.h"
 
 namespace triadcal {
@@ -163,6 +164,8 @@ std::string DefaultSvgPath(const std::string& out_json) {
 int RunDesign(const DesignArgs& a) {
   const auto t_start = std::chrono::steady_clock::now();
   const Scenario s = LoadScenario(a.scenario);
+  RecordInput("scenario", a.scenario);
+  CheckOverwrite(a.out_json);  // before the long work
   const ParameterLayout layout(ParseEffectList(a.effects));
   const int n = layout.size();
   std::vector<double> durations = ParseList(a.durations, "--durations");

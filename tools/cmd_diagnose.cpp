@@ -12,6 +12,7 @@
 #include "tools/report/estimate_json.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
+#include "tools/provenance.h"
 #include "tools/report/fit_report.h"
 
 namespace triadcal {
@@ -93,6 +94,7 @@ nlohmann::json StateJson(const ParameterLayout& layout, const BatchResult& r,
 int RunDiagnose(const DiagnoseArgs& a) {
   CheckOutputPath(a.out_json);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
+  CheckOverwrite(a.out_json);  // before the long work
   DiagnoseOptions opt;
   opt.alpha = a.alpha;
   opt.max_effects = a.max_effects;
@@ -102,7 +104,10 @@ int RunDiagnose(const DiagnoseArgs& a) {
   if (!(a.alpha > 0.0 && a.alpha < 1.0)) throw InputError("--alpha: must be in (0, 1)");
   std::map<std::string, double> truth;
   // Read the truth first: a bad truth file must fail before the work.
-  if (!a.truth_json.empty()) truth = ReadTruth(a.truth_json);
+  if (!a.truth_json.empty()) {
+    truth = ReadTruth(a.truth_json);
+    RecordInput("truth", a.truth_json);
+  }
   const DiagnosisResult d = Diagnose(run.description, run.data, opt);
   EndProgress();
   const std::map<std::string, double>* tp = a.truth_json.empty() ? nullptr : &truth;

@@ -17,6 +17,7 @@
 #include "solvers/estimation/separability.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
+#include "tools/provenance.h"
 
 namespace triadcal {
 namespace {
@@ -64,6 +65,7 @@ int RunFilter(const FilterArgs& a) {
   CheckOutputPath(a.out_json);
   if (!a.series_csv.empty()) CheckOutputPath(a.series_csv);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
+  CheckOverwrite(a.out_json);  // before the long work
   const ParameterLayout layout(ParseEffectList(a.effects));
   FilterOptions opt;
   opt.epoch_s = a.epoch_s;

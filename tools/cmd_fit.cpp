@@ -12,6 +12,7 @@
 #include "solvers/estimation/separability.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
+#include "tools/provenance.h"
 #include "tools/report/fit_report.h"
 
 namespace triadcal {
@@ -34,6 +35,7 @@ int RunFit(const FitArgs& a) {
   CheckOutputPath(a.out_json);
   if (!a.residuals_csv.empty()) CheckOutputPath(a.residuals_csv);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
+  CheckOverwrite(a.out_json);  // before the long work
   const ParameterLayout layout(ParseEffectList(a.effects));
   BatchOptions opt;
   opt.epoch_s = a.epoch_s;

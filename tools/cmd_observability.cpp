@@ -20,6 +20,7 @@
 #include "solvers/estimation/observability.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
+#include "tools/provenance.h"
 #include "tools/report/observability_report.h"
 
 namespace triadcal {
@@ -88,6 +89,7 @@ int RunObservability(const ObservabilityArgs& a) {
   std::string source, at;
   if (IsScenario(a.input)) {
     const Scenario s = NoiseFreeScenario(LoadScenario(a.input));
+    RecordInput("scenario", a.input);
     data = Simulate(s);
     run = s.run;
     theta = TruthInLayout(s, layout);

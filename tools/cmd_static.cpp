@@ -16,6 +16,7 @@
 #include "solvers/static/static_method.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
+#include "tools/provenance.h"
 
 namespace triadcal {
 namespace {
@@ -204,6 +205,7 @@ int RunStatic(const StaticArgs& a) {
   if (!(a.placement_sigma_deg >= 0.0)) throw InputError("--placement-sigma-deg: must be >= 0");
   opt.placement_sigma_rad = a.placement_sigma_deg * kDegToRad;
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
+  CheckOverwrite(a.out_json);  // before the long work
   const StaticReference ref = ChooseReference(run.description, run.data, a.reference);
   const StaticResult r = SolveStatic(run.description, run.data, ref, opt);
   WriteJson(StaticJson(a, r, run.data.size()), a.out_json);

@@ -99,6 +99,13 @@ void ParseDataFormat(const YAML::Node& node, const YamlPlace& at, RunDescription
   }
 }
 
+// sensor: {serial: TEXT, model: TEXT}, both optional, for the provenance.
+void ParseSensor(const YAML::Node& node, const YamlPlace& at, RunDescription* run) {
+  CheckKeys(node, at, {"serial", "model"});
+  if (node["serial"]) run->sensor_serial = ReadString(node["serial"], at.Child("serial"));
+  if (node["model"]) run->sensor_model = ReadString(node["model"], at.Child("model"));
+}
+
 }  // namespace
 
 RunDescription LoadRunDescription(const std::string& yaml_path) {
@@ -120,7 +127,7 @@ RunDescription ParseRunDescription(const YAML::Node& node, const std::string& ya
   if (!node.IsDefined() || node.IsNull()) return run;
   CheckKeys(node, at,
             {"data", "bench", "triad", "constraints", "columns", "mounting", "priors",
-             "data_format", "positions"});
+             "data_format", "positions", "sensor"});
   if (node["data"]) {
     const std::string data = ReadString(node["data"], at.Child("data"));
     if (data.empty()) at.Child("data").Fail("empty file name");
@@ -140,6 +147,7 @@ RunDescription ParseRunDescription(const YAML::Node& node, const std::string& ya
   if (node["priors"]) ParsePriors(node["priors"], at.Child("priors"), &run);
   if (node["data_format"]) ParseDataFormat(node["data_format"], at.Child("data_format"), &run);
   if (node["positions"]) run.positions = ParsePositions(node["positions"], at.Child("positions"));
+  if (node["sensor"]) ParseSensor(node["sensor"], at.Child("sensor"), &run);
   DefaultTriadForGReadings(node["triad"], &run);
   return run;
 }
@@ -209,6 +217,16 @@ std::string RunDescriptionToYaml(const RunDescription& run, const std::string& d
     out << YAML::Key << "axes" << YAML::Value << YAML::Flow << YAML::BeginSeq;
     for (int i = 0; i < 3; ++i) out << YAML::DoubleQuoted << MountingAxisText(run, i);
     out << YAML::EndSeq << YAML::EndMap;
+  }
+  if (!run.sensor_serial.empty() || !run.sensor_model.empty()) {
+    out << YAML::Key << "sensor" << YAML::Value << YAML::BeginMap;
+    if (!run.sensor_serial.empty()) {
+      out << YAML::Key << "serial" << YAML::Value << YAML::DoubleQuoted << run.sensor_serial;
+    }
+    if (!run.sensor_model.empty()) {
+      out << YAML::Key << "model" << YAML::Value << YAML::DoubleQuoted << run.sensor_model;
+    }
+    out << YAML::EndMap;
   }
   out << YAML::EndMap;
   if (!out.good()) throw std::logic_error("run.yaml emitter: " + out.GetLastError());

@@ -16,6 +16,7 @@
 //     - {expr: "dpsi - dlambda2", value_arcmin: 0, sigma_arcsec: 30}
 //   columns:        # optional; see README "Run data" for the full mapping syntax
 //   mounting:       # optional; axes: ["+x", "+y", "+z"]
+//   sensor:         # optional; {serial: "SN 0042", model: "ADXL325"}
 #pragma once
 
 #include <map>
@@ -86,6 +87,11 @@ struct RunDescription {
   // parameter around its nominal value; absent names use the defaults of
   // core/model/priors.h. (Parsed from the optional `priors:` key.)
   std::map<std::string, double> prior_sigma;
+
+  // sensor (optional): which unit was calibrated, copied into the provenance
+  // of every output: {serial: "SN 0042", model: "ADXL325"}; empty when absent.
+  std::string sensor_serial;
+  std::string sensor_model;
 };
 
 // The nominal parameter vector of this run (scale, bias from the triad section,

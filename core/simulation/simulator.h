@@ -137,7 +137,9 @@ double TruthFileValue(const ParameterLayout& layout, const Eigen::VectorXd& thet
 //   run.yaml    RunDescriptionToYaml(run, "run.csv"): injected effects NOT declared
 //   truth.json  {"parameters": {"Kx": 171.5, ..., "angle_latency.tau_ms": 2},
 //                "units": {...}, "injected_effects": [...], "scenario": NAME,
-//                "seed": N, "noise": {"accel_mV", "angle_arcsec"}, "samples": N}
-void WriteSimulation(const Scenario& s, const RunData& data, const std::string& dir);
+//                "seed": N, "noise": {"accel_mV", "angle_arcsec"}, "samples": N,
+//                "provenance": {...}}  (provenance_json, when not empty)
+void WriteSimulation(const Scenario& s, const RunData& data, const std::string& dir,
+                     const std::string& provenance_json = "");
 
 }  // namespace triadcal
