@@ -69,6 +69,10 @@ Calibration LoadCalibration(const std::string& path) {
   } catch (const json::parse_error& e) {
     throw InputError(path + ": not valid JSON (" + std::string(e.what()) + ")");
   }
+  return CalibrationFromJson(root, path);
+}
+
+Calibration CalibrationFromJson(const nlohmann::json& root, const std::string& path) {
   Calibration cal;
   cal.path = path;
   if (root.is_object() && root.contains("command") && root["command"].is_string()) {

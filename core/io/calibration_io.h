@@ -3,6 +3,8 @@
 
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "core/model/apply_calibration.h"
 
 namespace triadcal {
@@ -16,5 +18,8 @@ namespace triadcal {
 // and lever-arm parameters are not used. Throws InputError
 // "PATH: parameters.NAME: what is wrong".
 Calibration LoadCalibration(const std::string& path);
+
+// The same from JSON already read; `path` names it in messages.
+Calibration CalibrationFromJson(const nlohmann::json& root, const std::string& path);
 
 }  // namespace triadcal
