@@ -1,5 +1,5 @@
 // `triadcal diagnose RUN.yaml -o OUT.json [--truth truth.json]`: the closed
-// loop of SPEC section 8 (solvers/diagnosis/effect_discovery.h).
+// loop of docs/method.md (solvers/diagnosis/effect_discovery.h).
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -26,7 +26,7 @@ struct DiagnoseArgs {
 };
 
 // Truth values in file units keyed by layout parameter name; keys the file
-// has that we do not know are ignored (SPEC section 7).
+// has that we do not know are ignored (docs/file-formats.md).
 std::map<std::string, double> ReadTruth(const std::string& path) {
   nlohmann::json j;
   try {

@@ -34,7 +34,7 @@ struct FilterArgs {
 std::string SeriesCsv(const ParameterLayout& layout, const FilterResult& r) {
   std::ostringstream s;
   s << "# triadcal filter: forward-pass estimates with 1-sigma, and innovations\n";
-  s << "# units: t s; parameters in the units of SPEC section 3 (";
+  s << "# units: t s; parameters in the units of docs/file-formats.md (";
   for (int i = 0; i < layout.size(); ++i) {
     s << (i ? ", " : "") << layout.info(i).name << " " << layout.info(i).unit;
   }

@@ -50,7 +50,7 @@ double EntryValue(const json& entry, const std::string& where, const std::string
     if (entry.contains("unit")) {
       if (!entry["unit"].is_string() || entry["unit"].get<std::string>() != unit) {
         throw InputError(where + ": unit " + entry["unit"].dump() + ", expected \"" + unit +
-                         "\" (SPEC section 3)");
+                         "\" (docs/file-formats.md)");
       }
     }
   }
@@ -112,7 +112,7 @@ Calibration CalibrationFromJson(const nlohmann::json& root, const std::string& p
       if (i <= kKzz || info.effect) {
         throw InputError(at + info.name +
                          ": missing (a calibration needs the 21 sensor parameters Kx..Kzz of "
-                         "SPEC section 3, and every parameter of an effect it names)");
+                         "docs/file-formats.md, and every parameter of an effect it names)");
       }
       continue;  // bench and lever arm: not used by the inverse
     }

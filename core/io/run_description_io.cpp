@@ -1,4 +1,4 @@
-// run.yaml in and out (SPEC section 7): the bench and triad nominal values, the
+// run.yaml in and out (docs/file-formats.md): the bench and triad nominal values, the
 // constraints, and the column mapping and mounting for foreign data files.
 #include "core/io/run_description_io.h"
 
@@ -154,7 +154,7 @@ RunDescription ParseRunDescription(const YAML::Node& node, const std::string& ya
 
 std::string RunDescriptionToYaml(const RunDescription& run, const std::string& data_relative) {
   YAML::Emitter out;
-  out << YAML::Comment("triadcal run description (SPEC section 7)") << YAML::Newline;
+  out << YAML::Comment("triadcal run description (docs/file-formats.md)") << YAML::Newline;
   out << YAML::BeginMap;
   out << YAML::Key << "data" << YAML::Value << data_relative;
 

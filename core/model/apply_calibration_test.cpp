@@ -220,12 +220,12 @@ TEST_F(ApplyTest, BadCalibrationFilesGiveOneLine) {
   EXPECT_EQ(error_of(j.dump()),
             "triadcal: error: " + f +
                 ": parameters.Kyz: missing (a calibration needs the 21 sensor parameters Kx..Kzz "
-                "of SPEC section 3, and every parameter of an effect it names)\n");
+                "of docs/file-formats.md, and every parameter of an effect it names)\n");
   j = nlohmann::json::parse(ParametersJsonText("fit"));
   j["parameters"]["gamma_y"]["unit"] = "deg";
   EXPECT_EQ(error_of(j.dump()), "triadcal: error: " + f +
                                     ": parameters.gamma_y: unit \"deg\", expected \"arcmin\" "
-                                    "(SPEC section 3)\n");
+                                    "(docs/file-formats.md)\n");
   j = nlohmann::json::parse(ParametersJsonText("fit"));
   j["parameters"]["W0x"]["value"] = "1500";
   EXPECT_EQ(error_of(j.dump()),
@@ -235,7 +235,7 @@ TEST_F(ApplyTest, BadCalibrationFilesGiveOneLine) {
   EXPECT_EQ(error_of(j.dump()),
             "triadcal: error: " + f +
                 ": parameters.thermal_drift.rate_y: missing (a calibration needs the 21 sensor "
-                "parameters Kx..Kzz of SPEC section 3, and every parameter of an effect it "
+                "parameters Kx..Kzz of docs/file-formats.md, and every parameter of an effect it "
                 "names)\n");
   j = nlohmann::json::parse(ParametersJsonText("fit"));
   j["parameters"]["Ky"]["value"] = 0;

@@ -1,5 +1,5 @@
-// The effect catalogue (SPEC section 8): every effect that the base model of
-// SPEC sections 1-3 lacks, each with its own parameters and units.
+// The effect catalogue (docs/method.md): every effect that the base model of
+// docs/method.md lacks, each with its own parameters and units.
 //
 // An effect is switched on by adding it to a ParameterLayout; its parameters are
 // then appended to the parameter vector theta and every model function in

@@ -1,4 +1,4 @@
-// The run description (run.yaml, SPEC section 7): where the data are, what the
+// The run description (run.yaml, docs/file-formats.md): where the data are, what the
 // bench and the triad are nominally, the constraints (pseudo-measurements), and
 // for files other than the CSV contract, how their columns map to ours and how
 // the IMU sits on the platform.

@@ -1,4 +1,4 @@
-// WriteSimulation: the three files of `triadcal simulate` (SPEC section 7),
+// WriteSimulation: the three files of `triadcal simulate` (docs/file-formats.md),
 // DIR/run.csv, DIR/run.yaml and DIR/truth.json, all or none.
 #include <unistd.h>
 

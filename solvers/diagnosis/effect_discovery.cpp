@@ -63,7 +63,7 @@ DiagnosisResult Diagnose(const RunDescription& run, const RunData& data,
   if (candidates.empty()) {
     // With temp_C recorded and (nearly) linear in time, a drift in time and a
     // drift in temperature are the same function of the samples: test the
-    // temperature form only (SPEC section 8 lists them as one effect).
+    // temperature form only (docs/method.md lists them as one effect).
     const bool temp_linear_in_time =
         data.has_temp() && std::abs(Correlation(data.t_s, data.temp_C)) > 0.99;
     for (const EffectSpec& e : EffectCatalogue()) {
