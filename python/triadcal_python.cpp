@@ -208,7 +208,7 @@ py::array_t<double> Apply(const py::object& cal_arg,
   return out;
 }
 
-py::dict Simulate(const std::string& scenario, std::optional<std::uint64_t> seed,
+py::dict SimulateScenario(const std::string& scenario, std::optional<std::uint64_t> seed,
                   const std::string& out_dir) {
   Scenario s = LoadScenario(scenario);
   if (seed) s.seed = *seed;
@@ -261,7 +261,7 @@ PYBIND11_MODULE(triadcal, m) {
         "Raw readings (N, 3) [mV, triad axes] -> specific force W (N, 3) [g] by the exact "
         "inverse of the readings model, as `triadcal apply`. temp_C counts from its first "
         "value (thermal_drift_temp).");
-  m.def("simulate", &triadcal::Simulate, "scenario"_a, "seed"_a = py::none(), "out_dir"_a = "",
+  m.def("simulate", &triadcal::SimulateScenario, "scenario"_a, "seed"_a = py::none(), "out_dir"_a = "",
         "Simulate a scenario.yaml: dict with t_s, lambda1_deg, lambda2_deg, readings_mV (N, 3), "
         "truth {name: value in file units}; also writes run.csv, run.yaml, truth.json to "
         "out_dir when given.");

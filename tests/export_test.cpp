@@ -194,7 +194,7 @@ TEST_F(ExportTest, MatrixFormIsTheReadingsModel) {
   const Calibration cal = LoadCalibration(Path("sim/truth.json"));
   const ModelConfig cfg = MakeModelConfig(RunDescription(), cal.layout);
   const double g0 = m["g0_mps2"].get<double>();
-  for (const Eigen::Vector3d W : {Eigen::Vector3d(0.3, -0.8, 0.52), Eigen::Vector3d(-1, 0.1, 0.2)}) {
+  for (const Eigen::Vector3d& W : {Eigen::Vector3d(0.3, -0.8, 0.52), Eigen::Vector3d(-1, 0.1, 0.2)}) {
     const Eigen::Vector3d z = Readings_mV(cfg, cal.theta.data(), W, SampleContext{});
     const Eigen::Vector3d a = W * g0;
     for (int i = 0; i < 3; ++i) {
