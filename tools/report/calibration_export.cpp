@@ -27,11 +27,11 @@ std::string Array3(const double* v) {
   return "{" + Exact(v[0]) + ", " + Exact(v[1]) + ", " + Exact(v[2]) + "}";
 }
 
+// Row by row, one row per line.
 std::string Matrix3(const Eigen::Matrix3d& m) {
   std::string s = "{";
   for (int r = 0; r < 3; ++r) {
-    const double row[3] = {m(r, 0), m(r, 1), m(r, 2)};
-    s += (r ? ",\n    " : "") + Array3(row);
+    s += (r ? ",\n    " : "") + Exact(m(r, 0)) + ", " + Exact(m(r, 1)) + ", " + Exact(m(r, 2));
   }
   return s + "}";
 }
@@ -105,11 +105,11 @@ CExport ExportC(const Calibration& cal, const std::string& name, const std::stri
   s += "/* Scale factors K_i [mV/g] and zero offsets W0_i [mV]. */\n";
   s += "static const double kScale[3] = " + Array3(th + kKx) + ";\n";
   s += "static const double kBias[3] = " + Array3(th + kW0x) + ";\n";
-  s += "/* Non-orthogonality matrix M (angles in rad):\n"
+  s += "/* Non-orthogonality matrix M (angles in rad), row by row:\n"
        " *   [[1, -alpha_y, beta_z], [alpha_x, 1, -gamma_z], [-beta_x, gamma_y, 1]] */\n";
-  s += "static const double kM[3][3] = " + Matrix3(M) + ";\n";
-  s += "/* Nonlinearity and cross-coupling K_ij [1/g]. */\n";
-  s += "static const double kK[3][3] = " + Matrix3(K) + ";\n";
+  s += "static const double kM[9] = " + Matrix3(M) + ";\n";
+  s += "/* Nonlinearity and cross-coupling K_ij [1/g], row by row. */\n";
+  s += "static const double kK[9] = " + Matrix3(K) + ";\n";
   s += "/* Sensor-stage effects (zero when absent): zero drift [mV/s] and [mV/degC],\n"
        " * scale asymmetry dK_i [mV/g] (scale K_i + dK_i for u_i > 0, K_i - dK_i below). */\n";
   s += "static const double kDriftPerS[3] = " + Array3(drift_mV_per_s.data()) + ";\n";
@@ -119,48 +119,49 @@ CExport ExportC(const Calibration& cal, const std::string& name, const std::stri
        (cal.layout.has(Effect::kScaleAsymmetry) ? "1" : "0") + ";\n\n";
   s += R"(static double Abs(double x) { return x < 0.0 ? -x : x; }
 
+/* 3x3 matrices are stored row by row: a[3 * row + column]. */
+
 /* Inverse of a 3x3 matrix by its cofactors. */
-static void Inverse3(const double a[3][3], double inv[3][3]) {
-  double c[3][3];
+static void Inverse3(const double* a, double* inv) {
+  double c[9], det;
   int r, k;
-  double det;
-  c[0][0] = a[1][1] * a[2][2] - a[1][2] * a[2][1];
-  c[0][1] = a[1][2] * a[2][0] - a[1][0] * a[2][2];
-  c[0][2] = a[1][0] * a[2][1] - a[1][1] * a[2][0];
-  c[1][0] = a[0][2] * a[2][1] - a[0][1] * a[2][2];
-  c[1][1] = a[0][0] * a[2][2] - a[0][2] * a[2][0];
-  c[1][2] = a[0][1] * a[2][0] - a[0][0] * a[2][1];
-  c[2][0] = a[0][1] * a[1][2] - a[0][2] * a[1][1];
-  c[2][1] = a[0][2] * a[1][0] - a[0][0] * a[1][2];
-  c[2][2] = a[0][0] * a[1][1] - a[0][1] * a[1][0];
-  det = a[0][0] * c[0][0] + a[0][1] * c[0][1] + a[0][2] * c[0][2];
+  c[0] = a[4] * a[8] - a[5] * a[7];
+  c[1] = a[5] * a[6] - a[3] * a[8];
+  c[2] = a[3] * a[7] - a[4] * a[6];
+  c[3] = a[2] * a[7] - a[1] * a[8];
+  c[4] = a[0] * a[8] - a[2] * a[6];
+  c[5] = a[1] * a[6] - a[0] * a[7];
+  c[6] = a[1] * a[5] - a[2] * a[4];
+  c[7] = a[2] * a[3] - a[0] * a[5];
+  c[8] = a[0] * a[4] - a[1] * a[3];
+  det = a[0] * c[0] + a[1] * c[1] + a[2] * c[2];
   for (r = 0; r < 3; ++r) {
-    for (k = 0; k < 3; ++k) inv[r][k] = c[k][r] / det;
+    for (k = 0; k < 3; ++k) inv[3 * r + k] = c[3 * k + r] / det;
   }
 }
 
-static void MulVec(const double m[3][3], const double v[3], double out[3]) {
+static void MulVec(const double* m, const double* v, double* out) {
   int r;
-  for (r = 0; r < 3; ++r) out[r] = m[r][0] * v[0] + m[r][1] * v[1] + m[r][2] * v[2];
+  for (r = 0; r < 3; ++r) out[r] = m[3 * r] * v[0] + m[3 * r + 1] * v[1] + m[3 * r + 2] * v[2];
 }
 
 /* F(W) = M W + diag(W) Kij W - u and its Jacobian J = M + diag(Kij W) + diag(W) Kij. */
-static void Residual(const double W[3], const double u[3], double F[3], double J[3][3]) {
+static void Residual(const double* W, const double* u, double* F, double* J) {
   double MW[3], KW[3];
   int r, k;
   MulVec(kM, W, MW);
   MulVec(kK, W, KW);
   for (r = 0; r < 3; ++r) {
     F[r] = MW[r] + W[r] * KW[r] - u[r];
-    for (k = 0; k < 3; ++k) J[r][k] = kM[r][k] + W[r] * kK[r][k];
-    J[r][r] += KW[r];
+    for (k = 0; k < 3; ++k) J[3 * r + k] = kM[3 * r + k] + W[r] * kK[3 * r + k];
+    J[3 * r + r] += KW[r];
   }
 }
 
 )";
   s += "void " + name + "_apply(const double z_mV[3], double t_s, double temp_C,\n"
        "    double temp_ref_C, double W_g[3]) {\n";
-  s += R"(  double u[3], W[3], F[3], J[3][3], Jinv[3][3], Minv[3][3], step[3];
+  s += R"(  double u[3], W[3], F[3], J[9], Jinv[9], Minv[9], step[3];
   int i, it;
   for (i = 0; i < 3; ++i) {
     const double w0 = kBias[i] + kDriftPerS[i] * t_s + kDriftPerC[i] * (temp_C - temp_ref_C);
