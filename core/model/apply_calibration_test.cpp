@@ -176,8 +176,10 @@ TEST_F(ApplyTest, RoundTripThroughTheFilesOfEveryCommand) {
   const Truth tr = MakeTruth(CalibrationLayout(), CalibrationTheta(), 500);
   WriteRunCsv(tr.data, Path("run.csv"), "readings of known specific forces");
   const std::string run = Write("run.yaml", "data: run.csv\nconstraints: []\n");
-  const std::string out = Path("corrected.csv"), err = Path("err.txt");
+  const std::string err = Path("err.txt");
   for (const std::string kind : {"fit", "filter", "truth"}) {
+    // One output per calibration: apply will not replace results of other inputs.
+    const std::string out = Path("corrected_" + kind + ".csv");
     const std::string cal =
         Write(kind + ".json", kind == "truth" ? TruthJsonText() : ParametersJsonText(kind));
     ASSERT_EQ(RunCli("apply " + cal + " " + run + " -o " + out, err), 0) << ReadFile(err);
