@@ -13,13 +13,12 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+#include <yaml-cpp/yaml.h>
 
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
-
-#include <nlohmann/json.hpp>
-#include <yaml-cpp/yaml.h>
 
 #include "core/io/calibration_io.h"
 #include "core/io/run_description_io.h"
@@ -45,9 +44,7 @@ json ToJson(const py::object& o) {
   return json::parse(dumps(o).cast<std::string>());
 }
 
-py::object FromJson(const json& j) {
-  return py::module_::import("json").attr("loads")(j.dump());
-}
+py::object FromJson(const json& j) { return py::module_::import("json").attr("loads")(j.dump()); }
 
 YAML::Node ToYaml(const json& j) {
   YAML::Node n;
@@ -117,16 +114,16 @@ py::dict RunDataDict(const RunData& d) {
 
 py::object Fit(const py::object& run_arg, const std::string& effects, double epoch_s,
                double rate_window_s, const std::string& init, const std::string& robust,
-               double robust_scale, const std::string& linear_solver,
-               const std::string& covariance, int threads, bool correlations, bool auto_hold,
-               const std::vector<std::string>& hold, const std::vector<std::string>& free) {
+               double robust_scale, const std::string& linear_solver, const std::string& covariance,
+               int threads, bool correlations, bool auto_hold, const std::vector<std::string>& hold,
+               const std::vector<std::string>& free) {
   if (init != "rts" && init != "nominal") {
     throw InputError("init: expected rts or nominal, got '" + init + "'");
   }
   const RunDescription run = RunFrom(run_arg);
   std::vector<Effect> list;
   std::string item;
-  for (std::size_t start = 0; start <= effects.size(); ) {
+  for (std::size_t start = 0; start <= effects.size();) {
     const std::size_t end = std::min(effects.find(',', start), effects.size());
     item = effects.substr(start, end - start);
     if (!item.empty()) {
@@ -186,8 +183,8 @@ py::array_t<double> Apply(const py::object& cal_arg,
   auto copy = [n](const py::array_t<double, py::array::forcecast>& a, const char* name,
                   std::vector<double>* out) {
     if (a.ndim() != 1 || static_cast<std::size_t>(a.shape(0)) != n) {
-      throw InputError(std::string(name) + ": expected an array of shape (N,), N = " +
-                       std::to_string(n));
+      throw InputError(std::string(name) +
+                       ": expected an array of shape (N,), N = " + std::to_string(n));
     }
     out->assign(a.data(), a.data() + n);
   };
@@ -209,7 +206,7 @@ py::array_t<double> Apply(const py::object& cal_arg,
 }
 
 py::dict SimulateScenario(const std::string& scenario, std::optional<std::uint64_t> seed,
-                  const std::string& out_dir) {
+                          const std::string& out_dir) {
   Scenario s = LoadScenario(scenario);
   if (seed) s.seed = *seed;
   SampleTruth(&s);
@@ -252,8 +249,8 @@ PYBIND11_MODULE(triadcal, m) {
   m.def("fit", &triadcal::Fit, "run"_a, py::kw_only(), "effects"_a = "", "epoch_s"_a = 0.5,
         "rate_window_s"_a = 0.1, "init"_a = "rts", "robust"_a = "", "robust_scale"_a = 3.0,
         "linear_solver"_a = "sparse_normal_cholesky", "covariance"_a = "schur", "threads"_a = 0,
-        "correlations"_a = false, "auto_hold"_a = true,
-        "hold"_a = std::vector<std::string>{}, "free"_a = std::vector<std::string>{},
+        "correlations"_a = false, "auto_hold"_a = true, "hold"_a = std::vector<std::string>{},
+        "free"_a = std::vector<std::string>{},
         "Batch least-squares fit of a run (run.yaml path or dict); returns the OUT of "
         "`triadcal fit` as a dict (parameters: {name: {value, sigma, unit, ...}}).");
   m.def("apply", &triadcal::Apply, "calibration"_a, "readings_mV"_a, "t_s"_a = py::none(),
@@ -261,7 +258,8 @@ PYBIND11_MODULE(triadcal, m) {
         "Raw readings (N, 3) [mV, triad axes] -> specific force W (N, 3) [g] by the exact "
         "inverse of the readings model, as `triadcal apply`. temp_C counts from its first "
         "value (thermal_drift_temp).");
-  m.def("simulate", &triadcal::SimulateScenario, "scenario"_a, "seed"_a = py::none(), "out_dir"_a = "",
+  m.def("simulate", &triadcal::SimulateScenario, "scenario"_a, "seed"_a = py::none(),
+        "out_dir"_a = "",
         "Simulate a scenario.yaml: dict with t_s, lambda1_deg, lambda2_deg, readings_mV (N, 3), "
         "truth {name: value in file units}; also writes run.csv, run.yaml, truth.json to "
         "out_dir when given.");

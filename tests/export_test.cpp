@@ -10,11 +10,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "core/io/calibration_io.h"
 #include "core/io/file_util.h"
@@ -50,7 +49,8 @@ class ExportTest : public testing_fixtures::TempDirTest {
 
   // W [g] per sample from `triadcal apply CAL RUN`.
   std::vector<Eigen::Vector3d> Apply(const std::string& cal, const std::string& run_yaml) {
-    const auto r = RunTriadcal("apply " + cal + " " + run_yaml + " -o " + Path("applied.csv"), Err());
+    const auto r =
+        RunTriadcal("apply " + cal + " " + run_yaml + " -o " + Path("applied.csv"), Err());
     EXPECT_EQ(r.status, 0) << r.err;
     std::vector<Eigen::Vector3d> W;
     std::ifstream in(Path("applied.csv"));
@@ -80,9 +80,9 @@ class ExportTest : public testing_fixtures::TempDirTest {
     const auto e = RunTriadcal("export " + cal + " --format c -o " + Path("cal.c"), Err());
     EXPECT_EQ(e.status, 0) << e.err;
     // The exported code alone, with every warning an error.
-    const auto cc = RunCommand("cc -std=c99 -Wall -Wextra -pedantic -Werror -c " + Path("cal.c") +
-                                   " -o " + Path("cal.o"),
-                               Err());
+    const auto cc = RunCommand(
+        "cc -std=c99 -Wall -Wextra -pedantic -Werror -c " + Path("cal.c") + " -o " + Path("cal.o"),
+        Err());
     EXPECT_EQ(cc.status, 0) << cc.err;
     WriteText("driver.c",
               "#include <stdio.h>\n#include \"cal.h\"\n"
@@ -111,9 +111,9 @@ class ExportTest : public testing_fixtures::TempDirTest {
         in << buf;
       }
     }
-    const auto r = RunCommand(Path("driver") + " < " + Path("readings.txt") + " > " +
-                                  Path("c_out.txt") + " ; true",
-                              Err());
+    const auto r = RunCommand(
+        Path("driver") + " < " + Path("readings.txt") + " > " + Path("c_out.txt") + " ; true",
+        Err());
     std::vector<Eigen::Vector3d> W;
     std::ifstream out(Path("c_out.txt"));
     Eigen::Vector3d w;
@@ -152,11 +152,11 @@ TEST_F(ExportTest, CMatchesApplyOnASimulatedRunWithEveryKij) {
 }
 
 TEST_F(ExportTest, CMatchesApplyWithTheSensorStageEffects) {
-  const std::string run = Simulate(
-      Scenario("effects: {thermal_drift: {rate_x_mV_per_min: 0.5, rate_z: -0.25},\n"
-               "          thermal_drift_temp: {coef_y_mV_per_degC: 0.3, coef_z: -0.2},\n"
-               "          scale_asymmetry: {dKx: 0.4, dKy: -0.3, dKz: 0.2}}\n"
-               "temperature: {start_C: 20, rate_C_per_h: 10}\n"));
+  const std::string run =
+      Simulate(Scenario("effects: {thermal_drift: {rate_x_mV_per_min: 0.5, rate_z: -0.25},\n"
+                        "          thermal_drift_temp: {coef_y_mV_per_degC: 0.3, coef_z: -0.2},\n"
+                        "          scale_asymmetry: {dKx: 0.4, dKy: -0.3, dKz: 0.2}}\n"
+                        "temperature: {start_C: 20, rate_C_per_h: 10}\n"));
   const Calibration cal = LoadCalibration(Path("sim/truth.json"));
   ASSERT_TRUE(cal.layout.has(Effect::kThermalDrift));
   ASSERT_TRUE(cal.layout.has(Effect::kThermalDriftTemp));
@@ -180,9 +180,8 @@ TEST_F(ExportTest, MatrixFormIsTheReadingsModel) {
   Simulate(Scenario(""));
   for (const std::string format : {"json-matrix", "yaml"}) {
     const std::string out = Path("matrix." + format);
-    const auto r = RunTriadcal("export " + Path("sim/truth.json") + " --format " + format +
-                                   " -o " + out,
-                               Err());
+    const auto r = RunTriadcal(
+        "export " + Path("sim/truth.json") + " --format " + format + " -o " + out, Err());
     ASSERT_EQ(r.status, 0) << r.err;
   }
   const nlohmann::json m = nlohmann::json::parse(ReadFile(Path("matrix.json-matrix")));
@@ -194,7 +193,8 @@ TEST_F(ExportTest, MatrixFormIsTheReadingsModel) {
   const Calibration cal = LoadCalibration(Path("sim/truth.json"));
   const ModelConfig cfg = MakeModelConfig(RunDescription(), cal.layout);
   const double g0 = m["g0_mps2"].get<double>();
-  for (const Eigen::Vector3d& W : {Eigen::Vector3d(0.3, -0.8, 0.52), Eigen::Vector3d(-1, 0.1, 0.2)}) {
+  for (const Eigen::Vector3d& W :
+       {Eigen::Vector3d(0.3, -0.8, 0.52), Eigen::Vector3d(-1, 0.1, 0.2)}) {
     const Eigen::Vector3d z = Readings_mV(cfg, cal.theta.data(), W, SampleContext{});
     const Eigen::Vector3d a = W * g0;
     for (int i = 0; i < 3; ++i) {
@@ -218,12 +218,15 @@ TEST_F(ExportTest, BadOptions) {
   EXPECT_EQ(r.err, "triadcal: error: --format: expected c, yaml or json-matrix, got 'fortran'\n");
   r = RunTriadcal("export " + cal + " --format c -o " + Path("cal.txt"), Err());
   EXPECT_EQ(r.status, 2);
-  EXPECT_EQ(r.err, "triadcal: error: -o: for --format c give NAME.c or NAME.h (both are "
-                   "written), got '" + Path("cal.txt") + "'\n");
+  EXPECT_EQ(r.err,
+            "triadcal: error: -o: for --format c give NAME.c or NAME.h (both are "
+            "written), got '" +
+                Path("cal.txt") + "'\n");
   r = RunTriadcal("export " + cal + " --format c -o " + Path("my-cal.c"), Err());
   EXPECT_EQ(r.status, 2);
-  EXPECT_EQ(r.err, "triadcal: error: -o: file name 'my-cal' is not a C identifier (the "
-                   "function is NAME_apply); use --name\n");
+  EXPECT_EQ(r.err,
+            "triadcal: error: -o: file name 'my-cal' is not a C identifier (the "
+            "function is NAME_apply); use --name\n");
   EXPECT_FALSE(fs::exists(Path("my-cal.c")));
   r = RunTriadcal("export " + cal + " --format c -o " + Path("my-cal.c") + " --name imu0", Err());
   EXPECT_EQ(r.status, 0) << r.err;

@@ -3,10 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <regex>
 #include <string>
-
-#include <nlohmann/json.hpp>
 
 #include "core/io/file_util.h"
 #include "core/io/sha256.h"
@@ -64,10 +63,10 @@ TEST_F(ProvenanceTest, SimulateAndFitRecordTheirInputs) {
   EXPECT_EQ(fp["sensor"], json({{"serial", "SN 0042"}, {"model", "ADXL325"}}));
 
   // apply: the CSV carries it on a comment line.
-  ASSERT_EQ(Triadcal("apply " + Path("fit.json") + " " + Path("a/run.yaml") + " -o " +
-                     Path("w.csv"))
-                .status,
-            0);
+  ASSERT_EQ(
+      Triadcal("apply " + Path("fit.json") + " " + Path("a/run.yaml") + " -o " + Path("w.csv"))
+          .status,
+      0);
   const std::string csv = ReadFile(Path("w.csv"));
   const std::size_t at = csv.find("# provenance: ");
   ASSERT_NE(at, std::string::npos);
@@ -88,9 +87,9 @@ TEST_F(ProvenanceTest, RefusesToOverwriteResultsOfOtherInputs) {
 
   auto r = Triadcal("fit " + Path("b/run.yaml") + " -o " + Path("fit.json"));
   EXPECT_EQ(r.status, 2);
-  EXPECT_EQ(r.err, "triadcal: error: " + Path("fit.json") + ": holds results of other inputs (data " +
-                       Abs("a/run.csv") + ", run " + Abs("a/run.yaml") +
-                       "); --force overwrites it\n");
+  EXPECT_EQ(r.err, "triadcal: error: " + Path("fit.json") +
+                       ": holds results of other inputs (data " + Abs("a/run.csv") + ", run " +
+                       Abs("a/run.yaml") + "); --force overwrites it\n");
   EXPECT_EQ(ReadFile(Path("fit.json")), before);
   r = Triadcal("fit " + Path("b/run.yaml") + " -o " + Path("fit.json") + " --force");
   EXPECT_EQ(r.status, 0) << r.err;
@@ -115,8 +114,9 @@ TEST_F(ProvenanceTest, SimulateRefusesAFolderOfOtherResults) {
   const std::string truth = ReadFile(Path("out/truth.json"));
   auto r = Triadcal("simulate " + Path("b.yaml") + " -o " + Path("out"));
   EXPECT_EQ(r.status, 2);
-  EXPECT_EQ(r.err, "triadcal: error: " + Path("out") + ": holds results of other inputs (scenario " +
-                       Abs("a.yaml") + "); --force writes into it\n");
+  EXPECT_EQ(r.err, "triadcal: error: " + Path("out") +
+                       ": holds results of other inputs (scenario " + Abs("a.yaml") +
+                       "); --force writes into it\n");
   EXPECT_EQ(ReadFile(Path("out/truth.json")), truth);
   r = Triadcal("simulate " + Path("b.yaml") + " -o " + Path("out") + " --force");
   EXPECT_EQ(r.status, 0) << r.err;

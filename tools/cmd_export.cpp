@@ -1,13 +1,13 @@
 // `triadcal export CAL.json --format c|yaml|json-matrix -o OUT`: a calibration
 // for firmware (C99 code applying it) or other tools (the plain matrix form),
 // see tools/report/calibration_export.h.
+#include <yaml-cpp/yaml.h>
+
 #include <cctype>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <string>
-
-#include <yaml-cpp/yaml.h>
 
 #include "core/io/calibration_io.h"
 #include "core/io/file_util.h"
@@ -72,8 +72,10 @@ int RunExport(const ExportArgs& a) {
     CheckOverwrite(a.out);
     YAML::Emitter y;
     EmitYaml(MatrixForm(cal), &y);
-    WriteFileAtomically(a.out, "# triadcal calibration, plain matrix form (triadcal export)\n"
-                               "# provenance: " + provenance + "\n" + y.c_str() + "\n");
+    WriteFileAtomically(a.out,
+                        "# triadcal calibration, plain matrix form (triadcal export)\n"
+                        "# provenance: " +
+                            provenance + "\n" + y.c_str() + "\n");
   } else {
     const fs::path out(a.out);
     if (out.extension() != ".c" && out.extension() != ".h") {
@@ -95,8 +97,7 @@ int RunExport(const ExportArgs& a) {
                                      "provenance: " + provenance);
     WriteFileAtomically(h_path.string(), code.header);
     WriteFileAtomically(c_path.string(), code.source);
-    std::printf("export: %s_apply() in %s and %s\n", name.c_str(), h_path.c_str(),
-                c_path.c_str());
+    std::printf("export: %s_apply() in %s and %s\n", name.c_str(), h_path.c_str(), c_path.c_str());
     return 0;
   }
   std::printf("export: %s (%s) -> %s\n", a.calibration_json.c_str(), cal.section.c_str(),
@@ -111,11 +112,11 @@ Command AddExportCommand(CLI::App& app) {
   Command c;
   c.app = app.add_subcommand(
       "export", "A calibration as C99 code applying it, or as plain matrices (YAML, JSON)");
-  c.app->add_option("calibration", a->calibration_json,
-                    "OUT of fit, static, filter (rts) or compare (batch), or a truth.json")
+  c.app
+      ->add_option("calibration", a->calibration_json,
+                   "OUT of fit, static, filter (rts) or compare (batch), or a truth.json")
       ->required();
-  c.app->add_option("--format", a->format, "c (NAME.c + NAME.h), yaml or json-matrix")
-      ->required();
+  c.app->add_option("--format", a->format, "c (NAME.c + NAME.h), yaml or json-matrix")->required();
   c.app->add_option("-o,--output", a->out, "output file (for c: NAME.c or NAME.h)")->required();
   c.app->add_option("--name", a->name, "C function prefix (default: the file name)");
   c.run = [a] { return RunExport(*a); };

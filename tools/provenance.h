@@ -15,9 +15,8 @@
 // output of other inputs (CheckOverwrite) unless the command got --force.
 #pragma once
 
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 namespace triadcal {
 

@@ -51,7 +51,8 @@ TEST_F(Sha256File, MissingFile) {
     Sha256OfFile(Path("absent.csv"));
     FAIL() << "no error";
   } catch (const InputError& e) {
-    EXPECT_EQ(std::string(e.what()), Path("absent.csv") + ": cannot read (no such file or not readable)");
+    EXPECT_EQ(std::string(e.what()),
+              Path("absent.csv") + ": cannot read (no such file or not readable)");
   }
 }
 

@@ -14,7 +14,7 @@
 //     noise_mV: 2.0
 //   constraints:
 //     - {expr: "dpsi - dlambda2", value_arcmin: 0, sigma_arcsec: 30}
-//   columns:        # optional; see README "Run data" for the full mapping syntax
+//   columns:        # optional; see docs/file-formats.md for the full mapping syntax
 //   mounting:       # optional; axes: ["+x", "+y", "+z"]
 //   sensor:         # optional; {serial: "SN 0042", model: "ADXL325"}
 #pragma once

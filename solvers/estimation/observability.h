@@ -22,7 +22,7 @@
 //
 //   lambda < unobservable          unobservable: the answer along it is the
 //                                  prior's (a structural null of the model has
-//                                  lambda ~ 1e-6, rounding; see the README)
+//                                  lambda ~ 1e-6, rounding; see docs/method.md)
 //   lambda < weak                  weakly observable: determined, but the
 //                                  prior still shapes the answer
 //

@@ -10,9 +10,8 @@
 //   yaml, json   the plain matrix form (MatrixForm below).
 #pragma once
 
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "core/model/apply_calibration.h"
 
