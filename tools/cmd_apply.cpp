@@ -10,6 +10,7 @@
 #include "core/io/calibration_io.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
+#include "tools/provenance.h"
 
 namespace triadcal {
 namespace {
@@ -20,7 +21,9 @@ struct ApplyArgs {
 
 int RunApply(const ApplyArgs& a) {
   const Calibration cal = LoadCalibration(a.calibration_json);
+  RecordInput("calibration", a.calibration_json);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
+  CheckOverwrite(a.out_csv);
   const std::vector<Eigen::Vector3d> W = ApplyCalibration(cal, run.description, run.data);
   const bool angles = !(SourceOf(run.description, "lambda1").constant &&
                         SourceOf(run.description, "lambda2").constant);
@@ -30,6 +33,7 @@ int RunApply(const ApplyArgs& a) {
   out.reserve(128 + run.data.size() * 96);
   out += "# triadcal apply: calibration " + a.calibration_json + " (" + cal.section +
          (cal.command.empty() ? "" : ", from " + cal.command) + "), run " + a.run_yaml + "\n";
+  out += "# provenance: " + CurrentProvenance().dump() + "\n";
   out += "# W = specific force in the triad frame [g], an axis pointing up reads +1 g at rest:\n";
   out += "# the exact inverse of the readings model (paper eq. 1); t [s]";
   out += angles ? ", lambda1 lambda2 [deg] as recorded\n" : "\n";

@@ -13,6 +13,7 @@
 #include "tools/command_util.h"
 #include "solvers/estimation/run_problem.h"
 #include "tools/commands.h"
+#include "tools/provenance.h"
 #include "tools/report/fit_report.h"
 
 namespace triadcal {
@@ -30,6 +31,7 @@ double Seconds(std::chrono::steady_clock::time_point t0) {
 int RunCompare(const CompareArgs& a) {
   CheckOutputPath(a.out_json);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
+  CheckOverwrite(a.out_json);  // before the long work
   const ParameterLayout layout(ParseEffectList(a.effects, run.data));
 
   FilterOptions fo;

@@ -23,6 +23,7 @@
 #include "tools/command_util.h"
 #include "solvers/estimation/run_problem.h"
 #include "tools/commands.h"
+#include "tools/provenance.h"
 #include "tools/report/design_report.h"
 
 namespace triadcal {
@@ -134,6 +135,8 @@ DesignStudyOptions StudyOptions(const DesignArgs& a, const ParameterLayout& layo
 int RunDesign(const DesignArgs& a) {
   const auto t_start = std::chrono::steady_clock::now();
   const Scenario s = LoadScenario(a.scenario);
+  RecordInput("scenario", a.scenario);
+  CheckOverwrite(a.out_json);  // before the long work
   const ParameterLayout layout(ParseEffectList(a.effects));
   return WithFlags(DesignFlags(), [&] {
     const DesignStudyOptions options = StudyOptions(a, layout);

@@ -1,5 +1,5 @@
 // `triadcal diagnose RUN.yaml -o OUT.json [--truth truth.json]`: the closed
-// loop of SPEC section 8 (solvers/diagnosis/effect_discovery.h).
+// loop of docs/method.md (solvers/diagnosis/effect_discovery.h).
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -14,6 +14,7 @@
 #include "tools/command_util.h"
 #include "solvers/estimation/run_problem.h"
 #include "tools/commands.h"
+#include "tools/provenance.h"
 #include "tools/report/fit_report.h"
 
 namespace triadcal {
@@ -27,7 +28,7 @@ struct DiagnoseArgs {
 };
 
 // Truth values in file units keyed by layout parameter name; keys the file
-// has that we do not know are ignored (SPEC section 7).
+// has that we do not know are ignored (docs/file-formats.md).
 std::map<std::string, double> ReadTruth(const std::string& path) {
   return FileValues(ReadParametersJson(path, {""}, "{\"parameters\": {name: value}}"));
 }
@@ -74,6 +75,7 @@ nlohmann::json StateJson(const ParameterLayout& layout, const BatchResult& r,
 int RunDiagnose(const DiagnoseArgs& a) {
   CheckOutputPath(a.out_json);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
+  CheckOverwrite(a.out_json);  // before the long work
   DiagnoseOptions opt;
   opt.alpha = a.alpha;
   opt.max_effects = a.max_effects;
@@ -87,7 +89,10 @@ int RunDiagnose(const DiagnoseArgs& a) {
   if (!(a.alpha > 0.0 && a.alpha < 1.0)) throw InputError("--alpha: must be in (0, 1)");
   std::map<std::string, double> truth;
   // Read the truth first: a bad truth file must fail before the work.
-  if (!a.truth_json.empty()) truth = ReadTruth(a.truth_json);
+  if (!a.truth_json.empty()) {
+    truth = ReadTruth(a.truth_json);
+    RecordInput("truth", a.truth_json);
+  }
   const DiagnosisResult d = Diagnose(run.description, run.data, opt);
   EndProgress();
   const std::map<std::string, double>* tp = a.truth_json.empty() ? nullptr : &truth;

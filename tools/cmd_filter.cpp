@@ -17,6 +17,7 @@
 #include "solvers/estimation/separability.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
+#include "tools/provenance.h"
 
 namespace triadcal {
 namespace {
@@ -33,7 +34,7 @@ struct FilterArgs {
 std::string SeriesCsv(const ParameterLayout& layout, const FilterResult& r) {
   std::ostringstream s;
   s << "# triadcal filter: forward-pass estimates with 1-sigma, and innovations\n";
-  s << "# units: t s; parameters in the units of SPEC section 3 (";
+  s << "# units: t s; parameters in the units of docs/file-formats.md (";
   for (int i = 0; i < layout.size(); ++i) {
     s << (i ? ", " : "") << layout.info(i).name << " " << layout.info(i).unit;
   }
@@ -64,6 +65,7 @@ int RunFilter(const FilterArgs& a) {
   CheckOutputPath(a.out_json);
   if (!a.series_csv.empty()) CheckOutputPath(a.series_csv);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
+  CheckOverwrite(a.out_json);  // before the long work
   const ParameterLayout layout(ParseEffectList(a.effects, run.data));
   FilterOptions opt;
   opt.epoch_s = a.epoch_s;

@@ -13,6 +13,7 @@
 #include "tools/command_util.h"
 #include "solvers/estimation/run_problem.h"
 #include "tools/commands.h"
+#include "tools/provenance.h"
 #include "tools/report/fit_report.h"
 
 namespace triadcal {
@@ -41,6 +42,7 @@ int RunFit(const FitArgs& a) {
   CheckOutputPath(a.out_json);
   if (!a.residuals_csv.empty()) CheckOutputPath(a.residuals_csv);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
+  CheckOverwrite(a.out_json);  // before the long work
   const ParameterLayout layout(ParseEffectList(a.effects, run.data));
   BatchOptions opt;
   opt.epoch_s = a.epoch_s;

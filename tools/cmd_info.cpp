@@ -12,11 +12,11 @@ Command AddInfoCommand(CLI::App& app) {
   Command c;
   c.app = app.add_subcommand("params", "List parameter names and units, and the effect catalogue");
   c.run = [] {
-    std::printf("Base parameters (SPEC section 3):\n");
+    std::printf("Base parameters (docs/file-formats.md):\n");
     for (const ParameterInfo& p : BaseParameterInfo()) {
       std::printf("  %-10s %s\n", p.name.c_str(), p.unit.c_str());
     }
-    std::printf("\nEffects (SPEC section 8), parameters named effect.param:\n");
+    std::printf("\nEffects (docs/method.md), parameters named effect.param:\n");
     for (const EffectSpec& e : EffectCatalogue()) {
       std::printf("  %-26s %s\n", e.name.c_str(), e.description.c_str());
       std::string needs;

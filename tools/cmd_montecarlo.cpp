@@ -15,6 +15,7 @@
 #include "tools/command_util.h"
 #include "solvers/estimation/run_problem.h"
 #include "tools/commands.h"
+#include "tools/provenance.h"
 
 namespace triadcal {
 namespace {
@@ -34,6 +35,8 @@ int RunMonteCarloCommand(const MonteCarloArgs& a) {
   if (a.runs < 1) throw InputError("-n: at least 1 run, got " + std::to_string(a.runs));
   if (!(a.tolerance > 0)) throw InputError("--tolerance: must be > 0");
   const Scenario s = LoadScenario(a.scenario);
+  RecordInput("scenario", a.scenario);
+  CheckOverwrite(a.out_json);  // before the long work
   MonteCarloOptions opt;
   opt.runs = a.runs;
   opt.first_seed = a.first_seed;

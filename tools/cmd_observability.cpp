@@ -22,6 +22,7 @@
 #include "tools/command_util.h"
 #include "solvers/estimation/run_problem.h"
 #include "tools/commands.h"
+#include "tools/provenance.h"
 #include "tools/report/observability_report.h"
 
 namespace triadcal {
@@ -65,6 +66,7 @@ int RunObservability(const ObservabilityArgs& a) {
   std::string source, at;
   if (IsScenario(a.input)) {
     const Scenario s = NoiseFreeScenario(LoadScenario(a.input));
+    RecordInput("scenario", a.input);
     data = Simulate(s);
     run = s.run;
     theta = TruthInLayout(s, layout);

@@ -8,6 +8,7 @@
 #include "core/simulation/simulator.h"
 #include "core/model/units.h"
 #include "tools/commands.h"
+#include "tools/provenance.h"
 
 namespace triadcal {
 namespace {
@@ -49,15 +50,17 @@ Command AddSimulateCommand(CLI::App& app) {
   Command c;
   c.app = app.add_subcommand(
       "simulate", "Generate a run with known truth: DIR/run.csv, DIR/run.yaml, DIR/truth.json");
-  c.app->add_option("scenario", opt->scenario_path, "SCENARIO.yaml (SPEC section 7)")->required();
+  c.app->add_option("scenario", opt->scenario_path, "SCENARIO.yaml (docs/file-formats.md)")->required();
   c.app->add_option("-o,--out", opt->out_dir, "output folder (created when missing)")->required();
   CLI::Option* seed = c.app->add_option("--seed", opt->seed, "noise seed (overrides `seed:`)");
   c.run = [opt, seed] {
     Scenario s = LoadScenario(opt->scenario_path);
+    RecordInput("scenario", opt->scenario_path);
+    CheckSimulationFolder(opt->out_dir);
     if (seed->count() > 0) s.seed = opt->seed;
     SampleTruth(&s);
     const RunData data = Simulate(s);
-    WriteSimulation(s, data, opt->out_dir);
+    WriteSimulation(s, data, opt->out_dir, CurrentProvenance().dump());
     PrintSummary(s, data, opt->out_dir);
     return 0;
   };

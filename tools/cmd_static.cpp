@@ -17,6 +17,7 @@
 #include "solvers/static/static_method.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
+#include "tools/provenance.h"
 
 namespace triadcal {
 namespace {
@@ -232,6 +233,7 @@ int RunStatic(const StaticArgs& a) {
   if (!(a.placement_sigma_deg >= 0.0)) throw InputError("--placement-sigma-deg: must be >= 0");
   opt.placement_sigma_rad = a.placement_sigma_deg * kDegToRad;
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
+  CheckOverwrite(a.out_json);  // before the long work
   const StaticResult r = WithFlags(StaticFlags(), [&] {
     return SolveStatic(run.description, run.data, Reference(a, run), opt);
   });

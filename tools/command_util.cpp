@@ -10,15 +10,19 @@
 #include "core/io/file_util.h"
 #include "core/io/run_io.h"
 #include "core/io/run_description_io.h"
+#include "tools/provenance.h"
 
 namespace triadcal {
 
 LoadedRun LoadRunOrThrow(const std::string& run_yaml) {
   LoadedRun r;
   r.description = LoadRunDescription(run_yaml);
+  RecordInput("run", run_yaml);
+  RecordSensor(r.description.sensor_serial, r.description.sensor_model);
   RunWarnings warnings;
   r.data = LoadRunData(r.description, &warnings);
   for (const std::string& w : warnings.lines) std::cerr << "triadcal: warning: " << w << "\n";
+  RecordInput("data", r.description.data_path);
   return r;
 }
 
@@ -89,7 +93,10 @@ void CheckOutputPath(const std::string& path) {
 }
 
 void WriteJson(const nlohmann::json& j, const std::string& path) {
-  WriteFileAtomically(path, j.dump(2) + "\n");
+  CheckOverwrite(path);
+  nlohmann::json stamped = j;
+  stamped["provenance"] = CurrentProvenance();
+  WriteFileAtomically(path, stamped.dump(2) + "\n");
 }
 
 }  // namespace triadcal

@@ -61,7 +61,9 @@ void CheckOutputPath(const std::string& path);
 void ShowProgress(const std::string& what, double fraction);
 void EndProgress();
 
-// Serialises with 2-space indentation and writes atomically.
+// Adds "provenance" (tools/provenance.h), refuses to replace an output of
+// other inputs (CheckOverwrite), serialises with 2-space indentation and
+// writes atomically.
 void WriteJson(const nlohmann::json& j, const std::string& path);
 
 }  // namespace triadcal

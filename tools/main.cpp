@@ -7,6 +7,7 @@
 
 #include "core/model/errors.h"
 #include "tools/commands.h"
+#include "tools/provenance.h"
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -26,8 +27,14 @@ int main(int argc, char** argv) {
       triadcal::AddDesignCommand(app),
       triadcal::AddMonteCarloCommand(app),
       triadcal::AddInfoCommand(app),
+      triadcal::AddExportCommand(app),
   };
 
+  for (const triadcal::Command& c : commands) {
+    c.app->add_flag("--force", triadcal::ForceOverwrite(),
+                    "replace outputs that hold results of other inputs");
+  }
+  triadcal::SetCommandLine(argc, argv);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -5,11 +5,22 @@
 
 namespace triadcal {
 
+namespace {
+const char kExpected[] =
+    "an OUT of fit, static, filter (\"rts\"), compare (\"batch\") or a truth.json";
+Calibration CalibrationFrom(const ParametersFile& file, const std::string& path);
+}  // namespace
+
 Calibration LoadCalibration(const std::string& path) {
-  const ParametersFile file =
-      ReadParametersJson(path, {"", "rts", "batch"},
-                         "an OUT of fit, static, filter (\"rts\"), compare (\"batch\") or a "
-                         "truth.json");
+  return CalibrationFrom(ReadParametersJson(path, {"", "rts", "batch"}, kExpected), path);
+}
+
+Calibration CalibrationFromJson(const nlohmann::json& root, const std::string& path) {
+  return CalibrationFrom(ParametersFromJson(root, path, {"", "rts", "batch"}, kExpected), path);
+}
+
+namespace {
+Calibration CalibrationFrom(const ParametersFile& file, const std::string& path) {
   Calibration cal;
   cal.path = path;
   cal.section = file.section;
@@ -34,7 +45,7 @@ Calibration LoadCalibration(const std::string& path) {
       if (i <= kKzz || info.effect) {
         throw InputError(file.At() + info.name +
                          ": missing (a calibration needs the 21 sensor parameters Kx..Kzz of "
-                         "SPEC section 3, and every parameter of an effect it names)");
+                         "docs/file-formats.md, and every parameter of an effect it names)");
       }
       continue;  // bench and lever arm: not used by the inverse
     }
@@ -47,5 +58,6 @@ Calibration LoadCalibration(const std::string& path) {
   }
   return cal;
 }
+}  // namespace
 
 }  // namespace triadcal

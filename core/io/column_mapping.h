@@ -19,7 +19,7 @@
 // temp_C C. Readings in g or mg become mV with 1 g = 1000 mV, so the triad's
 // nominal scale must then be 1000 mV/g (and the bias 0 mV).
 // The readings channels wx, wy, wz are the IMU's own axes; the mounting turns
-// them into the platform frame (SPEC section 1) after the mapping.
+// them into the platform frame (docs/method.md) after the mapping.
 #pragma once
 
 #include <yaml-cpp/yaml.h>

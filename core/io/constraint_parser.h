@@ -2,7 +2,7 @@
 // parameters, e.g. {expr: "dpsi - dlambda2", value_arcmin: 0, sigma_arcsec: 30}.
 //
 // expr is a sum of terms [coef[*]]name with + or - between them ("2*dpsi -
-// 0.5 * dlambda2", "dx2"); names are the base parameters of SPEC section 3 and
+// 0.5 * dlambda2", "dx2"); names are the base parameters of docs/file-formats.md and
 // effect parameters "effect.param". value_UNIT / sigma_UNIT take the suffix
 // arcmin, arcsec, deg, rad (angle parameters only), mm, m (length parameters
 // only), or none: then the value is in the file unit of the parameters, which

@@ -1,4 +1,4 @@
-// Fast reader of the text form of run data (CSV contract of SPEC section 7, or
+// Fast reader of the text form of run data (CSV contract of docs/file-formats.md, or
 // blank-separated text): one pass over the file in memory, numbers parsed with
 // std::from_chars, only the wanted columns converted.
 #include <algorithm>

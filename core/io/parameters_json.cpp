@@ -24,7 +24,7 @@ double EntryValue(const json& entry, const std::string& where, const std::string
     if (entry.contains("unit")) {
       if (!entry["unit"].is_string() || entry["unit"].get<std::string>() != unit) {
         throw InputError(where + ": unit " + entry["unit"].dump() + ", expected \"" + unit +
-                         "\" (SPEC section 3)");
+                         "\" (docs/file-formats.md)");
       }
     }
   }
@@ -54,6 +54,12 @@ ParametersFile ReadParametersJson(const std::string& path, const std::vector<std
   } catch (const json::parse_error& e) {
     throw InputError(path + ": not valid JSON (" + std::string(e.what()) + ")");
   }
+  return ParametersFromJson(root, path, sections, expected_what);
+}
+
+ParametersFile ParametersFromJson(const nlohmann::json& root, const std::string& path,
+                                  const std::vector<std::string>& sections,
+                                  const std::string& expected_what) {
   ParametersFile out;
   out.path = path;
   if (root.is_object() && root.contains("command") && root["command"].is_string()) {

@@ -4,7 +4,7 @@
 // numbers). Used by `apply` (LoadCalibration), `diagnose --truth` and
 // `observability --at`.
 //
-// An entry is {"value": v, "unit": u, ...} with u the unit of SPEC section 3
+// An entry is {"value": v, "unit": u, ...} with u the unit of docs/file-formats.md
 // (checked when given), or a plain number in that unit. Effect parameters are
 // keyed "effect.name" or, as truth.json writes them, "effect.name_unit"
 // ("angle_latency.tau_ms"); both are read under the layout name
@@ -13,6 +13,8 @@
 
 #include <map>
 #include <string>
+
+#include <nlohmann/json.hpp>
 #include <vector>
 
 namespace triadcal {
@@ -23,7 +25,7 @@ struct ParametersFile {
   std::string command;  // the file's "command", or ""
   struct Entry {
     std::string key;    // as written in the file (for messages)
-    double value_file;  // in the unit of SPEC section 3
+    double value_file;  // in the unit of docs/file-formats.md
   };
   std::map<std::string, Entry> entries;  // by parameter name (ParameterLayout names)
   // "PATH: SECTION." for messages about one entry.
@@ -34,9 +36,14 @@ struct ParametersFile {
 // ("" for the top level, "rts", "batch"). Throws InputError:
 //   "PATH: not valid JSON (...)", "PATH: parameters: missing (expected WHAT)",
 //   "PATH: SECTION.KEY: expected a number or {\"value\": number}" / "no \"value\"" /
-//   "unit U, expected \"V\" (SPEC section 3)" / "value is not a number: X" /
+//   "unit U, expected \"V\" (docs/file-formats.md)" / "value is not a number: X" /
 //   "value is not finite".
 ParametersFile ReadParametersJson(const std::string& path, const std::vector<std::string>& sections,
+                                  const std::string& expected_what);
+
+// The same from JSON already read; `path` names it in messages.
+ParametersFile ParametersFromJson(const nlohmann::json& root, const std::string& path,
+                                  const std::vector<std::string>& sections,
                                   const std::string& expected_what);
 
 // name -> value in file units (the form SetFromFileUnits takes).

@@ -1,4 +1,4 @@
-// run.yaml in and out (SPEC section 7): the bench and triad nominal values, the
+// run.yaml in and out (docs/file-formats.md): the bench and triad nominal values, the
 // constraints, and the column mapping and mounting for foreign data files.
 #include "core/io/run_description_io.h"
 
@@ -121,6 +121,13 @@ void ParseDataFormat(const YAML::Node& node, const YamlPlace& at, RunDescription
   }
 }
 
+// sensor: {serial: TEXT, model: TEXT}, both optional, for the provenance.
+void ParseSensor(const YAML::Node& node, const YamlPlace& at, RunDescription* run) {
+  CheckKeys(node, at, {"serial", "model"});
+  if (node["serial"]) run->sensor_serial = ReadString(node["serial"], at.Child("serial"));
+  if (node["model"]) run->sensor_model = ReadString(node["model"], at.Child("model"));
+}
+
 }  // namespace
 
 RunDescription LoadRunDescription(const std::string& yaml_path) {
@@ -142,7 +149,7 @@ RunDescription ParseRunDescription(const YAML::Node& node, const std::string& ya
   if (!node.IsDefined() || node.IsNull()) return run;
   CheckKeys(node, at,
             {"data", "bench", "triad", "constraints", "columns", "mounting", "priors",
-             "data_format", "positions"});
+             "data_format", "positions", "sensor"});
   if (node["data"]) {
     const std::string data = ReadString(node["data"], at.Child("data"));
     if (data.empty()) at.Child("data").Fail("empty file name");
@@ -162,13 +169,14 @@ RunDescription ParseRunDescription(const YAML::Node& node, const std::string& ya
   if (node["priors"]) ParsePriors(node["priors"], at.Child("priors"), &run);
   if (node["data_format"]) ParseDataFormat(node["data_format"], at.Child("data_format"), &run);
   if (node["positions"]) run.positions = ParsePositions(node["positions"], at.Child("positions"));
+  if (node["sensor"]) ParseSensor(node["sensor"], at.Child("sensor"), &run);
   DefaultTriadForGReadings(node["triad"], &run);
   return run;
 }
 
 std::string RunDescriptionToYaml(const RunDescription& run, const std::string& data_relative) {
   YAML::Emitter out;
-  out << YAML::Comment("triadcal run description (SPEC section 7)") << YAML::Newline;
+  out << YAML::Comment("triadcal run description (docs/file-formats.md)") << YAML::Newline;
   out << YAML::BeginMap;
   out << YAML::Key << "data" << YAML::Value << data_relative;
 
@@ -238,6 +246,16 @@ std::string RunDescriptionToYaml(const RunDescription& run, const std::string& d
     out << YAML::Key << "axes" << YAML::Value << YAML::Flow << YAML::BeginSeq;
     for (int i = 0; i < 3; ++i) out << YAML::DoubleQuoted << MountingAxisText(run, i);
     out << YAML::EndSeq << YAML::EndMap;
+  }
+  if (!run.sensor_serial.empty() || !run.sensor_model.empty()) {
+    out << YAML::Key << "sensor" << YAML::Value << YAML::BeginMap;
+    if (!run.sensor_serial.empty()) {
+      out << YAML::Key << "serial" << YAML::Value << YAML::DoubleQuoted << run.sensor_serial;
+    }
+    if (!run.sensor_model.empty()) {
+      out << YAML::Key << "model" << YAML::Value << YAML::DoubleQuoted << run.sensor_model;
+    }
+    out << YAML::EndMap;
   }
   out << YAML::EndMap;
   if (!out.good()) throw std::logic_error("run.yaml emitter: " + out.GetLastError());

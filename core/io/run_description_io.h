@@ -1,4 +1,4 @@
-// Reading and writing run.yaml (the run description of SPEC section 7).
+// Reading and writing run.yaml (the run description of docs/file-formats.md).
 #pragma once
 
 #include <string>
@@ -19,7 +19,7 @@ RunDescription ParseRunDescription(const YAML::Node& node, const std::string& ya
                                    const std::string& where);
 
 // run.yaml text for this description, with `data:` written as given (relative
-// to the folder the YAML will be written to). Only the keys of the SPEC and
+// to the folder the YAML will be written to). Only the keys of docs/file-formats.md and
 // those that differ from the defaults are written.
 std::string RunDescriptionToYaml(const RunDescription& run, const std::string& data_relative);
 

@@ -222,7 +222,7 @@ TEST_F(RunDescriptionTest, ErrorsNameTheKey) {
   const std::string f = Path();
   EXPECT_EQ(ErrorOf("data: run.csv\ntrid: {}\n"),
             f + ": trid: unknown key (allowed: data, bench, triad, constraints, columns, "
-                "mounting, priors, data_format, positions)");
+                "mounting, priors, data_format, positions, sensor)");
   EXPECT_EQ(ErrorOf("data: run.csv\ntriad: {scale_mV_per_g: [174, 174]}\n"),
             f + ": triad.scale_mV_per_g: expected a list of 3 numbers, got 2");
   EXPECT_EQ(ErrorOf("data: run.csv\ntriad: {scale_mV_per_g: [174, x, 174]}\n"),
@@ -375,6 +375,24 @@ mounting: {axes: ["+y", "-z", "-x"]}
   ExpectSameDescription(run, back);
   // Written again, the text is the same: nothing drifts.
   EXPECT_EQ(RunDescriptionToYaml(back, "run.csv"), text);
+}
+
+// sensor: {serial, model}, both optional, kept as text and written back.
+TEST_F(RunDescriptionTest, SensorSerialAndModel) {
+  const RunDescription run =
+      LoadRunDescription(WriteYaml("data: run.csv\nsensor: {serial: 0042, model: ADXL325}\n"));
+  EXPECT_EQ(run.sensor_serial, "0042");
+  EXPECT_EQ(run.sensor_model, "ADXL325");
+  const RunDescription back =
+      LoadRunDescription(WriteYaml(RunDescriptionToYaml(run, "run.csv"), "run2.yaml"));
+  EXPECT_EQ(back.sensor_serial, "0042");
+  EXPECT_EQ(back.sensor_model, "ADXL325");
+  const RunDescription model_only =
+      LoadRunDescription(WriteYaml("data: run.csv\nsensor: {model: ADXL325}\n"));
+  EXPECT_EQ(model_only.sensor_serial, "");
+  EXPECT_EQ(RunDescriptionToYaml(model_only, "run.csv").find("serial"), std::string::npos);
+  EXPECT_EQ(ErrorOf("data: run.csv\nsensor: {serial_no: 1}\n"),
+            Path() + ": sensor.serial_no: unknown key (allowed: serial, model)");
 }
 
 TEST_F(RunDescriptionTest, DefaultRoundTripWritesTheSpecKeysOnly) {

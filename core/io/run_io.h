@@ -1,4 +1,4 @@
-// Run data in and out: the CSV contract of SPEC section 7, MATLAB files through
+// Run data in and out: the CSV contract of docs/file-formats.md, MATLAB files through
 // matio, the column mapping and IMU mounting of run.yaml, angle unwrapping, and
 // the validation of what was read.
 #pragma once

@@ -441,7 +441,7 @@ TEST_F(RunIoTest, MatFileWithColumnMappingAndMounting) {
             f + ": sample 5: variable 'bad' (wy): NaN (every sample must be a number)");
 }
 
-// The real single-axis runs (SPEC section 9): skipped without the shared folder.
+// The real single-axis runs (docs/real-data.md): skipped without the shared folder.
 class RunIoRealData : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(RunIoRealData, LoadsThroughTheExampleYaml) {

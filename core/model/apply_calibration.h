@@ -2,7 +2,7 @@
 //
 // Convention. The forward model is the readings model of paper eq. 1
 // (bench_model.h Readings_mV): specific force W [g, triad frame] -> readings
-// [mV]. A calibration is its parameters theta (SPEC section 3); applying it is
+// [mV]. A calibration is its parameters theta (docs/file-formats.md); applying it is
 // the exact inverse of that model, bench_model.h SpecificForceFromReadings_g:
 //
 //   u_i = (Wpr_i - W0_i) / K_i,    M W + diag(W) K W = u    (solved by Newton)

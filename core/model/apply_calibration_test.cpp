@@ -176,8 +176,10 @@ TEST_F(ApplyTest, RoundTripThroughTheFilesOfEveryCommand) {
   const Truth tr = MakeTruth(CalibrationLayout(), CalibrationTheta(), 500);
   WriteRunCsv(tr.data, Path("run.csv"), "readings of known specific forces");
   const std::string run = Write("run.yaml", "data: run.csv\nconstraints: []\n");
-  const std::string out = Path("corrected.csv"), err = Path("err.txt");
+  const std::string err = Path("err.txt");
   for (const std::string kind : {"fit", "filter", "truth"}) {
+    // One output per calibration: apply will not replace results of other inputs.
+    const std::string out = Path("corrected_" + kind + ".csv");
     const std::string cal =
         Write(kind + ".json", kind == "truth" ? TruthJsonText() : ParametersJsonText(kind));
     ASSERT_EQ(RunCli("apply " + cal + " " + run + " -o " + out, err), 0) << ReadFile(err);
@@ -220,12 +222,12 @@ TEST_F(ApplyTest, BadCalibrationFilesGiveOneLine) {
   EXPECT_EQ(error_of(j.dump()),
             "triadcal: error: " + f +
                 ": parameters.Kyz: missing (a calibration needs the 21 sensor parameters Kx..Kzz "
-                "of SPEC section 3, and every parameter of an effect it names)\n");
+                "of docs/file-formats.md, and every parameter of an effect it names)\n");
   j = nlohmann::json::parse(ParametersJsonText("fit"));
   j["parameters"]["gamma_y"]["unit"] = "deg";
   EXPECT_EQ(error_of(j.dump()), "triadcal: error: " + f +
                                     ": parameters.gamma_y: unit \"deg\", expected \"arcmin\" "
-                                    "(SPEC section 3)\n");
+                                    "(docs/file-formats.md)\n");
   j = nlohmann::json::parse(ParametersJsonText("fit"));
   j["parameters"]["W0x"]["value"] = "1500";
   EXPECT_EQ(error_of(j.dump()),
@@ -235,7 +237,7 @@ TEST_F(ApplyTest, BadCalibrationFilesGiveOneLine) {
   EXPECT_EQ(error_of(j.dump()),
             "triadcal: error: " + f +
                 ": parameters.thermal_drift.rate_y: missing (a calibration needs the 21 sensor "
-                "parameters Kx..Kzz of SPEC section 3, and every parameter of an effect it "
+                "parameters Kx..Kzz of docs/file-formats.md, and every parameter of an effect it "
                 "names)\n");
   j = nlohmann::json::parse(ParametersJsonText("fit"));
   j["parameters"]["Ky"]["value"] = 0;

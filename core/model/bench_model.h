@@ -1,10 +1,10 @@
-// The physics of triadcal, written once: bench kinematics (SPEC sections 1-2,
+// The physics of triadcal, written once: bench kinematics (docs/method.md,
 // paper eq. 2), the readings model (paper eq. 1) and its exact inverse, and the
 // effects of the catalogue (effects.h). Everything is templated on the scalar so
 // that Ceres Jets flow through; the simulator, the filter, the batch solver and
 // the analyses all call these functions and nothing else.
 //
-// Frames (SPEC section 1): L level (x up, g_L = (-g, 0, 0)), 1 outer-axis frame,
+// Frames (docs/method.md): L level (x up, g_L = (-g, 0, 0)), 1 outer-axis frame,
 // 2 platform frame (= triad frame). Names carry frames: C_L2 rotates frame-2
 // vectors into L, p_O_L is the position of O in L.
 #pragma once
@@ -145,7 +145,7 @@ BenchAngles<T> BenchAnglesFromRecorded(const ModelConfig& cfg, const T* theta,
 }
 
 // ---------------------------------------------------------------------------
-// Geometry stage: bench kinematics (SPEC sections 1-2, paper eq. 2).
+// Geometry stage: bench kinematics (docs/method.md, paper eq. 2).
 //
 //   C_L1 = Rz(dpsi) Ry(l1 + dtheta_c)
 //   C_12 = Rz(eps) Rx(l2 + dlambda2) Rz(-eps)         (eps = 0 without the effect)

@@ -71,7 +71,7 @@ TEST(BenchModel, KinematicsMatchFiniteDifferencesOfPosition) {
   }
 }
 
-// The rotation chain of SPEC section 1 written out directly.
+// The rotation chain of docs/method.md written out directly.
 TEST(BenchModel, RotationChainIsSpecOrder) {
   ModelConfig cfg;
   Eigen::VectorXd th = Eigen::VectorXd::Zero(cfg.layout.size());

@@ -1,5 +1,5 @@
-// The effect catalogue (SPEC section 8): every effect that the base model of
-// SPEC sections 1-3 lacks, each with its own parameters and units.
+// The effect catalogue (docs/method.md): every effect that the base model of
+// docs/method.md lacks, each with its own parameters and units.
 //
 // Every effect is declared once, in EffectCatalogue() (effects.cpp): its stage,
 // its parameters with their file units, default prior sigma, plausible range

@@ -1,4 +1,4 @@
-// The parameter vector theta: the 27 base parameters of SPEC section 3 followed
+// The parameter vector theta: the 27 base parameters of docs/file-formats.md followed
 // by the parameters of each effect switched on in the layout.
 //
 // Internally every entry is in SI/radians (see units.h); ParameterInfo gives the
@@ -38,7 +38,7 @@ struct ParameterInfo {
   std::optional<Effect> effect;  // empty for base parameters
 };
 
-// Names and units of the 27 base parameters (SPEC section 3).
+// Names and units of the 27 base parameters (docs/file-formats.md).
 const std::vector<ParameterInfo>& BaseParameterInfo();
 
 // Which effects are switched on and where their parameters sit in theta.

@@ -1,4 +1,4 @@
-// Weak priors on theta (SPEC section 6, block 4): mean = the run's nominal
+// Weak priors on theta (docs/method.md, batch block 4): mean = the run's nominal
 // values, sigma = datasheet-like spreads, overridable per parameter with the
 // `priors:` key of run.yaml (file units). The estimators start from them and the
 // observability analysis measures what the data add to them.

@@ -1,4 +1,4 @@
-// Elementary rotations of SPEC section 1, templated on the scalar so that Ceres
+// Elementary rotations of docs/method.md, templated on the scalar so that Ceres
 // Jets pass through them.
 //
 //   Rx(a) = [[1,0,0],[0,c,-s],[0,s,c]]

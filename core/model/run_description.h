@@ -1,4 +1,4 @@
-// The run description (run.yaml, SPEC section 7): where the data are, what the
+// The run description (run.yaml, docs/file-formats.md): where the data are, what the
 // bench and the triad are nominally, the constraints (pseudo-measurements), and
 // for files other than the CSV contract, how their columns map to ours and how
 // the IMU sits on the platform.
@@ -14,8 +14,9 @@
 //     noise_mV: 2.0
 //   constraints:
 //     - {expr: "dpsi - dlambda2", value_arcmin: 0, sigma_arcsec: 30}
-//   columns:        # optional; see README "Run data" for the full mapping syntax
+//   columns:        # optional; see docs/file-formats.md for the full mapping syntax
 //   mounting:       # optional; axes: ["+x", "+y", "+z"]
+//   sensor:         # optional; {serial: "SN 0042", model: "ADXL325"}
 #pragma once
 
 #include <map>
@@ -94,6 +95,11 @@ struct RunDescription {
   // parameter around its nominal value; absent names use the defaults of
   // core/model/priors.h. (Parsed from the optional `priors:` key.)
   std::map<std::string, double> prior_sigma;
+
+  // sensor (optional): which unit was calibrated, copied into the provenance
+  // of every output: {serial: "SN 0042", model: "ADXL325"}; empty when absent.
+  std::string sensor_serial;
+  std::string sensor_model;
 };
 
 // The nominal parameter vector of this run (scale, bias from the triad section,

@@ -2,7 +2,7 @@
 // except the two quantities of the readings model (paper eq. 1) that have no SI
 // counterpart: readings are in mV and the specific force W is dimensionless,
 // expressed in units of g (so scale factors are mV/g and K_ij are 1/g).
-// Conversions to the units of the files (SPEC section 3) happen only at the
+// Conversions to the units of the files (docs/file-formats.md) happen only at the
 // file boundary, through the tables in parameters.h and effects.h.
 #pragma once
 
@@ -14,6 +14,6 @@ constexpr double kArcminToRad = kPi / (180.0 * 60.0);
 constexpr double kArcsecToRad = kPi / (180.0 * 3600.0);
 constexpr double kMmToM = 1e-3;
 constexpr double kMsToS = 1e-3;
-constexpr double kStandardGravity = 9.80665;  // m/s^2, SPEC section 1 default
+constexpr double kStandardGravity = 9.80665;  // m/s^2, docs/method.md default
 
 }  // namespace triadcal

@@ -1,4 +1,4 @@
-// LoadScenario: reads and checks a scenario file (SPEC section 7, the input of
+// LoadScenario: reads and checks a scenario file (docs/file-formats.md, the input of
 // `triadcal simulate`; the schema is in simulator.h). Every message is one line
 // "FILE: key.path: what is wrong", through the shared helpers of yaml_fields.h.
 #include <yaml-cpp/yaml.h>
@@ -285,7 +285,7 @@ Scenario LoadScenario(const std::string& yaml_path) {
     for (const auto& kv : spread) {
       const std::string name = kv.first.as<std::string>();
       const int i = s.truth_layout.IndexOf(name);
-      if (i < 0) spread_at.Child(name).Fail("unknown parameter (SPEC section 3 names)");
+      if (i < 0) spread_at.Child(name).Fail("unknown parameter (docs/file-formats.md names)");
       s.truth_spread.push_back(
           {i, ReadNonNegative(kv.second, spread_at.Child(name)) * s.truth_layout.info(i).si_per_unit});
     }

@@ -1,4 +1,4 @@
-// WriteSimulation: the three files of `triadcal simulate` (SPEC section 7),
+// WriteSimulation: the three files of `triadcal simulate` (docs/file-formats.md),
 // DIR/run.csv, DIR/run.yaml and DIR/truth.json, all or none.
 #include <unistd.h>
 
@@ -44,7 +44,7 @@ double TruthFileValue(const ParameterLayout& layout, const Eigen::VectorXd& thet
 
 namespace {
 
-std::string TruthJson(const Scenario& s, const RunData& data) {
+std::string TruthJson(const Scenario& s, const RunData& data, const std::string& provenance) {
   nlohmann::ordered_json params = nlohmann::ordered_json::object();
   nlohmann::ordered_json units = nlohmann::ordered_json::object();
   for (int i = 0; i < s.truth_layout.size(); ++i) {
@@ -63,6 +63,7 @@ std::string TruthJson(const Scenario& s, const RunData& data) {
   j["seed"] = s.seed;
   j["noise"] = {{"accel_mV", s.accel_noise_mV}, {"angle_arcsec", s.angle_noise_rad / kArcsecToRad}};
   j["samples"] = data.size();
+  if (!provenance.empty()) j["provenance"] = nlohmann::ordered_json::parse(provenance);
   return j.dump(2) + "\n";
 }
 
@@ -73,10 +74,11 @@ std::string CsvComment(const Scenario& s) {
 
 }  // namespace
 
-void WriteSimulation(const Scenario& s, const RunData& data, const std::string& dir) {
+void WriteSimulation(const Scenario& s, const RunData& data, const std::string& dir,
+                     const std::string& provenance_json) {
   // Everything that can fail without touching the disk, first.
   const std::string yaml_text = RunDescriptionToYaml(s.run, "run.csv");
-  const std::string json_text = TruthJson(s, data);
+  const std::string json_text = TruthJson(s, data, provenance_json);
   const std::vector<std::string> names = {"run.csv", "run.yaml", "truth.json"};
 
   const fs::path out(dir);

@@ -1,4 +1,4 @@
-// The simulator: a scenario (SPEC section 7) -> a run (run.csv, run.yaml,
+// The simulator: a scenario (docs/file-formats.md) -> a run (run.csv, run.yaml,
 // truth.json). It uses the model of bench_model.h and nothing else for the
 // physics, so data and estimators share one model.
 //
@@ -6,7 +6,7 @@
 //
 //   profile: {amplitude_deg: [360, 90], period_s: [30, 12], phase_deg: [0, 0],
 //             duration_s: 90, rate_hz: 100}
-//   truth: {Kx: 171.5, dpsi: -33, dx2: -7}   # SPEC section 3 names, file units;
+//   truth: {Kx: 171.5, dpsi: -33, dx2: -7}   # docs/file-formats.md names, file units;
 //                                             # absent: nominal (Kx..Kz, W0x..W0z
 //                                             # from run.triad) or 0
 //   noise: {accel_mV: 2.0, angle_arcsec: 0}   # white, 1 sigma per sample
@@ -20,7 +20,7 @@
 //        # (q = sensor.quantization_mV), at least kMinDeclaredNoise_mV since
 //        # run.yaml needs noise_mV > 0; `data`, `columns` and `mounting` are not
 //        # allowed (simulate writes the CSV contract itself)
-//   # optional keys beyond SPEC section 7:
+//   # optional keys beyond docs/file-formats.md:
 //   seed: 1                                   # overridden by `simulate --seed N`
 //   truth_spread: {dlambda2: 0.5}             # per-seed Gaussian spread added to
 //                                             # the truth (file units), drawn from
@@ -124,7 +124,7 @@ RunData Simulate(const Scenario& s);
 
 // The key of parameter i of the layout in truth.json: base parameters by name
 // ("Kx"), effect parameters as effect.name_unit ("angle_latency.tau_ms", the
-// SPEC section 7 form), and its value in file units, written with the fewest
+// the OUT form of docs/file-formats.md), and its value in file units, written with the fewest
 // digits that read back (value * si_per_unit) to exactly theta[i].
 std::string TruthFileKey(const ParameterLayout& layout, int i);
 double TruthFileValue(const ParameterLayout& layout, const Eigen::VectorXd& theta, int i);
@@ -137,7 +137,9 @@ double TruthFileValue(const ParameterLayout& layout, const Eigen::VectorXd& thet
 //   run.yaml    RunDescriptionToYaml(run, "run.csv"): injected effects NOT declared
 //   truth.json  {"parameters": {"Kx": 171.5, ..., "angle_latency.tau_ms": 2},
 //                "units": {...}, "injected_effects": [...], "scenario": NAME,
-//                "seed": N, "noise": {"accel_mV", "angle_arcsec"}, "samples": N}
-void WriteSimulation(const Scenario& s, const RunData& data, const std::string& dir);
+//                "seed": N, "noise": {"accel_mV", "angle_arcsec"}, "samples": N,
+//                "provenance": {...}}  (provenance_json, when not empty)
+void WriteSimulation(const Scenario& s, const RunData& data, const std::string& dir,
+                     const std::string& provenance_json = "");
 
 }  // namespace triadcal

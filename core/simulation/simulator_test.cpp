@@ -245,7 +245,7 @@ TEST(SimulatorNoiseFree, ReadingsAreTheModelAtTheProfileAngles) {
   EXPECT_FALSE(d.has_temp());
 }
 
-// Gravity projection by hand, SPEC sections 1-2: at rest W = C_L2^T (0 - g_L)/g
+// Gravity projection by hand, docs/method.md: at rest W = C_L2^T (0 - g_L)/g
 // = first row of C_L2 = Rz(psi) Ry(a) Rx(b), a = l1 + dtheta_c, b = l2 + dlambda2:
 //   row0(Rz(psi))              = (cpsi, -spsi, 0)
 //   row0(Rz(psi) Ry(a))        = (cpsi ca, -spsi, cpsi sa)
@@ -444,7 +444,7 @@ TEST(ScenarioLoad, DefaultsNominalTruthAndDeclaredNoise) {
                                   "noise: {accel_mV: 1.5, angle_arcsec: 0}\n"
                                   "run: {triad: {scale_mV_per_g: [170, 171, 172],\n"
                                   "              bias_mV: [1490, 1500, 1510]}}\n");
-  EXPECT_EQ(s.profile.NumSamples(), 9000u);  // SPEC profile, 90 s at 100 Hz
+  EXPECT_EQ(s.profile.NumSamples(), 9000u);  // the paper profile, 90 s at 100 Hz
   EXPECT_EQ(s.truth_layout.size(), kNumBaseParams);
   EXPECT_EQ(s.truth[kKx], 171.5);
   EXPECT_EQ(s.truth[kKy], 171.0);  // nominal from run.triad

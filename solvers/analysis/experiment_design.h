@@ -1,6 +1,6 @@
 // Experiment design: the Cramer-Rao bound of a test before it is run.
 //
-// Quasi-harmonic runs (SPEC sections 5-6). A scenario's profile, truth and
+// Quasi-harmonic runs (docs/method.md). A scenario's profile, truth and
 // declared noise are simulated without noise (Simulate with the scenario's
 // noise and quantization set to 0; run.yaml's declared noise kept, so the
 // process and measurement weights are those of the real run) and the Fisher

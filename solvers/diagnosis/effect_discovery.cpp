@@ -72,7 +72,7 @@ DiagnosisResult Diagnose(const RunDescription& run, const RunData& data,
     // Effects need the data their catalogue entry names (temp_C). With temp_C
     // recorded and (nearly) linear in time, a zero-offset drift in time and
     // one in temperature are the same function of the samples: test the
-    // temperature form only (SPEC section 8 lists them as one effect).
+    // temperature form only (docs/method.md lists them as one effect).
     const bool temp_linear_in_time =
         data.has_temp() && std::abs(Correlation(data.t_s, data.temp_C)) > 0.99;
     for (const EffectSpec& e : EffectCatalogue()) {

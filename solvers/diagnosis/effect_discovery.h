@@ -1,4 +1,4 @@
-// Closing the loop (SPEC section 8): fit, look at the residuals, test every
+// Closing the loop (docs/method.md): fit, look at the residuals, test every
 // catalogue effect the model lacks, add the ones the data demand, refit, and
 // report before and after.
 //

@@ -1,4 +1,4 @@
-// The batch solver (SPEC section 6): the whole run as one sparse nonlinear
+// The batch solver (docs/method.md): the whole run as one sparse nonlinear
 // least-squares problem, solved by Ceres.
 //
 // Unknowns: theta (n) and the trajectory x_e = (V_e, S_e) of O in L at the

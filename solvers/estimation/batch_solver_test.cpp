@@ -233,7 +233,7 @@ TEST(FitCommand, FitAndCompareWriteTheirOutputs) {
     EXPECT_TRUE(cmp.contains(key)) << key;
   }
   EXPECT_TRUE(cmp["ekf"]["parameters"].contains("Kx"));
-  // The batch optimum and the iterated smoother agree (SPEC section 6).
+  // The batch optimum and the iterated smoother agree (docs/method.md).
   EXPECT_LT(cmp["largest_batch_minus_rts"]["sigma"].get<double>(), 0.05);
   const std::string table = Slurp((dir / "cmp.txt").string());
   EXPECT_NE(table.find("RTS-EKF"), std::string::npos);

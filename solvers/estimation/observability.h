@@ -1,6 +1,6 @@
 // Observability of a run: the Cramer-Rao bound of theta and the directions the
 // run cannot determine, from the Fisher information of the batch model
-// (SPEC sections 4 and 6) -- the same linearisation the estimators use.
+// (docs/method.md) -- the same linearisation the estimators use.
 //
 // Fisher information. batch_linearization.h linearises every process (B1),
 // measurement (B2) and theta-only row of the batch problem at a theta;
@@ -22,7 +22,7 @@
 //
 //   lambda < unobservable          unobservable: the answer along it is the
 //                                  prior's (a structural null of the model has
-//                                  lambda ~ 1e-6, rounding; see the README)
+//                                  lambda ~ 1e-6, rounding; see docs/method.md)
 //   lambda < weak                  weakly observable: determined, but the
 //                                  prior still shapes the answer
 //

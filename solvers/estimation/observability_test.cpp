@@ -1,7 +1,7 @@
 // Observability, experiment design and Monte Carlo (solvers/estimation/observability.h,
 // experiment_design.h, monte_carlo.h) and their commands: the inner-axis
 // rotation named without the paper's constraint and nothing unobservable with
-// it, the CRB against SPEC section 4, 1/sqrt(T), what a static test cannot
+// it, the CRB against docs/method.md, 1/sqrt(T), what a static test cannot
 // determine, the real single-axis runs, a small Monte Carlo, and bad input.
 #include <cmath>
 #include <cstdio>
@@ -29,7 +29,7 @@ namespace {
 namespace fs = std::filesystem;
 using testing_fixtures::PaperScenario;
 
-// The paper's experiment 3 at the SPEC section 4 noise level (2 mV at 20 Hz,
+// The paper's experiment 3 at the docs/method.md noise level (2 mV at 20 Hz,
 // 15" angles), analysed without noise in the data at the truth, with 0.2-s
 // epochs (the figures below were set with them; the default 0.5-s epochs
 // carry a little less B2 information, and the constrained problem's smallest
@@ -95,7 +95,7 @@ TEST(Observability, InnerAxisRotationNamedWithoutTheConstraintOnly) {
   }
 }
 
-// SPEC section 4: with 2 mV white noise at 20 Hz over 90 s the CRB is roughly
+// docs/method.md: with 2 mV white noise at 20 Hz over 90 s the CRB is roughly
 // scale 0.08-0.13 mV/g, bias 0.07-0.14 mV, angles 1.3-3.3', K_ij 0.8-1.7e-3 /g,
 // dpsi/dtheta_c/dlambda2 1.3-1.5', dR 3-5 mm. "Roughly": our ranges may reach
 // 15 % below the low ends (measured: 0.88 of it at worst, Kx and W0z).
@@ -116,7 +116,7 @@ TEST(Observability, CrbAgreesWithSpecSection4) {
   for (const Range& g : ranges) {
     for (int i : g.members) {
       const double s = Sigma(r.with_constraints, i);
-      std::printf("%-9s %.3g (SPEC %.3g-%.3g)\n", ParameterLayout().info(i).name.c_str(), s, g.lo,
+      std::printf("%-9s %.3g (quoted %.3g-%.3g)\n", ParameterLayout().info(i).name.c_str(), s, g.lo,
                   g.hi);
       EXPECT_GE(s, 0.85 * g.lo) << ParameterLayout().info(i).name;
       EXPECT_LE(s, 1.02 * g.hi) << ParameterLayout().info(i).name;
@@ -124,7 +124,7 @@ TEST(Observability, CrbAgreesWithSpecSection4) {
   }
 }
 
-// sigma shrinks as 1/sqrt(samples) (SPEC section 4), up to the trapezoid
+// sigma shrinks as 1/sqrt(samples) (docs/method.md), up to the trapezoid
 // weights of B1: an interval of m sample steps carries the noise of m - 1/2
 // samples (its end samples count half), so sigma goes as sqrt(m - 1/2) / m
 // and 4x the rate gives 1.90 at 20 -> 80 Hz, 1.98 at 100 -> 400 Hz (m = 20 -> 80

@@ -28,7 +28,7 @@ constexpr int kN = kNumBaseParams;
 // ---------------------------------------------------------------------------
 
 // A position on the bench, at rest (lambda' = lambda'' = 0):
-//   W_p = C_L2(lambda_p + bench errors)^T (0 - g_L) / g      (SPEC section 2)
+//   W_p = C_L2(lambda_p + bench errors)^T (0 - g_L) / g      (docs/method.md)
 //   r   = (Readings_mV(theta; W_p) - z_p) / sigma_p          (paper eq. 1)
 // PredictReadings_mV is exactly this chain with zero rates; the lever arm
 // multiplies rates only, so it drops out.
@@ -221,7 +221,7 @@ std::vector<HeldParameter> HeldFor(StaticReference ref, const std::vector<std::s
     const int i = layout.IndexOf(name);
     if (i < 0 || i >= kN) {
       throw OptionError("fixed", "unknown parameter '" + name +
-                                     "' (names of SPEC section 3, or K_ij for all nine)");
+                                     "' (names of docs/file-formats.md, or K_ij for all nine)");
     }
     held[name] = "held at nominal by --fix";
   }

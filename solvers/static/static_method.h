@@ -25,7 +25,7 @@
 // with options.placement_sigma_rad the position covariance also carries the
 // orientation error of the position (PositionSqrtInfo in the .cpp).
 // The weak priors of priors.h (on the free parameters) and, with angles, the
-// constraints of run.yaml are added as in the batch problem (SPEC section 6),
+// constraints of run.yaml are added as in the batch problem (docs/method.md),
 // so the separability analysis (separability.h) can name what the positions do
 // not support; such parameters are reported with "estimable": false.
 //

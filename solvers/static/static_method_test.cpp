@@ -505,7 +505,7 @@ TEST(StaticMethod, BenchAnglesRecoverTheSensorAndTheBench) {
   for (const char* held : {"dx2", "dy2", "dz2"}) EXPECT_TRUE(IsHeld(r, held));
   // Without the constraint a static test cannot tell dlambda2 from a common
   // rotation of the triad about the inner axis (gamma_y, gamma_z), as the
-  // quasi-harmonic run cannot (SPEC section 4); dpsi and dtheta_c it separates.
+  // quasi-harmonic run cannot (docs/method.md); dpsi and dtheta_c it separates.
   s.run.constraints.clear();
   const StaticResult u = SolveStatic(s.run, d, StaticReference::kAngles, StaticOptions{});
   const std::set<std::string> weak(u.not_separable.begin(), u.not_separable.end());
@@ -567,7 +567,7 @@ TEST(StaticVsQuasiHarmonic, Table2) {
 }
 
 // ---------------------------------------------------------------------------
-// The real sessions of the shared folder (SPEC section 9), skipped without it.
+// The real sessions of the shared folder (docs/real-data.md), skipped without it.
 // ---------------------------------------------------------------------------
 
 std::string SharedFile(const std::string& example, const std::string& rest) {
@@ -813,7 +813,7 @@ TEST(StaticCommand, WritesOutAndRejectsBadInput) {
             "triadcal: error: --reference: expected auto, angles, labels or none, got "
             "'sideways'\n");
   EXPECT_EQ(error_of("static " + yaml + " --fix Kqq"),
-            "triadcal: error: --fix: unknown parameter 'Kqq' (names of SPEC section 3, or K_ij "
+            "triadcal: error: --fix: unknown parameter 'Kqq' (names of docs/file-formats.md, or K_ij "
             "for all nine)\n");
   EXPECT_EQ(error_of("static " + yaml + " --noise-factor 0"),
             "triadcal: error: --noise-factor: must be > 0\n");

@@ -1,4 +1,4 @@
-// The "parameters" object of every OUT file (SPEC section 7):
+// The "parameters" object of every OUT file (docs/file-formats.md):
 //   {"Kx": {"value": 171.52, "sigma": 0.08, "unit": "mV/g"}, ...}
 // values and sigmas in file units; "estimable": false marks parameters that the
 // run cannot separate (their value is the prior's).

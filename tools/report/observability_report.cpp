@@ -70,7 +70,7 @@ nlohmann::json ObservabilityJson(const ObservabilityResult& r) {
   out["not_estimable"] = with["not_estimable"];
   out["correlation"] = CorrelationJson(L, r.with_constraints.cov);
   const std::set<std::string> held = UnobservableNames(r.with_constraints);
-  // SPEC section 7 form: value = the point of evaluation, sigma = the CRB.
+  // the OUT form of docs/file-formats.md: value = the point of evaluation, sigma = the CRB.
   out["parameters"] = ParametersJson(L, r.theta, r.with_constraints.cov, held);
   nlohmann::json prior = nlohmann::json::object();
   for (int i = 0; i < L.size(); ++i) prior[L.info(i).name] = r.prior.sigma[i] / L.info(i).si_per_unit;

@@ -1,0 +1,104 @@
+"""The Python module against the command line: the main example's fit, apply,
+simulate and the error messages. Run by ctest (python_pytest) with PYTHONPATH
+set to the module's folder and TRIADCAL_BIN, TRIADCAL_SOURCE_DIR set."""
+import json
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+import triadcal
+
+BIN = os.environ["TRIADCAL_BIN"]
+SOURCE = os.environ["TRIADCAL_SOURCE_DIR"]
+EXAMPLE = os.path.join(SOURCE, "examples", "paper-experiment3", "scenario.yaml")
+
+
+def run_cli(*args):
+    subprocess.run([BIN, *args], check=True, stdout=subprocess.DEVNULL)
+
+
+@pytest.fixture(scope="module")
+def example(tmp_path_factory):
+    """The main job (examples/paper-experiment3/run.sh) through the command line."""
+    out = tmp_path_factory.mktemp("exp3")
+    run_cli("simulate", EXAMPLE, "-o", str(out), "--seed", "1")
+    run_cli("fit", str(out / "run.yaml"), "-o", str(out / "fit.json"))
+    return out
+
+
+def test_fit_reproduces_the_main_example(example):
+    cli = json.load(open(example / "fit.json"))
+    py = triadcal.fit(str(example / "run.yaml"))
+    assert py["command"] == "fit"
+    assert set(py["parameters"]) == set(cli["parameters"])
+    for name, p in cli["parameters"].items():
+        q = py["parameters"][name]
+        # The same code on the same data: equal up to the rounding of a
+        # multi-threaded sum (far below a millionth of sigma).
+        assert abs(q["value"] - p["value"]) <= 1e-6 * p["sigma"], name
+        assert q["sigma"] == pytest.approx(p["sigma"], rel=1e-6), name
+        assert q["unit"] == p["unit"]
+    assert py["chi2_per_dof"] == pytest.approx(cli["chi2_per_dof"], rel=1e-9)
+    # And it is the right answer: within 4 sigma of the simulated truth.
+    truth = json.load(open(example / "truth.json"))["parameters"]
+    for name, q in py["parameters"].items():
+        assert abs(q["value"] - truth[name]) < 4 * q["sigma"], name
+
+
+def test_fit_from_a_dict(example):
+    run = {
+        "data": str(example / "run.csv"),
+        "bench": {"lever_arm_mm": [138, 20, 20], "angle_noise_arcsec": 15},
+        "triad": {"scale_mV_per_g": [174, 174, 174], "bias_mV": [1500, 1500, 1500],
+                  "noise_mV": 0.97},
+        "constraints": [{"expr": "dpsi - dlambda2", "value_arcmin": 0, "sigma_arcsec": 30}],
+    }
+    from_path = triadcal.fit(str(example / "run.yaml"))
+    from_dict = triadcal.fit(run)
+    for name, p in from_path["parameters"].items():
+        assert abs(from_dict["parameters"][name]["value"] - p["value"]) <= 1e-6 * p["sigma"]
+
+
+def test_simulate_gives_the_command_line_data(example):
+    sim = triadcal.simulate(EXAMPLE, seed=1)
+    cli = triadcal.load_run(str(example / "run.yaml"))
+    assert sim["readings_mV"].shape == (90000, 3)
+    np.testing.assert_array_equal(sim["t_s"], cli["t_s"])
+    np.testing.assert_array_equal(sim["readings_mV"], cli["readings_mV"])
+    np.testing.assert_array_equal(sim["lambda1_deg"], cli["lambda1_deg"])
+    assert sim["truth"] == json.load(open(example / "truth.json"))["parameters"]
+
+
+def test_apply_matches_the_command_line(example, tmp_path):
+    run_cli("apply", str(example / "fit.json"), str(example / "run.yaml"), "-o",
+            str(tmp_path / "w.csv"))
+    rows = [line for line in open(tmp_path / "w.csv") if not line.startswith("#")][1:]
+    cli = np.loadtxt(rows, delimiter=",", usecols=(1, 2, 3))
+    readings = triadcal.load_run(str(example / "run.yaml"))["readings_mV"]
+    from_path = triadcal.apply(str(example / "fit.json"), readings)
+    from_dict = triadcal.apply(json.load(open(example / "fit.json")), readings)
+    assert np.abs(from_path - cli).max() <= 1e-12
+    np.testing.assert_array_equal(from_path, from_dict)
+    # At rest-like magnitudes: |W| ~ 1 g on the bench.
+    assert np.median(np.linalg.norm(from_path, axis=1)) == pytest.approx(1.0, abs=0.05)
+
+
+def test_bad_input_raises_the_command_line_message(tmp_path):
+    missing = str(tmp_path / "missing.yaml")
+    with pytest.raises(triadcal.InputError) as e:
+        triadcal.fit(missing)
+    assert str(e.value).startswith(missing + ": ")
+    assert issubclass(triadcal.InputError, ValueError)
+    cal = {"parameters": {n: 0.0 for n in ["Kx", "Ky", "Kz", "W0x", "W0y", "W0z", "alpha_x",
+                                           "alpha_y", "beta_x", "beta_z", "gamma_y", "gamma_z",
+                                           "Kxx", "Kxy", "Kxz", "Kyx", "Kyy", "Kyz", "Kzx",
+                                           "Kzy", "Kzz"]}}
+    cal["parameters"].update({"Kx": 174.0, "Ky": 174.0, "Kz": 174.0})
+    with pytest.raises(triadcal.InputError) as e:
+        triadcal.apply(cal, np.zeros((4, 2)))
+    assert str(e.value) == "readings_mV: expected an array of shape (N, 3)"
+    with pytest.raises(triadcal.InputError) as e:
+        triadcal.fit({"bench": {}})
+    assert str(e.value) == "run: data: missing: the data file"

@@ -1,0 +1,268 @@
+// The Python module `triadcal`: the library's main jobs on numpy arrays and
+// dicts (python/README in docs/library.md).
+//
+//   triadcal.fit(run, **options) -> dict         the OUT of `triadcal fit`
+//   triadcal.apply(calibration, readings_mV, t_s=None, temp_C=None) -> (N, 3)
+//   triadcal.simulate(scenario, seed=None, out_dir=None) -> dict of arrays
+//   triadcal.load_run(run) -> dict of arrays
+//
+// `run` is a run.yaml path or a dict with run.yaml's keys (a relative `data`
+// path is then relative to the working folder); `calibration` an OUT file's
+// path or its dict. Bad input raises triadcal.InputError (a ValueError) with
+// the command line's message.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <yaml-cpp/yaml.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+#include "core/io/calibration_io.h"
+#include "core/io/run_description_io.h"
+#include "core/io/run_io.h"
+#include "core/model/apply_calibration.h"
+#include "core/model/errors.h"
+#include "core/model/units.h"
+#include "core/simulation/simulator.h"
+#include "solvers/estimation/batch_solver.h"
+#include "tools/report/estimate_json.h"
+#include "tools/report/fit_report.h"
+
+namespace py = pybind11;
+
+namespace triadcal {
+namespace {
+
+using json = nlohmann::json;
+
+// Python object -> JSON, through the json module (dicts, lists, numbers, str).
+json ToJson(const py::object& o) {
+  const py::object dumps = py::module_::import("json").attr("dumps");
+  return json::parse(dumps(o).cast<std::string>());
+}
+
+py::object FromJson(const json& j) { return py::module_::import("json").attr("loads")(j.dump()); }
+
+YAML::Node ToYaml(const json& j) {
+  YAML::Node n;
+  if (j.is_object()) {
+    n = YAML::Node(YAML::NodeType::Map);
+    for (const auto& [k, v] : j.items()) n[k] = ToYaml(v);
+  } else if (j.is_array()) {
+    n = YAML::Node(YAML::NodeType::Sequence);
+    for (const auto& v : j) n.push_back(ToYaml(v));
+  } else if (j.is_string()) {
+    n = j.get<std::string>();
+  } else if (j.is_boolean()) {
+    n = j.get<bool>();
+  } else if (j.is_number()) {
+    n = j.dump();  // exact text of the number
+  }
+  return n;
+}
+
+// A run.yaml path, or a dict of its keys (paths relative to the working folder).
+RunDescription RunFrom(const py::object& run) {
+  if (py::isinstance<py::str>(run)) return LoadRunDescription(run.cast<std::string>());
+  if (!py::isinstance<py::dict>(run)) {
+    throw InputError("run: expected a run.yaml path or a dict of its keys");
+  }
+  const YAML::Node node = ToYaml(ToJson(run));
+  if (!node["data"]) throw InputError("run: data: missing: the data file");
+  const std::string where = (std::filesystem::current_path() / "run.yaml").string();
+  return ParseRunDescription(node, where, "run (dict)");
+}
+
+Calibration CalibrationFrom(const py::object& cal) {
+  if (py::isinstance<py::str>(cal)) return LoadCalibration(cal.cast<std::string>());
+  if (!py::isinstance<py::dict>(cal)) {
+    throw InputError("calibration: expected an OUT file's path or its dict");
+  }
+  return CalibrationFromJson(ToJson(cal), "calibration (dict)");
+}
+
+py::array_t<double> Column(const std::vector<double>& v) {
+  py::array_t<double> a(static_cast<py::ssize_t>(v.size()));
+  std::copy(v.begin(), v.end(), a.mutable_data());
+  return a;
+}
+
+py::array_t<double> Readings(const RunData& d) {
+  py::array_t<double> a({static_cast<py::ssize_t>(d.size()), py::ssize_t(3)});
+  auto r = a.mutable_unchecked<2>();
+  for (std::size_t k = 0; k < d.size(); ++k) {
+    for (int i = 0; i < 3; ++i) r(k, i) = d.w_mV[i][k];
+  }
+  return a;
+}
+
+py::dict RunDataDict(const RunData& d) {
+  py::dict out;
+  out["t_s"] = Column(d.t_s);
+  std::vector<double> l1(d.lambda_rad[0]), l2(d.lambda_rad[1]);
+  for (double& x : l1) x /= kDegToRad;
+  for (double& x : l2) x /= kDegToRad;
+  out["lambda1_deg"] = Column(l1);
+  out["lambda2_deg"] = Column(l2);
+  out["readings_mV"] = Readings(d);
+  if (d.has_temp()) out["temp_C"] = Column(d.temp_C);
+  return out;
+}
+
+py::object Fit(const py::object& run_arg, const std::string& effects, double epoch_s,
+               double rate_window_s, const std::string& init, const std::string& robust,
+               double robust_scale, const std::string& linear_solver, const std::string& covariance,
+               int threads, bool correlations, bool auto_hold, const std::vector<std::string>& hold,
+               const std::vector<std::string>& free) {
+  if (init != "rts" && init != "nominal") {
+    throw InputError("init: expected rts or nominal, got '" + init + "'");
+  }
+  const RunDescription run = RunFrom(run_arg);
+  std::vector<Effect> list;
+  std::string item;
+  for (std::size_t start = 0; start <= effects.size();) {
+    const std::size_t end = std::min(effects.find(',', start), effects.size());
+    item = effects.substr(start, end - start);
+    if (!item.empty()) {
+      try {
+        list.push_back(EffectFromName(item));
+      } catch (const std::invalid_argument& e) {
+        throw InputError(std::string("effects: ") + e.what());
+      }
+    }
+    start = end + 1;
+  }
+  const ParameterLayout layout(list);
+  BatchResult r;
+  std::size_t samples = 0;
+  {
+    py::gil_scoped_release release;
+    const RunData data = LoadRunData(run, nullptr);
+    samples = data.size();
+    BatchOptions opt;  // the options of `triadcal fit`, with its defaults
+    opt.epoch_s = epoch_s;
+    opt.derivatives.half_window_s = rate_window_s;
+    opt.init = init == "rts" ? BatchInit::kRts : BatchInit::kNominal;
+    opt.linear_solver = linear_solver;
+    opt.robust_loss = robust;
+    opt.robust_scale = robust_scale;
+    opt.threads = threads;
+    opt.covariance_method = covariance;
+    opt.holding.auto_hold = auto_hold;
+    opt.holding.hold = hold;
+    opt.holding.free = free;
+    r = SolveBatch(run, data, layout, opt);
+  }
+  const FitReport rep = MakeFitReport(layout, r);
+  json out = FitJson(layout, r, rep, correlations);
+  out["command"] = "fit";
+  out["run"] = run.yaml_path;
+  out["samples"] = samples;
+  return FromJson(out);
+}
+
+py::array_t<double> Apply(const py::object& cal_arg,
+                          py::array_t<double, py::array::c_style | py::array::forcecast> z,
+                          std::optional<py::array_t<double, py::array::forcecast>> t_s,
+                          std::optional<py::array_t<double, py::array::forcecast>> temp_C) {
+  const Calibration cal = CalibrationFrom(cal_arg);
+  if (z.ndim() != 2 || z.shape(1) != 3) {
+    throw InputError("readings_mV: expected an array of shape (N, 3)");
+  }
+  const std::size_t n = static_cast<std::size_t>(z.shape(0));
+  RunData data;
+  data.t_s.assign(n, 0.0);
+  auto zr = z.unchecked<2>();
+  for (int i = 0; i < 3; ++i) {
+    data.w_mV[i].resize(n);
+    for (std::size_t k = 0; k < n; ++k) data.w_mV[i][k] = zr(k, i);
+  }
+  auto copy = [n](const py::array_t<double, py::array::forcecast>& a, const char* name,
+                  std::vector<double>* out) {
+    if (a.ndim() != 1 || static_cast<std::size_t>(a.shape(0)) != n) {
+      throw InputError(std::string(name) +
+                       ": expected an array of shape (N,), N = " + std::to_string(n));
+    }
+    out->assign(a.data(), a.data() + n);
+  };
+  if (t_s) copy(*t_s, "t_s", &data.t_s);
+  if (temp_C) copy(*temp_C, "temp_C", &data.temp_C);
+  if (cal.layout.has(Effect::kThermalDrift) && !t_s) {
+    throw InputError("t_s: needed by the calibration's thermal_drift");
+  }
+  if (cal.layout.has(Effect::kThermalDriftTemp) && !temp_C) {
+    throw InputError("temp_C: needed by the calibration's thermal_drift_temp");
+  }
+  const std::vector<Eigen::Vector3d> W = ApplyCalibration(cal, RunDescription(), data);
+  py::array_t<double> out({static_cast<py::ssize_t>(n), py::ssize_t(3)});
+  auto o = out.mutable_unchecked<2>();
+  for (std::size_t k = 0; k < n; ++k) {
+    for (int i = 0; i < 3; ++i) o(k, i) = W[k][i];
+  }
+  return out;
+}
+
+py::dict SimulateScenario(const std::string& scenario, std::optional<std::uint64_t> seed,
+                          const std::string& out_dir) {
+  Scenario s = LoadScenario(scenario);
+  if (seed) s.seed = *seed;
+  SampleTruth(&s);
+  RunData data;
+  {
+    py::gil_scoped_release release;
+    data = triadcal::Simulate(s);
+  }
+  if (!out_dir.empty()) WriteSimulation(s, data, out_dir);
+  py::dict out = RunDataDict(data);
+  py::dict truth;
+  for (int i = 0; i < s.truth_layout.size(); ++i) {
+    truth[py::str(TruthFileKey(s.truth_layout, i))] = TruthFileValue(s.truth_layout, s.truth, i);
+  }
+  out["truth"] = truth;
+  out["seed"] = s.seed;
+  return out;
+}
+
+py::dict LoadRun(const py::object& run_arg) {
+  const RunDescription run = RunFrom(run_arg);
+  return RunDataDict(LoadRunData(run, nullptr));
+}
+
+}  // namespace
+}  // namespace triadcal
+
+PYBIND11_MODULE(triadcal, m) {
+  using namespace pybind11::literals;
+  m.doc() = "triadcal: calibrate a MEMS accelerometer triad from a two-axis bench run";
+  m.attr("__version__") = "0.1.0";
+  static py::exception<triadcal::InputError> input_error(m, "InputError", PyExc_ValueError);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const triadcal::InputError& e) {
+      input_error(e.what());
+    }
+  });
+  m.def("fit", &triadcal::Fit, "run"_a, py::kw_only(), "effects"_a = "", "epoch_s"_a = 0.5,
+        "rate_window_s"_a = 0.1, "init"_a = "rts", "robust"_a = "", "robust_scale"_a = 3.0,
+        "linear_solver"_a = "sparse_normal_cholesky", "covariance"_a = "schur", "threads"_a = 0,
+        "correlations"_a = false, "auto_hold"_a = true, "hold"_a = std::vector<std::string>{},
+        "free"_a = std::vector<std::string>{},
+        "Batch least-squares fit of a run (run.yaml path or dict); returns the OUT of "
+        "`triadcal fit` as a dict (parameters: {name: {value, sigma, unit, ...}}).");
+  m.def("apply", &triadcal::Apply, "calibration"_a, "readings_mV"_a, "t_s"_a = py::none(),
+        "temp_C"_a = py::none(),
+        "Raw readings (N, 3) [mV, triad axes] -> specific force W (N, 3) [g] by the exact "
+        "inverse of the readings model, as `triadcal apply`. temp_C counts from its first "
+        "value (thermal_drift_temp).");
+  m.def("simulate", &triadcal::SimulateScenario, "scenario"_a, "seed"_a = py::none(),
+        "out_dir"_a = "",
+        "Simulate a scenario.yaml: dict with t_s, lambda1_deg, lambda2_deg, readings_mV (N, 3), "
+        "truth {name: value in file units}; also writes run.csv, run.yaml, truth.json to "
+        "out_dir when given.");
+  m.def("load_run", &triadcal::LoadRun, "run"_a,
+        "The data of a run (run.yaml path or dict) as numpy arrays.");
+}

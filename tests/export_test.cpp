@@ -1,0 +1,237 @@
+// `triadcal export`: the exported C99 code, compiled with `cc -std=c99 -Wall
+// -Wextra -pedantic -Werror`, gives what `triadcal apply` gives to 1e-9 g on a
+// simulated run with every K_ij non-zero (with and without the sensor-stage
+// effects) and on the Ferraris real run; the matrix form reproduces the
+// readings model; bad options give their exact message.
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/io/calibration_io.h"
+#include "core/io/file_util.h"
+#include "core/io/run_description_io.h"
+#include "core/io/run_io.h"
+#include "core/model/bench_model.h"
+#include "tests/command_runner.h"
+#include "tests/temp_dir_test.h"
+
+namespace triadcal {
+namespace {
+
+namespace fs = std::filesystem;
+using testing_fixtures::RunCommand;
+using testing_fixtures::RunTriadcal;
+
+// A short run on the paper's profile with every K_ij non-zero; `extra` adds
+// scenario sections (effects, temperature).
+std::string Scenario(const std::string& extra) {
+  return "seed: 7\n"
+         "profile: {amplitude_deg: [360, 90], period_s: [30, 12], duration_s: 30, rate_hz: 200}\n"
+         "truth: {Kx: 171.5, Ky: 175.8, Kz: 174.8, W0x: 1504.2, W0y: 1498.0, W0z: 1502.5,\n"
+         "        alpha_x: 16, alpha_y: -32, beta_x: 11, beta_z: 26, gamma_y: 140, gamma_z: 64,\n"
+         "        Kxx: 0.002, Kxy: -0.0012, Kxz: 0.0007, Kyx: 0.0009, Kyy: -0.0015,\n"
+         "        Kyz: -0.001, Kzx: 0.0011, Kzy: 0.0015, Kzz: -0.0008}\n"
+         "noise: {accel_mV: 1, angle_arcsec: 15}\n" +
+         extra;
+}
+
+class ExportTest : public testing_fixtures::TempDirTest {
+ protected:
+  std::string Err() const { return Path("err.txt"); }
+
+  // W [g] per sample from `triadcal apply CAL RUN`.
+  std::vector<Eigen::Vector3d> Apply(const std::string& cal, const std::string& run_yaml) {
+    const auto r =
+        RunTriadcal("apply " + cal + " " + run_yaml + " -o " + Path("applied.csv"), Err());
+    EXPECT_EQ(r.status, 0) << r.err;
+    std::vector<Eigen::Vector3d> W;
+    std::ifstream in(Path("applied.csv"));
+    std::string line;
+    bool header = true;
+    while (std::getline(in, line)) {
+      if (line.empty() || line[0] == '#') continue;
+      if (header) {
+        header = false;
+        continue;
+      }
+      std::stringstream ss(line);
+      std::string cell;
+      std::getline(ss, cell, ',');  // t
+      Eigen::Vector3d w;
+      for (int i = 0; i < 3; ++i) {
+        std::getline(ss, cell, ',');
+        w[i] = std::stod(cell);
+      }
+      W.push_back(w);
+    }
+    return W;
+  }
+
+  // Exports CAL as C, compiles it with a driver and runs it on every sample of RUN.
+  std::vector<Eigen::Vector3d> ExportedC(const std::string& cal, const std::string& run_yaml) {
+    const auto e = RunTriadcal("export " + cal + " --format c -o " + Path("cal.c"), Err());
+    EXPECT_EQ(e.status, 0) << e.err;
+    // The exported code alone, with every warning an error.
+    const auto cc = RunCommand(
+        "cc -std=c99 -Wall -Wextra -pedantic -Werror -c " + Path("cal.c") + " -o " + Path("cal.o"),
+        Err());
+    EXPECT_EQ(cc.status, 0) << cc.err;
+    WriteText("driver.c",
+              "#include <stdio.h>\n#include \"cal.h\"\n"
+              "int main(void) {\n"
+              "  double t, z[3], T, Tref, W[3];\n"
+              "  while (scanf(\"%lf %lf %lf %lf %lf %lf\", &t, &z[0], &z[1], &z[2], &T, &Tref) "
+              "== 6) {\n"
+              "    cal_apply(z, t, T, Tref, W);\n"
+              "    printf(\"%.17g %.17g %.17g\\n\", W[0], W[1], W[2]);\n"
+              "  }\n  return 0;\n}\n");
+    const auto link = RunCommand("cc -std=c99 -Wall -Werror " + Path("driver.c") + " " +
+                                     Path("cal.o") + " -o " + Path("driver"),
+                                 Err());
+    EXPECT_EQ(link.status, 0) << link.err;
+
+    const RunDescription run = LoadRunDescription(run_yaml);
+    const RunData data = LoadRunData(run, nullptr);
+    {
+      std::ofstream in(Path("readings.txt"));
+      char buf[256];
+      for (std::size_t k = 0; k < data.size(); ++k) {
+        const Eigen::Vector3d z = data.readings_mV(k);
+        std::snprintf(buf, sizeof(buf), "%.17g %.17g %.17g %.17g %.17g %.17g\n", data.t_s[k], z[0],
+                      z[1], z[2], data.has_temp() ? data.temp_C[k] : 0.0,
+                      data.has_temp() ? data.temp_C.front() : 0.0);
+        in << buf;
+      }
+    }
+    const auto r = RunCommand(
+        Path("driver") + " < " + Path("readings.txt") + " > " + Path("c_out.txt") + " ; true",
+        Err());
+    std::vector<Eigen::Vector3d> W;
+    std::ifstream out(Path("c_out.txt"));
+    Eigen::Vector3d w;
+    while (out >> w[0] >> w[1] >> w[2]) W.push_back(w);
+    EXPECT_EQ(W.size(), data.size()) << r.err;
+    return W;
+  }
+
+  // Largest |C - apply| over every sample and axis [g].
+  double LargestDifference(const std::string& cal, const std::string& run_yaml) {
+    const std::vector<Eigen::Vector3d> a = Apply(cal, run_yaml);
+    const std::vector<Eigen::Vector3d> c = ExportedC(cal, run_yaml);
+    EXPECT_EQ(a.size(), c.size());
+    EXPECT_GT(a.size(), 0u);
+    double worst = 0.0;
+    for (std::size_t k = 0; k < std::min(a.size(), c.size()); ++k) {
+      worst = std::max(worst, (a[k] - c[k]).cwiseAbs().maxCoeff());
+    }
+    return worst;
+  }
+
+  std::string Simulate(const std::string& scenario_text) {
+    const std::string scen = WriteText("scenario.yaml", scenario_text);
+    const auto r = RunTriadcal("simulate " + scen + " -o " + Path("sim"), Err());
+    EXPECT_EQ(r.status, 0) << r.err;
+    return Path("sim/run.yaml");
+  }
+};
+
+TEST_F(ExportTest, CMatchesApplyOnASimulatedRunWithEveryKij) {
+  const std::string run = Simulate(Scenario(""));
+  const double worst = LargestDifference(Path("sim/truth.json"), run);
+  EXPECT_LE(worst, 1e-9);
+  // The nonlinearity matters at this size: a wrong inverse would show.
+  EXPECT_EQ(LoadCalibration(Path("sim/truth.json")).theta[kKxy], -0.0012);
+}
+
+TEST_F(ExportTest, CMatchesApplyWithTheSensorStageEffects) {
+  const std::string run =
+      Simulate(Scenario("effects: {thermal_drift: {rate_x_mV_per_min: 0.5, rate_z: -0.25},\n"
+                        "          thermal_drift_temp: {coef_y_mV_per_degC: 0.3, coef_z: -0.2},\n"
+                        "          scale_asymmetry: {dKx: 0.4, dKy: -0.3, dKz: 0.2}}\n"
+                        "temperature: {start_C: 20, rate_C_per_h: 10}\n"));
+  const Calibration cal = LoadCalibration(Path("sim/truth.json"));
+  ASSERT_TRUE(cal.layout.has(Effect::kThermalDrift));
+  ASSERT_TRUE(cal.layout.has(Effect::kThermalDriftTemp));
+  ASSERT_TRUE(cal.layout.has(Effect::kScaleAsymmetry));
+  EXPECT_LE(LargestDifference(Path("sim/truth.json"), run), 1e-9);
+}
+
+// The real run: the Ferraris six-position session, calibrated by `static`.
+TEST_F(ExportTest, CMatchesApplyOnTheFerrarisRun) {
+  const std::string yaml = std::string(TRIADCAL_SOURCE_DIR) + "/examples/ferraris/run.yaml";
+  const std::string csv =
+      ResolveDataPath(yaml, "shared:data/real/ferraris-six-position/annotated_session.csv");
+  if (csv.empty() || !fs::exists(csv)) GTEST_SKIP() << "shared data folder absent";
+  const auto s = RunTriadcal("static " + yaml + " -o " + Path("static.json"), Err());
+  ASSERT_EQ(s.status, 0) << s.err;
+  EXPECT_LE(LargestDifference(Path("static.json"), yaml), 1e-9);
+}
+
+// S a + b + diag(a) N a with a = W g0 is the readings model, every K_ij on.
+TEST_F(ExportTest, MatrixFormIsTheReadingsModel) {
+  Simulate(Scenario(""));
+  for (const std::string format : {"json-matrix", "yaml"}) {
+    const std::string out = Path("matrix." + format);
+    const auto r = RunTriadcal(
+        "export " + Path("sim/truth.json") + " --format " + format + " -o " + out, Err());
+    ASSERT_EQ(r.status, 0) << r.err;
+  }
+  const nlohmann::json m = nlohmann::json::parse(ReadFile(Path("matrix.json-matrix")));
+  EXPECT_TRUE(m.contains("provenance"));
+  const std::string yaml = ReadFile(Path("matrix.yaml"));
+  EXPECT_NE(yaml.find("S_mV_per_mps2:"), std::string::npos);
+  EXPECT_NE(yaml.find("# provenance: {"), std::string::npos);
+
+  const Calibration cal = LoadCalibration(Path("sim/truth.json"));
+  const ModelConfig cfg = MakeModelConfig(RunDescription(), cal.layout);
+  const double g0 = m["g0_mps2"].get<double>();
+  for (const Eigen::Vector3d& W :
+       {Eigen::Vector3d(0.3, -0.8, 0.52), Eigen::Vector3d(-1, 0.1, 0.2)}) {
+    const Eigen::Vector3d z = Readings_mV(cfg, cal.theta.data(), W, SampleContext{});
+    const Eigen::Vector3d a = W * g0;
+    for (int i = 0; i < 3; ++i) {
+      double zi = m["b_mV"][i].get<double>();
+      double Na = 0.0;
+      for (int j = 0; j < 3; ++j) {
+        zi += m["S_mV_per_mps2"][i][j].get<double>() * a[j];
+        Na += m["N_mV_per_mps2_sq"][i][j].get<double>() * a[j];
+      }
+      zi += a[i] * Na;
+      EXPECT_NEAR(zi, z[i], 1e-9) << i;
+    }
+  }
+}
+
+TEST_F(ExportTest, BadOptions) {
+  Simulate(Scenario(""));
+  const std::string cal = Path("sim/truth.json");
+  auto r = RunTriadcal("export " + cal + " --format fortran -o " + Path("x.f"), Err());
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err, "triadcal: error: --format: expected c, yaml or json-matrix, got 'fortran'\n");
+  r = RunTriadcal("export " + cal + " --format c -o " + Path("cal.txt"), Err());
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err,
+            "triadcal: error: -o: for --format c give NAME.c or NAME.h (both are "
+            "written), got '" +
+                Path("cal.txt") + "'\n");
+  r = RunTriadcal("export " + cal + " --format c -o " + Path("my-cal.c"), Err());
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err,
+            "triadcal: error: -o: file name 'my-cal' is not a C identifier (the "
+            "function is NAME_apply); use --name\n");
+  EXPECT_FALSE(fs::exists(Path("my-cal.c")));
+  r = RunTriadcal("export " + cal + " --format c -o " + Path("my-cal.c") + " --name imu0", Err());
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(ReadFile(Path("my-cal.h")).find("void imu0_apply("), std::string::npos);
+}
+
+}  // namespace
+}  // namespace triadcal

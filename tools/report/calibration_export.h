@@ -1,0 +1,41 @@
+// `triadcal export`: a calibration in forms other programs use.
+//
+//   c            a dependency-free C99 header and source applying the
+//                calibration: raw readings -> specific force W [g], the exact
+//                inverse of the readings model (paper eq. 1) with the same
+//                Newton iteration as bench_model.h SpecificForceFromReadings_g,
+//                including the sensor-stage effects (thermal_drift,
+//                thermal_drift_temp, scale_asymmetry). Geometry and angle
+//                effects do not act on W and are left out, as in `apply`.
+//   yaml, json   the plain matrix form (MatrixForm below).
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/model/apply_calibration.h"
+
+namespace triadcal {
+
+struct CExport {
+  std::string header;  // NAME.h
+  std::string source;  // NAME.c (includes "NAME.h")
+};
+
+// C99 code for the calibration; `name` prefixes the function and is the base
+// of the file names (a C identifier); `comment` goes into both files' heading
+// (e.g. the provenance), one line per line.
+CExport ExportC(const Calibration& cal, const std::string& name, const std::string& comment);
+
+// The readings model as matrices, in SI and in g (g0 = 9.80665 m/s^2):
+//
+//   z = S a + b + diag(a) N a          z readings [mV], a specific force
+//                                      [m/s^2] in the triad frame
+//   S = diag(K) M / g0                 scale-misalignment [mV per m/s^2]
+//   N = diag(K) Kij / g0^2             nonlinearity [mV per (m/s^2)^2]
+//   b = W0                             bias [mV]
+//
+// plus S^-1 (the linear inverse) and the sensor-stage effects' parameters.
+nlohmann::ordered_json MatrixForm(const Calibration& cal);
+
+}  // namespace triadcal
