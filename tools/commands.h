@@ -26,5 +26,7 @@ Command AddApplyCommand(CLI::App& app);   // calibration -> specific force (cmd_
 Command AddObservabilityCommand(CLI::App& app);  // CRB, unobservable directions (cmd_observability.cpp)
 Command AddDesignCommand(CLI::App& app);  // experiment design from the CRB (cmd_design.cpp)
 Command AddMonteCarloCommand(CLI::App& app);  // Monte Carlo against the CRB (cmd_montecarlo.cpp)
+Command AddBatchCommand(CLI::App& app);  // a manifest of runs, filed by serial (cmd_batch.cpp)
+Command AddMergeCommand(CLI::App& app);  // shards of montecarlo/batch -> one output (cmd_merge.cpp)
 
 }  // namespace triadcal

@@ -1,0 +1,46 @@
+// One run through the batch solver as `triadcal fit` does it: the options,
+// SolveBatch, and the OUT.json. `fit` and `batch` both call this, so that a
+// production calibration is the very file `fit` would write.
+#pragma once
+
+#include <functional>
+#include <string>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "core/model/parameters.h"
+#include "solvers/estimation/batch_solver.h"
+#include "tools/command_util.h"
+#include "tools/report/fit_report.h"
+
+namespace triadcal {
+
+struct FitSettings {
+  std::string effects, init = "rts", robust;
+  std::string linear_solver = "sparse_normal_cholesky";
+  std::string covariance = "schur";
+  double epoch_s = 0.5, rate_window_s = 0.1, robust_scale = 3.0;
+  int threads = 0;
+  bool correlations = false, no_auto_hold = false;
+  std::string hold, free;
+};
+
+struct FitOutcome {
+  ParameterLayout layout;
+  BatchResult result;
+  FitReport report;
+  nlohmann::json json;  // OUT.json of `fit`
+};
+
+// Throws InputError for a bad setting (before any work).
+void CheckFitSettings(const FitSettings& s);
+
+// Fits `run` (read from run_yaml); progress lines go to `progress` (may be empty).
+FitOutcome FitRun(const FitSettings& s, const std::string& run_yaml, const LoadedRun& run,
+                  const std::function<void(const std::string&)>& progress);
+
+// Registers the fit options shared by `fit` and `batch` on a subcommand.
+void AddFitOptions(CLI::App* app, FitSettings* s);
+
+}  // namespace triadcal
