@@ -178,7 +178,10 @@ int RunBatch(const BatchArgs& a) {
   EndProgress();
   std::map<int, nlohmann::json> by_item;
   for (const std::string& p : parts) {
-    for (nlohmann::json& j : nlohmann::json::parse(p)) by_item[j["item"].get<int>()] = std::move(j);
+    for (nlohmann::json& j : nlohmann::json::parse(p)) {
+      const int item = j["item"].get<int>();
+      by_item[item] = std::move(j);
+    }
   }
   std::vector<UnitResult> units;
   for (const auto& [item, job] : by_item) units.push_back(FileUnit(a, date, entries[item], job));
