@@ -256,13 +256,13 @@ TEST_F(ScaleOut, BatchOfTwentyUnitsNamesTheThreeFailuresAndRerunsLoseNothing) {
 }
 
 TEST_F(ScaleOut, BatchOnTwoMpiRanksAndAsShardsEqualsOneProcess) {
-  std::string manifest = "serial,run,Kx_max\n";
+  std::string manifest = "serial,run,diagnose,Kx_max\n";
   for (int i = 1; i <= 4; ++i) {
     const std::string serial = "U" + std::to_string(i);
     SimulateUnit(serial, 200 + i);
-    manifest += serial + ",units/" + serial + "/run.yaml,171.6\n";
+    manifest += serial + ",units/" + serial + "/run.yaml," + (i == 1 ? "true" : "") + ",171.6\n";
   }
-  manifest += "MISSING,units/none/run.yaml,\n";
+  manifest += "MISSING,units/none/run.yaml,,\n";
   const std::string man = WriteText("manifest.csv", manifest);
   const std::string date = " --date 2026-01-31";
   ASSERT_EQ(Run("batch " + man + " -o " + Path("one") + date), 0) << Slurp(Path("log.txt"));
@@ -278,6 +278,7 @@ TEST_F(ScaleOut, BatchOnTwoMpiRanksAndAsShardsEqualsOneProcess) {
   const nlohmann::json one = WithoutExecution(ReadJson(Summary("one")));
   EXPECT_EQ(one["units"], 5);
   EXPECT_EQ(one["error"], 1);
+  EXPECT_TRUE(one["results"][0]["diagnosed"].get<bool>());
   EXPECT_EQ(WithoutExecution(ReadJson(Path("merged.json"))), one);
   EXPECT_TRUE(fs::exists(Path("merged.csv")));
   std::vector<std::string> dirs = {"sh"};
@@ -289,6 +290,10 @@ TEST_F(ScaleOut, BatchOnTwoMpiRanksAndAsShardsEqualsOneProcess) {
     dirs.push_back("two");
   }
   // The calibrations themselves, bit for bit but for their timing.
+  const std::string diagnosis = "U1/2026-01-31/diagnose.json";
+  for (const std::string& d : dirs) {
+    EXPECT_EQ(ReadJson(Path(d + "/" + diagnosis)), ReadJson(Path("one/" + diagnosis))) << d;
+  }
   for (int i = 1; i <= 4; ++i) {
     const std::string f = "U" + std::to_string(i) + "/2026-01-31/calibration.json";
     nlohmann::json a = ReadJson(Path("one/" + f));

@@ -1,0 +1,130 @@
+#!/usr/bin/env python3
+"""Throughput of triadcal on this machine: fits of the paper's 90-s run and
+Monte Carlo seeds, on 1 rank and on 2 MPI ranks, measured in the same run.
+
+usage: bench/throughput.py [--fits K] [--seeds N] [--workdir DIR]
+       (TRIADCAL=path/to/triadcal to use another binary)
+
+What it runs (every rank single-threaded, so 1 rank = 1 core):
+  fit    examples/paper-experiment3 (90 s at 1 kHz, 90 000 samples), once
+         alone for the per-run wall time and peak memory, then K copies
+         through `batch --threads 1` on 1 rank and `mpirun -n 2 batch
+         --threads 1`: runs per second.
+  seed   bench/scenarios/paper-mc.yaml (90 s at 100 Hz through EKF, RTS and
+         batch), `montecarlo -n N --threads 1` on 1 rank and on 2 ranks:
+         seeds per second, with and without the one-off CRB (rank 0).
+Prints a Markdown table and writes DIR/throughput.json. The machine's load
+(`uptime`) before and after is printed too: other jobs on the cores slow
+the 2-rank figures first.
+"""
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+BIN = os.environ.get("TRIADCAL", os.path.join(ROOT, "build", "tools", "triadcal"))
+MPIRUN = ["mpirun", "-n", "2", "--allow-run-as-root", "--oversubscribe"]
+
+
+def run(cmd):
+    """Wall seconds and peak resident MB (of the process itself) of cmd."""
+    start = time.monotonic()
+    pid = os.fork()
+    if pid == 0:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, 1)
+        os.execvp(cmd[0], cmd)
+    _, status, usage = os.wait4(pid, 0)
+    wall = time.monotonic() - start
+    code = os.waitstatus_to_exitcode(status)
+    if code != 0:
+        sys.exit(f"throughput: {' '.join(cmd)} exited {code}")
+    return wall, usage.ru_maxrss / 1024.0
+
+
+def load():
+    return subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--fits", type=int, default=8)
+    ap.add_argument("--seeds", type=int, default=8)
+    ap.add_argument("--workdir")
+    a = ap.parse_args()
+    work = a.workdir or tempfile.mkdtemp(prefix="triadcal_throughput_")
+    os.makedirs(work, exist_ok=True)
+    if not shutil.which("mpirun"):
+        sys.exit("throughput: mpirun not found (Debian: openmpi-bin)")
+    out = {"load_before": load(), "cores": os.cpu_count(), "fits": a.fits, "seeds": a.seeds}
+
+    # ---- fit on the paper's 90-s run
+    run90 = os.path.join(work, "90s")
+    run([BIN, "simulate", os.path.join(ROOT, "examples/paper-experiment3/scenario.yaml"),
+         "-o", run90])
+    yaml90 = os.path.join(run90, "run.yaml")
+    wall, mb = run([BIN, "fit", yaml90, "--threads", "1", "-o", os.path.join(work, "fit.json")])
+    out["fit_single"] = {"wall_s": wall, "peak_MB": mb}
+    manifest = os.path.join(work, "manifest.csv")
+    with open(manifest, "w") as f:
+        f.write("serial,run\n")
+        for k in range(a.fits):
+            f.write(f"U{k:04d},{yaml90}\n")
+    w1, mb1 = run([BIN, "batch", manifest, "-o", os.path.join(work, "b1"), "--threads", "1"])
+    w2, _ = run(MPIRUN + [BIN, "batch", manifest, "-o", os.path.join(work, "b2"),
+                          "--threads", "1"])
+    out["fit_batch"] = {"ranks1_wall_s": w1, "ranks1_peak_MB": mb1, "ranks2_wall_s": w2,
+                        "ranks1_runs_per_s": a.fits / w1, "ranks2_runs_per_s": a.fits / w2,
+                        "speedup": w1 / w2}
+
+    # ---- Monte Carlo seeds
+    scen = os.path.join(HERE, "scenarios", "paper-mc.yaml")
+    mc = {}
+    for ranks in (1, 2):
+        js = os.path.join(work, f"mc{ranks}.json")
+        cmd = [BIN, "montecarlo", scen, "-n", str(a.seeds), "--threads", "1", "-o", js]
+        wall, mb = run(cmd if ranks == 1 else MPIRUN + cmd)
+        t = json.load(open(js))["time_s"]
+        mc[ranks] = {"wall_s": wall, "crb_s": t["crb"], "peak_MB": mb,
+                     "seeds_per_s": a.seeds / wall,
+                     "seeds_per_s_without_crb": a.seeds / (t["total"] - t["crb"])}
+    wall, mb = run([BIN, "montecarlo", scen, "-n", "1", "--threads", "1", "-o",
+                    os.path.join(work, "mc_one.json")])
+    out["mc_one_seed"] = {"wall_s": wall, "peak_MB": mb}
+    out["mc"] = {"ranks1": mc[1], "ranks2": mc[2],
+                 "speedup": mc[2]["seeds_per_s"] / mc[1]["seeds_per_s"],
+                 "speedup_without_crb":
+                     mc[2]["seeds_per_s_without_crb"] / mc[1]["seeds_per_s_without_crb"]}
+    out["load_after"] = load()
+    with open(os.path.join(work, "throughput.json"), "w") as f:
+        json.dump(out, f, indent=2)
+
+    fb, m = out["fit_batch"], out["mc"]
+    print(f"load before: {out['load_before']}")
+    print(f"load after:  {out['load_after']}")
+    print()
+    print("| work | 1 rank | 2 ranks | speed-up | per core, 2 ranks |")
+    print("|---|---|---|---|---|")
+    print(f"| fit, 90-s run at 1 kHz ({a.fits} runs) | {fb['ranks1_runs_per_s']:.3f} runs/s | "
+          f"{fb['ranks2_runs_per_s']:.3f} runs/s | {fb['speedup']:.2f}x | "
+          f"{fb['ranks2_runs_per_s'] / 2:.3f} runs/s |")
+    print(f"| Monte Carlo seed, paper-mc ({a.seeds} seeds) | {m['ranks1']['seeds_per_s']:.3f} "
+          f"seeds/s | {m['ranks2']['seeds_per_s']:.3f} seeds/s | {m['speedup']:.2f}x | "
+          f"{m['ranks2']['seeds_per_s'] / 2:.3f} seeds/s |")
+    print(f"| same, without the one-off CRB | {m['ranks1']['seeds_per_s_without_crb']:.3f} | "
+          f"{m['ranks2']['seeds_per_s_without_crb']:.3f} | {m['speedup_without_crb']:.2f}x | |")
+    print()
+    print(f"one fit alone: {out['fit_single']['wall_s']:.2f} s, peak {out['fit_single']['peak_MB']:.0f} MB; "
+          f"one Monte Carlo seed alone (with the CRB): {out['mc_one_seed']['wall_s']:.2f} s, "
+          f"peak {out['mc_one_seed']['peak_MB']:.0f} MB; CRB {m['ranks1']['crb_s']:.2f} s")
+    print(f"wrote {os.path.join(work, 'throughput.json')}")
+
+
+if __name__ == "__main__":
+    main()
