@@ -33,7 +33,9 @@ MPIRUN = ["mpirun", "-n", "2", "--allow-run-as-root", "--oversubscribe"]
 
 
 def run(cmd):
-    """Wall seconds and peak resident MB (of the process itself) of cmd."""
+    """Wall seconds, peak resident MB (of the process itself) and CPU seconds
+    (user + system, the process and the children it waited for: mpirun's
+    ranks) of cmd."""
     start = time.monotonic()
     pid = os.fork()
     if pid == 0:
@@ -45,41 +47,57 @@ def run(cmd):
     code = os.waitstatus_to_exitcode(status)
     if code != 0:
         sys.exit(f"throughput: {' '.join(cmd)} exited {code}")
-    return wall, usage.ru_maxrss / 1024.0
+    return wall, usage.ru_maxrss / 1024.0, usage.ru_utime + usage.ru_stime
 
 
 def load():
     return subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
 
 
+def autogroup():
+    """Linux's autogroup gives each session (this script and its mpirun ranks
+    alike) one share of the CPU: on a busy machine 2 ranks then get no more
+    CPU than 1, and the wall-clock speed-up says nothing about the code."""
+    try:
+        with open("/proc/sys/kernel/sched_autogroup_enabled") as f:
+            return f.read().strip() == "1"
+    except OSError:
+        return False
+
+
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--fits", type=int, default=8)
-    ap.add_argument("--seeds", type=int, default=8)
+    ap.add_argument("--fits", type=int, default=16)
+    ap.add_argument("--seeds", type=int, default=16)
     ap.add_argument("--workdir")
     a = ap.parse_args()
     work = a.workdir or tempfile.mkdtemp(prefix="triadcal_throughput_")
     os.makedirs(work, exist_ok=True)
     if not shutil.which("mpirun"):
         sys.exit("throughput: mpirun not found (Debian: openmpi-bin)")
-    out = {"load_before": load(), "cores": os.cpu_count(), "fits": a.fits, "seeds": a.seeds}
+    out = {"load_before": load(), "cores": os.cpu_count(), "fits": a.fits, "seeds": a.seeds,
+           "autogroup": autogroup()}
 
     # ---- fit on the paper's 90-s run
     run90 = os.path.join(work, "90s")
     run([BIN, "simulate", os.path.join(ROOT, "examples/paper-experiment3/scenario.yaml"),
          "-o", run90])
     yaml90 = os.path.join(run90, "run.yaml")
-    wall, mb = run([BIN, "fit", yaml90, "--threads", "1", "-o", os.path.join(work, "fit.json")])
-    out["fit_single"] = {"wall_s": wall, "peak_MB": mb}
+    wall, mb, cpu = run([BIN, "fit", yaml90, "--threads", "1", "-o",
+                         os.path.join(work, "fit.json")])
+    out["fit_single"] = {"wall_s": wall, "peak_MB": mb, "cpu_s": cpu}
     manifest = os.path.join(work, "manifest.csv")
     with open(manifest, "w") as f:
         f.write("serial,run\n")
         for k in range(a.fits):
             f.write(f"U{k:04d},{yaml90}\n")
-    w1, mb1 = run([BIN, "batch", manifest, "-o", os.path.join(work, "b1"), "--threads", "1"])
-    w2, _ = run(MPIRUN + [BIN, "batch", manifest, "-o", os.path.join(work, "b2"),
-                          "--threads", "1"])
+    w1, mb1, c1 = run([BIN, "batch", manifest, "-o", os.path.join(work, "b1"),
+                       "--threads", "1"])
+    w2, _, c2 = run(MPIRUN + [BIN, "batch", manifest, "-o", os.path.join(work, "b2"),
+                              "--threads", "1"])
     out["fit_batch"] = {"ranks1_wall_s": w1, "ranks1_peak_MB": mb1, "ranks2_wall_s": w2,
+                        "ranks1_cpu_s": c1, "ranks2_cpu_s": c2,
+                        "cpu_s_per_run_ranks1": c1 / a.fits, "cpu_s_per_run_ranks2": c2 / a.fits,
                         "ranks1_runs_per_s": a.fits / w1, "ranks2_runs_per_s": a.fits / w2,
                         "speedup": w1 / w2}
 
@@ -89,14 +107,15 @@ def main():
     for ranks in (1, 2):
         js = os.path.join(work, f"mc{ranks}.json")
         cmd = [BIN, "montecarlo", scen, "-n", str(a.seeds), "--threads", "1", "-o", js]
-        wall, mb = run(cmd if ranks == 1 else MPIRUN + cmd)
+        wall, mb, cpu = run(cmd if ranks == 1 else MPIRUN + cmd)
         t = json.load(open(js))["time_s"]
-        mc[ranks] = {"wall_s": wall, "crb_s": t["crb"], "peak_MB": mb,
+        mc[ranks] = {"wall_s": wall, "crb_s": t["crb"], "peak_MB": mb, "cpu_s": cpu,
+                     "cpu_s_per_seed": cpu / a.seeds,
                      "seeds_per_s": a.seeds / wall,
                      "seeds_per_s_without_crb": a.seeds / (t["total"] - t["crb"])}
-    wall, mb = run([BIN, "montecarlo", scen, "-n", "1", "--threads", "1", "-o",
-                    os.path.join(work, "mc_one.json")])
-    out["mc_one_seed"] = {"wall_s": wall, "peak_MB": mb}
+    wall, mb, cpu = run([BIN, "montecarlo", scen, "-n", "1", "--threads", "1", "-o",
+                         os.path.join(work, "mc_one.json")])
+    out["mc_one_seed"] = {"wall_s": wall, "peak_MB": mb, "cpu_s": cpu}
     out["mc"] = {"ranks1": mc[1], "ranks2": mc[2],
                  "speedup": mc[2]["seeds_per_s"] / mc[1]["seeds_per_s"],
                  "speedup_without_crb":
@@ -106,7 +125,7 @@ def main():
         json.dump(out, f, indent=2)
 
     fb, m = out["fit_batch"], out["mc"]
-    print(f"load before: {out['load_before']}")
+    print(f"load before: {out['load_before']}; autogroup scheduling: {out['autogroup']}")
     print(f"load after:  {out['load_after']}")
     print()
     print("| work | 1 rank | 2 ranks | speed-up | per core, 2 ranks |")
@@ -123,6 +142,10 @@ def main():
     print(f"one fit alone: {out['fit_single']['wall_s']:.2f} s, peak {out['fit_single']['peak_MB']:.0f} MB; "
           f"one Monte Carlo seed alone (with the CRB): {out['mc_one_seed']['wall_s']:.2f} s, "
           f"peak {out['mc_one_seed']['peak_MB']:.0f} MB; CRB {m['ranks1']['crb_s']:.2f} s")
+    print(f"CPU seconds per fit: {fb['cpu_s_per_run_ranks1']:.3f} on 1 rank, "
+          f"{fb['cpu_s_per_run_ranks2']:.3f} on 2 ranks; per seed: "
+          f"{m['ranks1']['cpu_s_per_seed']:.3f} on 1 rank, {m['ranks2']['cpu_s_per_seed']:.3f} "
+          f"on 2 ranks (launcher included)")
     print(f"wrote {os.path.join(work, 'throughput.json')}")
 
 
