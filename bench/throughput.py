@@ -13,6 +13,8 @@ What it runs (every rank single-threaded, so 1 rank = 1 core):
   seed   bench/scenarios/paper-mc.yaml (90 s at 100 Hz through EKF, RTS and
          batch), `montecarlo -n N --threads 1` on 1 rank and on 2 ranks:
          seeds per second, with and without the one-off CRB (rank 0).
+Also: `diagnose` alone on the 90-s run, and 2 Monte Carlo seeds of the
+90-s 1-kHz run itself (CPU seconds and peak memory, for sizing).
 Prints a Markdown table and writes DIR/throughput.json. The machine's load
 (`uptime`) before and after is printed too: other jobs on the cores slow
 the 2-rank figures first.
@@ -86,6 +88,8 @@ def main():
     wall, mb, cpu = run([BIN, "fit", yaml90, "--threads", "1", "-o",
                          os.path.join(work, "fit.json")])
     out["fit_single"] = {"wall_s": wall, "peak_MB": mb, "cpu_s": cpu}
+    wall, mb, cpu = run([BIN, "diagnose", yaml90, "-o", os.path.join(work, "diagnose.json")])
+    out["diagnose_single"] = {"wall_s": wall, "peak_MB": mb, "cpu_s": cpu}
     manifest = os.path.join(work, "manifest.csv")
     with open(manifest, "w") as f:
         f.write("serial,run\n")
@@ -116,6 +120,10 @@ def main():
     wall, mb, cpu = run([BIN, "montecarlo", scen, "-n", "1", "--threads", "1", "-o",
                          os.path.join(work, "mc_one.json")])
     out["mc_one_seed"] = {"wall_s": wall, "peak_MB": mb, "cpu_s": cpu}
+    # A seed of the paper's run itself (1 kHz): 10 times the samples.
+    wall, mb, cpu = run([BIN, "montecarlo", os.path.join(ROOT, "examples/paper-experiment3/scenario.yaml"),
+                         "-n", "2", "--threads", "1", "-o", os.path.join(work, "mc_1khz.json")])
+    out["mc_1khz_two_seeds"] = {"wall_s": wall, "peak_MB": mb, "cpu_s": cpu}
     out["mc"] = {"ranks1": mc[1], "ranks2": mc[2],
                  "speedup": mc[2]["seeds_per_s"] / mc[1]["seeds_per_s"],
                  "speedup_without_crb":
@@ -146,6 +154,10 @@ def main():
           f"{fb['cpu_s_per_run_ranks2']:.3f} on 2 ranks; per seed: "
           f"{m['ranks1']['cpu_s_per_seed']:.3f} on 1 rank, {m['ranks2']['cpu_s_per_seed']:.3f} "
           f"on 2 ranks (launcher included)")
+    d, k = out["diagnose_single"], out["mc_1khz_two_seeds"]
+    print(f"diagnose alone on the 90-s run: {d['wall_s']:.2f} s wall, {d['cpu_s']:.2f} CPU s, "
+          f"peak {d['peak_MB']:.0f} MB; 2 Monte Carlo seeds of the 90-s 1-kHz run: "
+          f"{k['cpu_s']:.2f} CPU s, peak {k['peak_MB']:.0f} MB")
     print(f"wrote {os.path.join(work, 'throughput.json')}")
 
 

@@ -8,10 +8,9 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
-
-#include <nlohmann/json.hpp>
 
 #include "tests/temp_dir_test.h"
 
@@ -39,7 +38,9 @@ std::string ScenarioText(int seed, double Kx) {
          "\n"
          "profile: {amplitude_deg: [360, 90], period_s: [30, 12], phase_deg: [0, 0],\n"
          "          duration_s: 24, rate_hz: 50}\n"
-         "truth: {Kx: " + std::to_string(Kx) + ", dpsi: -33, dlambda2: -33}\n"
+         "truth: {Kx: " +
+         std::to_string(Kx) +
+         ", dpsi: -33, dlambda2: -33}\n"
          "truth_spread: {dlambda2: 0.5}\n"
          "noise: {accel_mV: 2.0, angle_arcsec: 0}\n"
          "run:\n"
@@ -62,7 +63,8 @@ class ScaleOut : public testing_fixtures::TempDirTest {
   // Simulates unit `serial` into DIR/units/serial/.
   void SimulateUnit(const std::string& serial, int seed, double Kx = 171.5) {
     const std::string scen = WriteText("scenario_" + serial + ".yaml", ScenarioText(seed, Kx));
-    ASSERT_EQ(Run("simulate " + scen + " -o " + Path("units/" + serial)), 0) << Slurp(Path("log.txt"));
+    ASSERT_EQ(Run("simulate " + scen + " -o " + Path("units/" + serial)), 0)
+        << Slurp(Path("log.txt"));
   }
   // The single summary_*.json in `dir` whose name contains `part`.
   fs::path Summary(const std::string& dir, const std::string& part = "") {
@@ -118,15 +120,19 @@ TEST_F(ScaleOut, MonteCarloShardsMergedEqualTheWhole) {
 
   // A shard missing, or given twice: named, exit 2, no output.
   EXPECT_EQ(Run("merge " + Path("s1.json") + " " + Path("s3.json") + " -o " + Path("m2.json"),
-                "err.txt") >> 8,
+                "err.txt") >>
+                8,
             2);
   EXPECT_EQ(Slurp(Path("err.txt")), "triadcal: error: " + Path("s1.json") +
                                         ": shard: shard 2/3 is missing from the merge\n");
   EXPECT_EQ(Run("merge " + Path("s1.json") + " " + Path("s1.json") + " " + Path("s2.json") +
-                " -o " + Path("m2.json"), "err.txt") >> 8,
+                    " -o " + Path("m2.json"),
+                "err.txt") >>
+                8,
             2);
   EXPECT_EQ(Slurp(Path("err.txt")), "triadcal: error: " + Path("s1.json") +
-                                        ": shard: 1/3 given twice (also " + Path("s1.json") + ")\n");
+                                        ": shard: 1/3 given twice (also " + Path("s1.json") +
+                                        ")\n");
   EXPECT_FALSE(fs::exists(Path("m2.json")));
   EXPECT_EQ(Run("montecarlo " + scen + " -n 7 --shard 4/3 -o " + Path("m3.json"), "err.txt") >> 8,
             2);
@@ -267,9 +273,9 @@ TEST_F(ScaleOut, BatchOnTwoMpiRanksAndAsShardsEqualsOneProcess) {
   const std::string date = " --date 2026-01-31";
   ASSERT_EQ(Run("batch " + man + " -o " + Path("one") + date), 0) << Slurp(Path("log.txt"));
   for (int i = 1; i <= 2; ++i) {
-    ASSERT_EQ(Run("batch " + man + " -o " + Path("sh") + date + " --shard " + std::to_string(i) +
-                  "/2"),
-              0);
+    ASSERT_EQ(
+        Run("batch " + man + " -o " + Path("sh") + date + " --shard " + std::to_string(i) + "/2"),
+        0);
   }
   ASSERT_EQ(Run("merge " + Summary("sh", "shard-2-of-2").string() + " " +
                 Summary("sh", "shard-1-of-2").string() + " -o " + Path("merged.json")),

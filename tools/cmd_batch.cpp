@@ -17,7 +17,6 @@
 #include <map>
 #include <memory>
 #include <mutex>
-
 #include <nlohmann/json.hpp>
 
 #include "core/io/file_util.h"
@@ -50,8 +49,11 @@ struct BatchArgs {
 // What a rank hands to rank 0 for one manifest run.
 nlohmann::json FitUnit(const BatchArgs& a, const ManifestEntry& e, int item) {
   const auto t0 = std::chrono::steady_clock::now();
-  nlohmann::json j = {{"item", item}, {"status", "fitted"}, {"reason", ""},
-                      {"warnings", nlohmann::json::array()}, {"diagnose", nullptr}};
+  nlohmann::json j = {{"item", item},
+                      {"status", "fitted"},
+                      {"reason", ""},
+                      {"warnings", nlohmann::json::array()},
+                      {"diagnose", nullptr}};
   try {
     LoadedRun run;
     run.description = LoadRunDescription(e.run_path);
@@ -136,10 +138,13 @@ UnitResult FileUnit(const BatchArgs& a, const std::string& date, const ManifestE
 
 // DIR/summary_<stamp>[_k][_shard-I-of-N] without an existing .csv or .json.
 std::string SummaryBase(const std::string& dir, const std::string& stamp, const Shard& shard) {
-  const std::string tail =
-      shard.whole() ? "" : "_shard-" + std::to_string(shard.index) + "-of-" + std::to_string(shard.count);
+  const std::string tail = shard.whole() ? ""
+                                         : "_shard-" + std::to_string(shard.index) + "-of-" +
+                                               std::to_string(shard.count);
   for (int k = 1;; ++k) {
-    const std::string base = (fs::path(dir) / ("summary_" + stamp + (k > 1 ? "_" + std::to_string(k) : "") + tail)).string();
+    const std::string base =
+        (fs::path(dir) / ("summary_" + stamp + (k > 1 ? "_" + std::to_string(k) : "") + tail))
+            .string();
     if (!fs::exists(base + ".csv") && !fs::exists(base + ".json")) return base;
   }
 }
@@ -235,9 +240,10 @@ Command AddBatchCommand(CLI::App& app) {
   c.app->add_option("-o,--output", a->out_dir, "folder of the calibrations and summaries")
       ->required();
   c.app->add_option("--date", a->date, "file under this UTC date (YYYY-MM-DD) instead of today");
-  c.app->add_option("--threads", a->threads,
-                    "runs fitted at once per process (0: the cores, shared among the MPI ranks "
-                    "on a machine)")
+  c.app
+      ->add_option("--threads", a->threads,
+                   "runs fitted at once per process (0: the cores, shared among the MPI ranks "
+                   "on a machine)")
       ->capture_default_str();
   c.app->add_option("--shard", a->shard,
                     "do shard I of N (1 <= I <= N) of the runs, e.g. $SLURM_ARRAY_TASK_ID/N; "

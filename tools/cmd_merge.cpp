@@ -5,10 +5,9 @@
 // OUT.json.
 #include <cstdio>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "core/io/file_util.h"
 #include "core/model/errors.h"
@@ -33,7 +32,8 @@ int RunMerge(const MergeArgs& a) {
     nlohmann::json j = nlohmann::json::parse(ReadFile(path), nullptr, false);
     if (j.is_discarded() || !j.is_object()) throw InputError(path + ": not valid JSON");
     if (!j.contains("shard") || !j["shard"].is_object()) {
-      throw InputError(path + ": shard: missing (not the output of montecarlo or batch with "
+      throw InputError(path +
+                       ": shard: missing (not the output of montecarlo or batch with "
                        "--shard I/N)");
     }
     const std::string c = j.value("command", "");
@@ -51,7 +51,8 @@ int RunMerge(const MergeArgs& a) {
       const MergedMonteCarlo m = MergeMonteCarloShards(shards, a.shards);
       nlohmann::json out = MonteCarloJson(m.settings, m.result);
       out["ranks"] = 0;
-      for (const nlohmann::json& s : shards) out["ranks"] = out["ranks"].get<int>() + s.value("ranks", 1);
+      for (const nlohmann::json& s : shards)
+        out["ranks"] = out["ranks"].get<int>() + s.value("ranks", 1);
       out["shards"] = shards.size();
       WriteJson(out, a.out_json);
       PrintMonteCarlo(m.settings, m.result, out);
@@ -60,7 +61,8 @@ int RunMerge(const MergeArgs& a) {
       std::vector<UnitResult> units;
       for (const nlohmann::json& r : out["results"]) units.push_back(UnitResultFromJson(r));
       std::string csv = a.out_json;
-      if (csv.size() > 5 && csv.compare(csv.size() - 5, 5, ".json") == 0) csv.resize(csv.size() - 5);
+      if (csv.size() > 5 && csv.compare(csv.size() - 5, 5, ".json") == 0)
+        csv.resize(csv.size() - 5);
       csv += ".csv";
       WriteFileAtomically(csv, BatchSummaryCsv(units));
       WriteJson(out, a.out_json);

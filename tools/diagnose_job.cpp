@@ -36,8 +36,8 @@ nlohmann::json StateJson(const ParameterLayout& layout, const BatchResult& r,
       if (it == truth->end() || rep.not_estimable.count(p.name)) continue;
       const double v = r.estimate.theta[i] / p.si_per_unit;
       const double s = std::sqrt(r.estimate.cov(i, i)) / p.si_per_unit;
-      err[p.name] = {{"error", v - it->second}, {"error_in_sigma", (v - it->second) / s},
-                     {"unit", p.unit}};
+      err[p.name] = {
+          {"error", v - it->second}, {"error_in_sigma", (v - it->second) / s}, {"unit", p.unit}};
       sum2 += std::pow((v - it->second) / s, 2);
       ++count;
     }
@@ -68,15 +68,21 @@ nlohmann::json DiagnoseJson(const std::string& run_yaml, double alpha, const Dia
   out["ranking"] = ranking;
   nlohmann::json tests = nlohmann::json::array();
   for (const CandidateTest& t : d.tests) {
-    tests.push_back({{"round", t.round}, {"effect", GetEffectSpec(t.effect).name},
-                     {"statistic", t.statistic}, {"dof", t.dof}, {"p_value", t.p_value},
-                     {"threshold", t.threshold}, {"selected", t.selected}});
+    tests.push_back({{"round", t.round},
+                     {"effect", GetEffectSpec(t.effect).name},
+                     {"statistic", t.statistic},
+                     {"dof", t.dof},
+                     {"p_value", t.p_value},
+                     {"threshold", t.threshold},
+                     {"selected", t.selected}});
   }
   out["tests"] = tests;
   out["selected"] = nlohmann::json::array();
   for (Effect e : d.selected) out["selected"].push_back(GetEffectSpec(e).name);
-  out["selection_rule"] = "forward, one effect per round; selected when its p-value < alpha / "
-                          "(candidates in the round), alpha = " + std::to_string(alpha);
+  out["selection_rule"] =
+      "forward, one effect per round; selected when its p-value < alpha / "
+      "(candidates in the round), alpha = " +
+      std::to_string(alpha);
   out["before"] = StateJson(d.before_layout, d.before, d.before_residuals, tp);
   out["after"] = StateJson(d.after_layout, d.after, d.after_residuals, tp);
   out["parameters"] = out["after"]["parameters"];

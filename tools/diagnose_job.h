@@ -3,9 +3,8 @@
 #pragma once
 
 #include <map>
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "solvers/diagnosis/effect_discovery.h"
 #include "tools/command_util.h"

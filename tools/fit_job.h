@@ -3,11 +3,10 @@
 // production calibration is the very file `fit` would write.
 #pragma once
 
-#include <functional>
-#include <string>
-
 #include <CLI/CLI.hpp>
+#include <functional>
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "core/model/parameters.h"
 #include "solvers/estimation/batch_solver.h"

@@ -9,10 +9,9 @@
 //     "failure": ""}, ...]}, ...]        values in SI, in layout order
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "solvers/analysis/monte_carlo.h"
 

@@ -41,7 +41,8 @@ nlohmann::json ViolationJson(const LimitViolation& v) {
 
 LimitViolation ViolationFromJson(const nlohmann::json& j) {
   return {j.at("parameter").get<std::string>(), j.at("limit").get<std::string>(),
-          j.at("value").get<double>(), j.at("bound").get<double>(), j.at("unit").get<std::string>()};
+          j.at("value").get<double>(), j.at("bound").get<double>(),
+          j.at("unit").get<std::string>()};
 }
 
 }  // namespace triadcal

@@ -3,10 +3,9 @@
 // read from the "parameters" object of the calibration (SPEC section 7).
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "tools/batch/manifest.h"
 
@@ -14,9 +13,9 @@ namespace triadcal {
 
 struct LimitViolation {
   std::string parameter;
-  std::string limit;  // "min", "max", "sigma_max", or "missing" (not in the calibration)
-  double value = 0.0;      // the value, or the sigma for sigma_max
-  double bound = 0.0;      // the limit
+  std::string limit;   // "min", "max", "sigma_max", or "missing" (not in the calibration)
+  double value = 0.0;  // the value, or the sigma for sigma_max
+  double bound = 0.0;  // the limit
   std::string unit;
   // "Kx 180.3 > max 178 mV/g"
   std::string Text() const;

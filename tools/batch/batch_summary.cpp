@@ -60,9 +60,12 @@ UnitResult UnitResultFromJson(const nlohmann::json& j) {
 BatchCounts CountUnits(const std::vector<UnitResult>& units) {
   BatchCounts c;
   for (const UnitResult& u : units) {
-    if (u.status == "pass") ++c.pass;
-    else if (u.status == "fail") ++c.fail;
-    else ++c.error;
+    if (u.status == "pass")
+      ++c.pass;
+    else if (u.status == "fail")
+      ++c.fail;
+    else
+      ++c.error;
   }
   return c;
 }
@@ -86,9 +89,9 @@ nlohmann::json BatchSummaryJson(const std::string& manifest, const std::string& 
   const BatchCounts c = CountUnits(units);
   nlohmann::json results = nlohmann::json::array();
   for (const UnitResult& u : units) results.push_back(UnitResultJson(u));
-  return {{"command", "batch"}, {"manifest", manifest}, {"output_dir", output_dir},
-          {"date", date},       {"units", units.size()}, {"pass", c.pass},
-          {"fail", c.fail},     {"error", c.error},      {"results", results},
+  return {{"command", "batch"},    {"manifest", manifest},  {"output_dir", output_dir},
+          {"date", date},          {"units", units.size()}, {"pass", c.pass},
+          {"fail", c.fail},        {"error", c.error},      {"results", results},
           {"execution", execution}};
 }
 

@@ -8,10 +8,9 @@
 // object and `triadcal merge` joins them (MergeBatchShards).
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "tools/batch/acceptance.h"
 

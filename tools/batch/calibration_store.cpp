@@ -65,7 +65,8 @@ std::string ClaimCalibrationFolder(const std::string& dir, const std::string& se
   for (int k = 1;; ++k) {
     const std::string name = FolderName(date, k);
     if (fs::create_directory(unit / name, ec)) return serial + "/" + name;
-    if (ec) throw InputError((unit / name).string() + ": cannot create folder (" + ec.message() + ")");
+    if (ec)
+      throw InputError((unit / name).string() + ": cannot create folder (" + ec.message() + ")");
   }
 }
 

@@ -4,9 +4,8 @@
 // atomic mkdir), so ranks, shards and reruns never share one.
 #pragma once
 
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 namespace triadcal {
 

@@ -71,7 +71,8 @@ TEST(Acceptance, EachViolatedLimitIsNamed) {
   limits[1].sigma_max = 1.0;
   limits.pop_back();
   EXPECT_TRUE(CheckLimits(limits, params).empty());
-  const std::vector<LimitViolation> low = CheckLimits({{"Kx", 181.0, std::nullopt, std::nullopt}}, params);
+  const std::vector<LimitViolation> low =
+      CheckLimits({{"Kx", 181.0, std::nullopt, std::nullopt}}, params);
   ASSERT_EQ(low.size(), 1u);
   EXPECT_EQ(low[0].Text(), "Kx 180.25 < min 181 mV/g");
 }
@@ -83,7 +84,8 @@ TEST(CalibrationStore, DateMustBeIso) {
       CheckDate(bad);
       ADD_FAILURE() << bad;
     } catch (const InputError& e) {
-      EXPECT_EQ(std::string(e.what()), std::string("--date: expected YYYY-MM-DD, got '") + bad + "'");
+      EXPECT_EQ(std::string(e.what()),
+                std::string("--date: expected YYYY-MM-DD, got '") + bad + "'");
     }
   }
 }

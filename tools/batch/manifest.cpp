@@ -29,8 +29,7 @@ bool KnownParameter(const std::string& name) {
 // "" when `serial` can name a folder, else what is wrong with it.
 std::string SerialProblem(const std::string& serial) {
   const bool ok =
-      !serial.empty() && serial[0] != '.' &&
-      std::all_of(serial.begin(), serial.end(), [](char c) {
+      !serial.empty() && serial[0] != '.' && std::all_of(serial.begin(), serial.end(), [](char c) {
         return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-';
       });
   if (ok) return "";

@@ -48,13 +48,13 @@ TEST_F(ManifestTest, CsvWithLimitsAndComments) {
 }
 
 TEST_F(ManifestTest, YamlDefaultsAndPerRunLimits) {
-  const std::string path = WriteText(
-      "m.yaml",
-      "limits: {Kx: {min: 165, max: 185}, angle_latency.tau: {max: 3}}\n"
-      "diagnose: true\n"
-      "runs:\n"
-      "  - {serial: A1, run: a/run.yaml}\n"
-      "  - {serial: A2, run: b/run.yaml, diagnose: false, limits: {Kx: {max: 180}}}\n");
+  const std::string path =
+      WriteText("m.yaml",
+                "limits: {Kx: {min: 165, max: 185}, angle_latency.tau: {max: 3}}\n"
+                "diagnose: true\n"
+                "runs:\n"
+                "  - {serial: A1, run: a/run.yaml}\n"
+                "  - {serial: A2, run: b/run.yaml, diagnose: false, limits: {Kx: {max: 180}}}\n");
   const std::vector<ManifestEntry> m = LoadManifest(path);
   ASSERT_EQ(m.size(), 2u);
   EXPECT_TRUE(m[0].diagnose);

@@ -78,8 +78,8 @@ std::vector<std::string> GatherOnRoot(const std::string& mine) {
     if (total > INT32_MAX) throw std::runtime_error("MPI: more than 2 GiB to gather");
     all.resize(static_cast<std::size_t>(total));
   }
-  Check(MPI_Gatherv(mine.data(), n, MPI_CHAR, all.data(), sizes.data(), offsets.data(), MPI_CHAR,
-                    0, MPI_COMM_WORLD),
+  Check(MPI_Gatherv(mine.data(), n, MPI_CHAR, all.data(), sizes.data(), offsets.data(), MPI_CHAR, 0,
+                    MPI_COMM_WORLD),
         "MPI_Gatherv");
   std::vector<std::string> out;
   if (s.rank == 0) {

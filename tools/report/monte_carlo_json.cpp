@@ -9,9 +9,9 @@
 namespace triadcal {
 
 nlohmann::json MonteCarloSettingsJson(const MonteCarloSettings& s) {
-  return {{"scenario", s.scenario},     {"effects", s.effects},       {"estimators", s.estimators},
-          {"runs", s.runs},             {"first_seed", s.first_seed}, {"epoch_s", s.epoch_s},
-          {"tolerance", s.tolerance},   {"rate_hz", s.rate_hz},       {"duration_s", s.duration_s},
+  return {{"scenario", s.scenario},   {"effects", s.effects},       {"estimators", s.estimators},
+          {"runs", s.runs},           {"first_seed", s.first_seed}, {"epoch_s", s.epoch_s},
+          {"tolerance", s.tolerance}, {"rate_hz", s.rate_hz},       {"duration_s", s.duration_s},
           {"per_seed", s.per_seed}};
 }
 
@@ -57,15 +57,12 @@ nlohmann::json MonteCarloJson(const MonteCarloSettings& a, const MonteCarloResul
     for (const EstimatorStats& st : r.estimators) {
       const double spread = std::sqrt(
           std::max(0.0, st.scatter[i] * st.scatter[i] - st.mean_error[i] * st.mean_error[i]));
-      j[st.name] = {{"mean_error", st.mean_error[i] / f},
-                    {"bias_over_crb", st.mean_error[i] / r.crb[i]},
-                    {"scatter", st.scatter[i] / f},
-                    {"spread_about_mean_over_crb", spread / r.crb[i]},
-                    {"mean_sigma", st.mean_sigma[i] / f},
-                    {"scatter_over_crb", st.scatter[i] / r.crb[i]},
-                    {"rms_normalised_error", st.rms_z[i]},
-                    {"max_abs_normalised_error", st.max_abs_z[i]},
-                    {"held_runs", st.held_runs[i]}};
+      j[st.name] = {
+          {"mean_error", st.mean_error[i] / f},  {"bias_over_crb", st.mean_error[i] / r.crb[i]},
+          {"scatter", st.scatter[i] / f},        {"spread_about_mean_over_crb", spread / r.crb[i]},
+          {"mean_sigma", st.mean_sigma[i] / f},  {"scatter_over_crb", st.scatter[i] / r.crb[i]},
+          {"rms_normalised_error", st.rms_z[i]}, {"max_abs_normalised_error", st.max_abs_z[i]},
+          {"held_runs", st.held_runs[i]}};
     }
     params[p.name] = j;
   }
@@ -75,9 +72,8 @@ nlohmann::json MonteCarloJson(const MonteCarloSettings& a, const MonteCarloResul
   out["crb"] = crb;
   nlohmann::json pooled = nlohmann::json::object();
   for (const EstimatorStats& st : r.estimators) {
-    pooled[st.name] = {{"rms_normalised_error", st.pooled_rms_z},
-                       {"runs", st.runs},
-                       {"failures", st.failures}};
+    pooled[st.name] = {
+        {"rms_normalised_error", st.pooled_rms_z}, {"runs", st.runs}, {"failures", st.failures}};
     if (!st.first_failure.empty()) pooled[st.name]["first_failure"] = st.first_failure;
   }
   out["pooled"] = pooled;
@@ -95,7 +91,8 @@ nlohmann::json MonteCarloJson(const MonteCarloSettings& a, const MonteCarloResul
       hi = std::max(hi, ratio);
       spread_lo = std::min(spread_lo, spread);
       spread_hi = std::max(spread_hi, spread);
-      if (std::abs(ratio - 1.0) >= std::abs(worst - 1.0)) worst = ratio, worst_name = L.info(i).name;
+      if (std::abs(ratio - 1.0) >= std::abs(worst - 1.0))
+        worst = ratio, worst_name = L.info(i).name;
       if (std::abs(b) >= std::abs(bias)) bias = b, bias_name = L.info(i).name;
     }
     check[st.name] = {{"min_ratio", lo},
@@ -170,17 +167,20 @@ void PrintMonteCarlo(const MonteCarloSettings& a, const MonteCarloResult& r,
               100.0 / std::sqrt(2.0 * a.runs));
   for (const EstimatorStats& st : r.estimators) {
     const nlohmann::json& c = check[st.name];
-    std::printf("%-5s: pooled rms z %.3f over %d runs%s; scatter/CRB %.3f .. %.3f, worst %s %.3f: %s\n",
-                st.name.c_str(), st.pooled_rms_z, st.runs,
-                st.failures ? (" (" + std::to_string(st.failures) + " FAILED)").c_str() : "",
-                c["min_ratio"].get<double>(), c["max_ratio"].get<double>(),
-                c["worst_parameter"].get<std::string>().c_str(), c["worst_ratio"].get<double>(),
-                c["within_tolerance"].get<bool>() ? "within tolerance" : "OUTSIDE tolerance");
-    std::printf("       spread about the mean / CRB %.3f .. %.3f; largest bias %s %+.3f CRB (%.1f standard errors)\n",
-                c["spread_about_mean_min_ratio"].get<double>(),
-                c["spread_about_mean_max_ratio"].get<double>(),
-                c["largest_bias_parameter"].get<std::string>().c_str(),
-                c["largest_bias_over_crb"].get<double>(), c["bias_standard_errors"].get<double>());
+    std::printf(
+        "%-5s: pooled rms z %.3f over %d runs%s; scatter/CRB %.3f .. %.3f, worst %s %.3f: %s\n",
+        st.name.c_str(), st.pooled_rms_z, st.runs,
+        st.failures ? (" (" + std::to_string(st.failures) + " FAILED)").c_str() : "",
+        c["min_ratio"].get<double>(), c["max_ratio"].get<double>(),
+        c["worst_parameter"].get<std::string>().c_str(), c["worst_ratio"].get<double>(),
+        c["within_tolerance"].get<bool>() ? "within tolerance" : "OUTSIDE tolerance");
+    std::printf(
+        "       spread about the mean / CRB %.3f .. %.3f; largest bias %s %+.3f CRB (%.1f standard "
+        "errors)\n",
+        c["spread_about_mean_min_ratio"].get<double>(),
+        c["spread_about_mean_max_ratio"].get<double>(),
+        c["largest_bias_parameter"].get<std::string>().c_str(),
+        c["largest_bias_over_crb"].get<double>(), c["bias_standard_errors"].get<double>());
   }
 }
 

@@ -11,10 +11,9 @@
 // time_s).
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "tools/report/monte_carlo_json.h"
 
