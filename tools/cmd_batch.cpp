@@ -178,14 +178,14 @@ int RunBatch(const BatchArgs& a) {
                    static_cast<double>(done) / mine.size());
     }
   });
-  const std::vector<std::string> parts = GatherOnRoot(nlohmann::json(jobs).dump());
+  const std::vector<nlohmann::json> parts = GatherJsonOnRoot(nlohmann::json(jobs));
   if (!MpiRoot()) return 0;
   EndProgress();
   std::map<int, nlohmann::json> by_item;
-  for (const std::string& p : parts) {
-    for (nlohmann::json& j : nlohmann::json::parse(p)) {
+  for (const nlohmann::json& p : parts) {
+    for (const nlohmann::json& j : p) {
       const int item = j["item"].get<int>();
-      by_item[item] = std::move(j);
+      by_item[item] = j;
     }
   }
   std::vector<UnitResult> units;

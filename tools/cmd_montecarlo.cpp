@@ -78,12 +78,12 @@ int RunMonteCarloCommand(const MonteCarloArgs& a) {
   const std::vector<MonteCarloRun> my_runs = RunMonteCarloSeeds(s, opt, mine);
   // Rank 0 puts every rank's runs back in seed order and sums them as one
   // process would.
-  const std::vector<std::string> parts = GatherOnRoot(MonteCarloRunsJson(my_runs).dump());
+  const std::vector<nlohmann::json> parts = GatherJsonOnRoot(MonteCarloRunsJson(my_runs));
   if (!MpiRoot()) return 0;
   EndProgress();
   std::map<std::uint64_t, MonteCarloRun> by_seed;
-  for (const std::string& p : parts) {
-    for (MonteCarloRun& run : MonteCarloRunsFromJson(nlohmann::json::parse(p),
+  for (const nlohmann::json& p : parts) {
+    for (MonteCarloRun& run : MonteCarloRunsFromJson(p,
                                                      opt.estimators.size(), r.layout.size(),
                                                      "rank")) {
       by_seed[run.seed] = std::move(run);

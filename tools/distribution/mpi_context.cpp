@@ -88,6 +88,15 @@ std::vector<std::string> GatherOnRoot(const std::string& mine) {
   return out;
 }
 
+std::vector<nlohmann::json> GatherJsonOnRoot(const nlohmann::json& mine) {
+  const std::vector<std::uint8_t> bytes = nlohmann::json::to_cbor(mine);
+  std::vector<nlohmann::json> out;
+  for (const std::string& part : GatherOnRoot(std::string(bytes.begin(), bytes.end()))) {
+    out.push_back(nlohmann::json::from_cbor(part));
+  }
+  return out;
+}
+
 void MpiAbortIfShared(int code) {
   if (State().active && State().size > 1) MPI_Abort(MPI_COMM_WORLD, code);
 }

@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 namespace triadcal {
 
 class MpiSession {
@@ -34,6 +36,11 @@ int MpiLocalSize();
 // Every rank passes its bytes; rank 0 receives them all in rank order, the
 // other ranks an empty vector. Collective: every rank must call it.
 std::vector<std::string> GatherOnRoot(const std::string& mine);
+
+// GatherOnRoot of JSON values, sent as CBOR (binary; doubles travel as their
+// 8 bytes, so they arrive bit for bit). Rank 0 gets every rank's value in
+// rank order, the others an empty vector. Collective.
+std::vector<nlohmann::json> GatherJsonOnRoot(const nlohmann::json& mine);
 
 // Ends the whole job when it has more than one rank (a rank that failed alone
 // would leave the others waiting in a collective); returns otherwise.
