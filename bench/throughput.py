@@ -2,7 +2,7 @@
 """Throughput of triadcal on this machine: fits of the paper's 90-s run and
 Monte Carlo seeds, on 1 rank and on 2 MPI ranks, measured in the same run.
 
-usage: bench/throughput.py [--fits K] [--seeds N] [--workdir DIR]
+usage: bench/throughput.py [--fits K] [--seeds N] [--repeat R] [--workdir DIR]
        (TRIADCAL=path/to/triadcal to use another binary)
 
 What it runs (every rank single-threaded, so 1 rank = 1 core):
@@ -12,7 +12,9 @@ What it runs (every rank single-threaded, so 1 rank = 1 core):
          --threads 1`: runs per second.
   seed   bench/scenarios/paper-mc.yaml (90 s at 100 Hz through EKF, RTS and
          batch), `montecarlo -n N --threads 1` on 1 rank and on 2 ranks:
-         seeds per second, with and without the one-off CRB (rank 0).
+         seeds per second (the one-off CRB, about 0.1 s, included).
+Each 1-rank/2-rank pair is repeated R times, interleaved, and the medians
+compared; CPU seconds are user + system of the command and its ranks.
 Also: `diagnose` alone on the 90-s run, and 2 Monte Carlo seeds of the
 90-s 1-kHz run itself (CPU seconds and peak memory, for sizing).
 Prints a Markdown table and writes DIR/throughput.json. The machine's load
@@ -23,6 +25,7 @@ import argparse
 import json
 import os
 import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -67,97 +70,102 @@ def autogroup():
         return False
 
 
+def compare(label, cmd1, cmd2, items, repeat):
+    """cmd1 on 1 rank and cmd2 on 2 ranks, interleaved `repeat` times (the
+    machine's load drifts: interleaving shares the drift between both)."""
+    rows = {1: [], 2: []}
+    for _ in range(repeat):
+        for ranks, cmd in ((1, cmd1), (2, cmd2)):
+            wall, mb, cpu = run(cmd(ranks, len(rows[ranks])))
+            rows[ranks].append({"wall_s": wall, "cpu_s": cpu, "peak_MB": mb})
+    r = {"label": label, "items": items, "repeat": repeat}
+    for ranks in (1, 2):
+        walls = [x["wall_s"] for x in rows[ranks]]
+        cpus = [x["cpu_s"] for x in rows[ranks]]
+        r[f"ranks{ranks}"] = {"runs": rows[ranks],
+                              "median_wall_s": statistics.median(walls),
+                              "items_per_s": items / statistics.median(walls),
+                              "cpu_s_per_item": statistics.median(cpus) / items}
+    r["speedup"] = r["ranks1"]["median_wall_s"] / r["ranks2"]["median_wall_s"]
+    pair = [a["wall_s"] / b["wall_s"] for a, b in zip(rows[1], rows[2])]
+    r["speedup_per_repeat"] = pair
+    return r
+
+
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--fits", type=int, default=16)
-    ap.add_argument("--seeds", type=int, default=16)
+    ap.add_argument("--fits", type=int, default=48)
+    ap.add_argument("--seeds", type=int, default=48)
+    ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--workdir")
     a = ap.parse_args()
     work = a.workdir or tempfile.mkdtemp(prefix="triadcal_throughput_")
     os.makedirs(work, exist_ok=True)
     if not shutil.which("mpirun"):
         sys.exit("throughput: mpirun not found (Debian: openmpi-bin)")
-    out = {"load_before": load(), "cores": os.cpu_count(), "fits": a.fits, "seeds": a.seeds,
-           "autogroup": autogroup()}
+    out = {"load_before": load(), "cores": os.cpu_count(), "autogroup": autogroup()}
 
-    # ---- fit on the paper's 90-s run
+    # ---- one of each alone: wall, CPU and peak memory per run
     run90 = os.path.join(work, "90s")
     run([BIN, "simulate", os.path.join(ROOT, "examples/paper-experiment3/scenario.yaml"),
          "-o", run90])
     yaml90 = os.path.join(run90, "run.yaml")
-    wall, mb, cpu = run([BIN, "fit", yaml90, "--threads", "1", "-o",
-                         os.path.join(work, "fit.json")])
-    out["fit_single"] = {"wall_s": wall, "peak_MB": mb, "cpu_s": cpu}
-    wall, mb, cpu = run([BIN, "diagnose", yaml90, "-o", os.path.join(work, "diagnose.json")])
-    out["diagnose_single"] = {"wall_s": wall, "peak_MB": mb, "cpu_s": cpu}
+    scen = os.path.join(HERE, "scenarios", "paper-mc.yaml")
+    alone = {
+        "fit_90s_1kHz": [BIN, "fit", yaml90, "--threads", "1", "-o",
+                         os.path.join(work, "fit.json")],
+        "diagnose_90s_1kHz": [BIN, "diagnose", yaml90, "-o", os.path.join(work, "diag.json")],
+        "montecarlo_1_seed_paper_mc": [BIN, "montecarlo", scen, "-n", "1", "--threads", "1",
+                                       "-o", os.path.join(work, "mc_one.json")],
+        "montecarlo_2_seeds_90s_1kHz": [
+            BIN, "montecarlo", os.path.join(ROOT, "examples/paper-experiment3/scenario.yaml"),
+            "-n", "2", "--threads", "1", "-o", os.path.join(work, "mc_1khz.json")],
+    }
+    out["alone"] = {}
+    for name, cmd in alone.items():
+        wall, mb, cpu = run(cmd)
+        out["alone"][name] = {"wall_s": wall, "cpu_s": cpu, "peak_MB": mb}
+
+    # ---- 1 rank against 2 ranks
     manifest = os.path.join(work, "manifest.csv")
     with open(manifest, "w") as f:
         f.write("serial,run\n")
         for k in range(a.fits):
             f.write(f"U{k:04d},{yaml90}\n")
-    w1, mb1, c1 = run([BIN, "batch", manifest, "-o", os.path.join(work, "b1"),
-                       "--threads", "1"])
-    w2, _, c2 = run(MPIRUN + [BIN, "batch", manifest, "-o", os.path.join(work, "b2"),
-                              "--threads", "1"])
-    out["fit_batch"] = {"ranks1_wall_s": w1, "ranks1_peak_MB": mb1, "ranks2_wall_s": w2,
-                        "ranks1_cpu_s": c1, "ranks2_cpu_s": c2,
-                        "cpu_s_per_run_ranks1": c1 / a.fits, "cpu_s_per_run_ranks2": c2 / a.fits,
-                        "ranks1_runs_per_s": a.fits / w1, "ranks2_runs_per_s": a.fits / w2,
-                        "speedup": w1 / w2}
 
-    # ---- Monte Carlo seeds
-    scen = os.path.join(HERE, "scenarios", "paper-mc.yaml")
-    mc = {}
-    for ranks in (1, 2):
-        js = os.path.join(work, f"mc{ranks}.json")
-        cmd = [BIN, "montecarlo", scen, "-n", str(a.seeds), "--threads", "1", "-o", js]
-        wall, mb, cpu = run(cmd if ranks == 1 else MPIRUN + cmd)
-        t = json.load(open(js))["time_s"]
-        mc[ranks] = {"wall_s": wall, "crb_s": t["crb"], "peak_MB": mb, "cpu_s": cpu,
-                     "cpu_s_per_seed": cpu / a.seeds,
-                     "seeds_per_s": a.seeds / wall,
-                     "seeds_per_s_without_crb": a.seeds / (t["total"] - t["crb"])}
-    wall, mb, cpu = run([BIN, "montecarlo", scen, "-n", "1", "--threads", "1", "-o",
-                         os.path.join(work, "mc_one.json")])
-    out["mc_one_seed"] = {"wall_s": wall, "peak_MB": mb, "cpu_s": cpu}
-    # A seed of the paper's run itself (1 kHz): 10 times the samples.
-    wall, mb, cpu = run([BIN, "montecarlo", os.path.join(ROOT, "examples/paper-experiment3/scenario.yaml"),
-                         "-n", "2", "--threads", "1", "-o", os.path.join(work, "mc_1khz.json")])
-    out["mc_1khz_two_seeds"] = {"wall_s": wall, "peak_MB": mb, "cpu_s": cpu}
-    out["mc"] = {"ranks1": mc[1], "ranks2": mc[2],
-                 "speedup": mc[2]["seeds_per_s"] / mc[1]["seeds_per_s"],
-                 "speedup_without_crb":
-                     mc[2]["seeds_per_s_without_crb"] / mc[1]["seeds_per_s_without_crb"]}
+    def batch(ranks, k):
+        cmd = [BIN, "batch", manifest, "-o", os.path.join(work, f"b{ranks}_{k}"), "--threads", "1"]
+        return cmd if ranks == 1 else MPIRUN + cmd
+
+    def montecarlo(ranks, k):
+        cmd = [BIN, "montecarlo", scen, "-n", str(a.seeds), "--threads", "1", "-o",
+               os.path.join(work, f"mc{ranks}_{k}.json")]
+        return cmd if ranks == 1 else MPIRUN + cmd
+
+    out["fit"] = compare("fit, 90-s run at 1 kHz", batch, batch, a.fits, a.repeat)
+    out["seed"] = compare("Monte Carlo seed, paper-mc", montecarlo, montecarlo, a.seeds,
+                          a.repeat)
     out["load_after"] = load()
     with open(os.path.join(work, "throughput.json"), "w") as f:
         json.dump(out, f, indent=2)
 
-    fb, m = out["fit_batch"], out["mc"]
     print(f"load before: {out['load_before']}; autogroup scheduling: {out['autogroup']}")
     print(f"load after:  {out['load_after']}")
     print()
-    print("| work | 1 rank | 2 ranks | speed-up | per core, 2 ranks |")
+    print("| work (median of %d, interleaved) | 1 rank | 2 ranks | speed-up (each repeat) | "
+          "CPU s per item, 1 / 2 ranks |" % a.repeat)
     print("|---|---|---|---|---|")
-    print(f"| fit, 90-s run at 1 kHz ({a.fits} runs) | {fb['ranks1_runs_per_s']:.3f} runs/s | "
-          f"{fb['ranks2_runs_per_s']:.3f} runs/s | {fb['speedup']:.2f}x | "
-          f"{fb['ranks2_runs_per_s'] / 2:.3f} runs/s |")
-    print(f"| Monte Carlo seed, paper-mc ({a.seeds} seeds) | {m['ranks1']['seeds_per_s']:.3f} "
-          f"seeds/s | {m['ranks2']['seeds_per_s']:.3f} seeds/s | {m['speedup']:.2f}x | "
-          f"{m['ranks2']['seeds_per_s'] / 2:.3f} seeds/s |")
-    print(f"| same, without the one-off CRB | {m['ranks1']['seeds_per_s_without_crb']:.3f} | "
-          f"{m['ranks2']['seeds_per_s_without_crb']:.3f} | {m['speedup_without_crb']:.2f}x | |")
+    for key, unit in (("fit", "runs"), ("seed", "seeds")):
+        r = out[key]
+        each = ", ".join(f"{x:.2f}" for x in r["speedup_per_repeat"])
+        print(f"| {r['label']} ({r['items']} {unit}) | {r['ranks1']['items_per_s']:.3f} {unit}/s | "
+              f"{r['ranks2']['items_per_s']:.3f} {unit}/s | {r['speedup']:.2f}x ({each}) | "
+              f"{r['ranks1']['cpu_s_per_item']:.3f} / {r['ranks2']['cpu_s_per_item']:.3f} |")
     print()
-    print(f"one fit alone: {out['fit_single']['wall_s']:.2f} s, peak {out['fit_single']['peak_MB']:.0f} MB; "
-          f"one Monte Carlo seed alone (with the CRB): {out['mc_one_seed']['wall_s']:.2f} s, "
-          f"peak {out['mc_one_seed']['peak_MB']:.0f} MB; CRB {m['ranks1']['crb_s']:.2f} s")
-    print(f"CPU seconds per fit: {fb['cpu_s_per_run_ranks1']:.3f} on 1 rank, "
-          f"{fb['cpu_s_per_run_ranks2']:.3f} on 2 ranks; per seed: "
-          f"{m['ranks1']['cpu_s_per_seed']:.3f} on 1 rank, {m['ranks2']['cpu_s_per_seed']:.3f} "
-          f"on 2 ranks (launcher included)")
-    d, k = out["diagnose_single"], out["mc_1khz_two_seeds"]
-    print(f"diagnose alone on the 90-s run: {d['wall_s']:.2f} s wall, {d['cpu_s']:.2f} CPU s, "
-          f"peak {d['peak_MB']:.0f} MB; 2 Monte Carlo seeds of the 90-s 1-kHz run: "
-          f"{k['cpu_s']:.2f} CPU s, peak {k['peak_MB']:.0f} MB")
+    print("| alone | wall s | CPU s | peak MB |")
+    print("|---|---|---|---|")
+    for name, x in out["alone"].items():
+        print(f"| {name} | {x['wall_s']:.2f} | {x['cpu_s']:.2f} | {x['peak_MB']:.0f} |")
     print(f"wrote {os.path.join(work, 'throughput.json')}")
 
 
