@@ -157,11 +157,11 @@ int RunBatch(const BatchArgs& a) {
   CheckDate(date);
   CheckFitSettings(a.fit);
   const std::vector<ManifestEntry> entries = LoadManifest(a.manifest);
-  if (MpiRoot()) {
-    std::error_code ec;
-    fs::create_directories(a.out_dir, ec);
-    CheckOutputPath((fs::path(a.out_dir) / "summary.json").string());
-  }
+  // On every rank (the same answer on a shared file system), so that a bad
+  // DIR stops them all before the gather.
+  std::error_code ec;
+  fs::create_directories(a.out_dir, ec);
+  CheckOutputPath((fs::path(a.out_dir) / "summary.json").string());
   const int threads = a.threads > 0 ? a.threads : std::max(1, DefaultThreads() / MpiLocalSize());
   const ItemRange range = ShardRange(static_cast<int>(entries.size()), shard);
   const std::vector<int> mine = RankItems(range, MpiRank(), MpiSize());

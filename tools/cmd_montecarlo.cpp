@@ -70,11 +70,12 @@ int RunMonteCarloCommand(const MonteCarloArgs& a) {
   MonteCarloResult r;
   r.layout = opt.layout;
   r.threads = opt.threads;
-  if (MpiRoot()) {
-    r.truth = TruthInLayout(s, opt.layout);
-    r.crb = MonteCarloCrb(s, opt);
-    r.crb_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  }
+  // Every rank computes the CRB (0.1 s), though only rank 0 needs it: a
+  // scenario the CRB rejects then fails on every rank alike, and no rank is
+  // left waiting for another in the gather below.
+  r.truth = TruthInLayout(s, opt.layout);
+  r.crb = MonteCarloCrb(s, opt);
+  r.crb_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const std::vector<MonteCarloRun> my_runs = RunMonteCarloSeeds(s, opt, mine);
   // Rank 0 puts every rank's runs back in seed order and sums them as one
   // process would.
