@@ -15,6 +15,7 @@
 #include "solvers/estimation/run_problem.h"
 #include "tools/commands.h"
 #include "tools/provenance.h"
+#include "tools/diagnose_job.h"
 #include "tools/report/fit_report.h"
 
 namespace triadcal {
@@ -31,45 +32,6 @@ struct DiagnoseArgs {
 // has that we do not know are ignored (docs/file-formats.md).
 std::map<std::string, double> ReadTruth(const std::string& path) {
   return FileValues(ReadParametersJson(path, {""}, "{\"parameters\": {name: value}}"));
-}
-
-nlohmann::json StateJson(const ParameterLayout& layout, const BatchResult& r,
-                         const ResidualReport& rr, const std::map<std::string, double>* truth) {
-  const FitReport rep = MakeFitReport(layout, r);
-  nlohmann::json j;
-  j["effects"] = nlohmann::json::array();
-  for (Effect e : layout.effects()) j["effects"].push_back(GetEffectSpec(e).name);
-  j["parameters"] = ParametersJson(layout, r.estimate.theta, r.estimate.cov, rep.not_estimable);
-  j["held"] = r.held;
-  j["chi2_per_dof"] = r.chi2_per_dof;
-  j["residual"] = ResidualReportJson(rr);
-  nlohmann::json rms = nlohmann::json::object();
-  nlohmann::json white = nlohmann::json::object();
-  for (const ChannelReport& c : rr.channels) {
-    rms[c.name] = c.rms;
-    white[c.name] = c.whiteness.p_value;
-  }
-  j["residual_rms"] = rms;
-  j["whiteness_p"] = white;
-  if (truth) {
-    nlohmann::json err = nlohmann::json::object();
-    double sum2 = 0.0;
-    int count = 0;
-    for (int i = 0; i < layout.size(); ++i) {
-      const ParameterInfo& p = layout.info(i);
-      auto it = truth->find(p.name);
-      if (it == truth->end() || rep.not_estimable.count(p.name)) continue;
-      const double v = r.estimate.theta[i] / p.si_per_unit;
-      const double s = std::sqrt(r.estimate.cov(i, i)) / p.si_per_unit;
-      err[p.name] = {{"error", v - it->second}, {"error_in_sigma", (v - it->second) / s},
-                     {"unit", p.unit}};
-      sum2 += std::pow((v - it->second) / s, 2);
-      ++count;
-    }
-    j["error_vs_truth"] = err;
-    j["error_vs_truth_rms_sigma"] = count ? std::sqrt(sum2 / count) : 0.0;
-  }
-  return j;
 }
 
 int RunDiagnose(const DiagnoseArgs& a) {
@@ -97,38 +59,7 @@ int RunDiagnose(const DiagnoseArgs& a) {
   EndProgress();
   const std::map<std::string, double>* tp = a.truth_json.empty() ? nullptr : &truth;
 
-  nlohmann::json out;
-  out["command"] = "diagnose";
-  out["run"] = a.run_yaml;
-  nlohmann::json ranking = nlohmann::json::array();
-  for (const CandidateTest& t : d.ranking) {
-    ranking.push_back({{"effect", GetEffectSpec(t.effect).name},
-                       {"statistic", t.statistic},
-                       {"likelihood_ratio", t.lr},
-                       {"dof", t.dof},
-                       {"p_value", t.p_value},
-                       {"threshold", t.threshold},
-                       {"selected", t.selected},
-                       {"note", t.note}});
-  }
-  out["ranking"] = ranking;
-  nlohmann::json tests = nlohmann::json::array();
-  for (const CandidateTest& t : d.tests) {
-    tests.push_back({{"round", t.round}, {"effect", GetEffectSpec(t.effect).name},
-                     {"statistic", t.statistic}, {"dof", t.dof}, {"p_value", t.p_value},
-                     {"threshold", t.threshold}, {"selected", t.selected}});
-  }
-  out["tests"] = tests;
-  out["selected"] = nlohmann::json::array();
-  for (Effect e : d.selected) out["selected"].push_back(GetEffectSpec(e).name);
-  out["selection_rule"] = "forward, one effect per round; selected when its p-value < alpha / "
-                          "(candidates in the round), alpha = " + std::to_string(a.alpha);
-  out["before"] = StateJson(d.before_layout, d.before, d.before_residuals, tp);
-  out["after"] = StateJson(d.after_layout, d.after, d.after_residuals, tp);
-  out["parameters"] = out["after"]["parameters"];
-  out["unexplained_structure"] = d.unexplained;
-  out["notes"] = d.notes;
-  out["verdict"] = d.verdict;
+  const nlohmann::json out = DiagnoseJson(a.run_yaml, a.alpha, d, tp);
   WriteJson(out, a.out_json);
 
   // The readable report.

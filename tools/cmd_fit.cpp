@@ -14,73 +14,32 @@
 #include "solvers/estimation/run_problem.h"
 #include "tools/commands.h"
 #include "tools/provenance.h"
+#include "tools/fit_job.h"
 #include "tools/report/fit_report.h"
 
 namespace triadcal {
 namespace {
 
 struct FitArgs {
-  std::string run_yaml, out_json, residuals_csv, effects, init = "rts", robust;
-  std::string linear_solver = "sparse_normal_cholesky";
-  std::string covariance = "schur";
-  double epoch_s = kDefaultEpoch_s, rate_window_s = 0.1, robust_scale = 3.0;
-  int threads = 0;
-  bool correlations = false, no_auto_hold = false;
-  std::string hold, free;
-  std::string require;
+  std::string run_yaml, out_json, residuals_csv;
+  FitSettings fit;
 };
 
 int RunFit(const FitArgs& a) {
-  if (a.init != "rts" && a.init != "nominal") {
-    throw InputError("--init: expected rts or nominal, got '" + a.init + "'");
-  }
-  for (const std::string& req : SplitList(a.require)) {
-    if (req != "converged" && req != "white" && req != "noise" && req != "pass") {
-      throw InputError("--require: unknown check '" + req + "' (converged, white, noise, pass)");
-    }
-  }
+  CheckFitSettings(a.fit);
   CheckOutputPath(a.out_json);
   if (!a.residuals_csv.empty()) CheckOutputPath(a.residuals_csv);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
   CheckOverwrite(a.out_json);  // before the long work
-  const ParameterLayout layout(ParseEffectList(a.effects, run.data));
-  BatchOptions opt;
-  opt.epoch_s = a.epoch_s;
-  opt.derivatives.half_window_s = a.rate_window_s;
-  opt.init = a.init == "rts" ? BatchInit::kRts : BatchInit::kNominal;
-  opt.linear_solver = a.linear_solver;
-  opt.robust_loss = a.robust;
-  opt.robust_scale = a.robust_scale;
-  opt.threads = a.threads;
-  opt.covariance_method = a.covariance;
-  opt.holding.auto_hold = !a.no_auto_hold;
-  opt.holding.hold = SplitList(a.hold);
-  opt.holding.free = SplitList(a.free);
-  opt.progress = [](const std::string& s) { ShowProgress("fit: " + s, 0.0); };
-  const BatchResult r = SolveBatch(run.description, run.data, layout, opt);
+  const FitOutcome f = FitRun(a.fit, a.run_yaml, run,
+                              [](const std::string& s) { ShowProgress("fit: " + s, 0.0); });
   EndProgress();
-
-  const FitReport rep = MakeFitReport(layout, r);
-  if (!r.noise_check.consistent && !run.description.noise_auto) {
-    const Eigen::Vector3d& d = r.noise_declared_mV;
-    const Eigen::Vector3d& e = r.noise_check.estimated_mV;
-    const Eigen::Vector3d& sd = r.noise_check.sd_mV;
-    char w[400];
-    std::snprintf(w, sizeof(w),
-                  "triadcal: warning: %s: triad.noise_mV: declared %.3g %.3g %.3g mV, the "
-                  "residuals hold %.3g %.3g %.3g mV (+- %.2g %.2g %.2g); sigma use the estimate "
-                  "(say noise_mV: auto to silence this)\n",
-                  a.run_yaml.c_str(), d[0], d[1], d[2], e[0], e[1], e[2], sd[0], sd[1], sd[2]);
-    std::fputs(w, stderr);
-  }
-  nlohmann::json out = FitJson(layout, r, rep, a.correlations);
-  out["command"] = "fit";
-  out["run"] = a.run_yaml;
-  out["samples"] = run.data.size();
-  out["settings"]["init"] = a.init;
-  out["settings"]["effects"] = a.effects;
-  out["settings"]["robust_loss"] = a.robust.empty() ? "none" : a.robust;
-  WriteJson(out, a.out_json);
+  const ParameterLayout& layout = f.layout;
+  const BatchResult& r = f.result;
+  const FitReport& rep = f.report;
+  const std::string warning = NoiseWarning(a.run_yaml, run, r);
+  if (!warning.empty()) std::fprintf(stderr, "triadcal: warning: %s\n", warning.c_str());
+  WriteJson(f.json, a.out_json);
   if (!a.residuals_csv.empty()) WriteFileAtomically(a.residuals_csv, ResidualsCsv(r));
 
   std::printf("fit: %zu samples, %d epochs, %s\n", run.data.size(), r.epochs,
@@ -98,25 +57,10 @@ int RunFit(const FitArgs& a) {
   std::printf("time: init %.2f s, solve %.2f s, covariance %.2f s\n", r.init_seconds,
               r.solve_seconds, r.covariance_seconds);
   std::printf("wrote %s\n", a.out_json.c_str());
-  // Failure must not look like success: a documented status for a fit that
-  // did not converge, and for a --require check that failed.
-  if (!r.converged) {
-    std::fprintf(stderr, "triadcal: error: %s: the fit did not converge (exit %d)\n",
-                 a.run_yaml.c_str(), kExitNotConverged);
-    return kExitNotConverged;
-  }
-  for (const std::string& req : SplitList(a.require)) {
-    const bool ok = req == "converged" ? r.converged
-                    : req == "white"   ? rep.residual_white
-                    : req == "noise"   ? rep.noise_consistent
-                                       : rep.pass;
-    if (!ok) {
-      std::fprintf(stderr, "triadcal: error: %s: --require %s failed (exit %d)\n",
-                   a.run_yaml.c_str(), req.c_str(), kExitRequirementFailed);
-      return kExitRequirementFailed;
-    }
-  }
-  return 0;
+  std::string why;
+  const int status = FitExitStatus(a.fit, a.run_yaml, r, rep, &why);
+  if (status != 0) std::fprintf(stderr, "triadcal: error: %s\n", why.c_str());
+  return status;
 }
 
 }  // namespace
@@ -127,34 +71,9 @@ Command AddFitCommand(CLI::App& app) {
   c.app = app.add_subcommand("fit", "Batch least-squares solution of the whole run (Ceres)");
   c.app->add_option("run", a->run_yaml, "run description (run.yaml)")->required();
   c.app->add_option("-o,--output", a->out_json, "output JSON")->required();
-  c.app->add_option("--init", a->init, "starting point: rts (EKF+RTS smoother) or nominal")
-      ->capture_default_str();
-  c.app->add_option("--effects", a->effects, "catalogue effects to estimate too, e.g. a,b");
-  c.app->add_option("--require", a->require,
-                    "checks that must hold, else exit 5: converged, white (residuals), noise "
-                    "(declared = estimated), pass (converged and white); e.g. converged,white");
-  c.app->add_option("--robust", a->robust, "robust loss on whitened residuals: huber or cauchy");
-  c.app->add_option("--robust-scale", a->robust_scale, "robust loss scale [whitened units]")
-      ->capture_default_str();
-  c.app->add_option("--linear-solver", a->linear_solver,
-                    "sparse_normal_cholesky (SuiteSparse), sparse_schur or dense_qr")
-      ->capture_default_str();
-  c.app->add_option("--covariance", a->covariance,
-                    "schur (Schur complement on theta) or ceres (SuiteSparse QR)")
-      ->capture_default_str();
-  c.app->add_option("--epoch-s", a->epoch_s, "interval between trajectory epochs [s]")
-      ->capture_default_str();
-  c.app->add_option("--rate-window-s", a->rate_window_s,
-                    "half window of the local cubic fit giving lambda' from the angles [s]")
-      ->capture_default_str();
-  c.app->add_option("--threads", a->threads, "threads (0: all cores)")->capture_default_str();
+  AddFitOptions(c.app, &a->fit);
+  c.app->add_option("--threads", a->fit.threads, "threads (0: all cores)")->capture_default_str();
   c.app->add_option("--residuals", a->residuals_csv, "write the residuals per epoch (CSV)");
-  c.app->add_flag("--correlations", a->correlations, "add the correlation matrix to OUT");
-  c.app->add_option("--hold", a->hold, "parameters to hold at their nominal values, e.g. dpsi,Kxy");
-  c.app->add_option("--free", a->free, "parameters to estimate even if the run barely supports them");
-  c.app->add_flag("--no-auto-hold", a->no_auto_hold,
-                  "estimate every parameter (by default those the run's motion does not support "
-                  "are held at nominal)");
   c.run = [a] { return RunFit(*a); };
   return c;
 }

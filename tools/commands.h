@@ -27,5 +27,7 @@ Command AddObservabilityCommand(CLI::App& app);  // CRB, unobservable directions
 Command AddDesignCommand(CLI::App& app);  // experiment design from the CRB (cmd_design.cpp)
 Command AddMonteCarloCommand(CLI::App& app);  // Monte Carlo against the CRB (cmd_montecarlo.cpp)
 Command AddExportCommand(CLI::App& app);  // calibration -> C99 code or matrices (cmd_export.cpp)
+Command AddBatchCommand(CLI::App& app);  // a manifest of runs, filed by serial (cmd_batch.cpp)
+Command AddMergeCommand(CLI::App& app);  // shards of montecarlo/batch -> one output (cmd_merge.cpp)
 
 }  // namespace triadcal

@@ -1,6 +1,7 @@
 // triadcal: calibration of a MEMS accelerometer triad from a two-axis bench run.
 #include <exception>
 #include <iostream>
+#include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
@@ -8,8 +9,11 @@
 #include "core/model/errors.h"
 #include "tools/commands.h"
 #include "tools/provenance.h"
+#include "tools/distribution/mpi_context.h"
 
 int main(int argc, char** argv) {
+  // MPI only under an MPI launcher (tools/distribution/mpi_context.h).
+  triadcal::MpiSession mpi(&argc, &argv);
   CLI::App app{
       "triadcal: calibrate a MEMS accelerometer triad from a quasi-harmonic two-axis bench run"};
   app.require_subcommand(1);
@@ -28,6 +32,8 @@ int main(int argc, char** argv) {
       triadcal::AddMonteCarloCommand(app),
       triadcal::AddInfoCommand(app),
       triadcal::AddExportCommand(app),
+      triadcal::AddBatchCommand(app),
+      triadcal::AddMergeCommand(app),
   };
 
   for (const triadcal::Command& c : commands) {
@@ -42,13 +48,20 @@ int main(int argc, char** argv) {
   }
   try {
     for (const triadcal::Command& c : commands) {
-      if (c.app->parsed()) return c.run();
+      if (!c.app->parsed()) continue;
+      // Under mpirun only montecarlo and batch share out their work; any
+      // other command runs once, on rank 0.
+      const std::string name = c.app->get_name();
+      if (!triadcal::MpiRoot() && name != "montecarlo" && name != "batch") return 0;
+      return c.run();
     }
   } catch (const triadcal::InputError& e) {
-    std::cerr << "triadcal: error: " << e.what() << "\n";
+    // Every rank reads the same input and fails the same way: rank 0 says so.
+    if (triadcal::MpiRoot()) std::cerr << "triadcal: error: " << e.what() << "\n";
     return 2;
   } catch (const std::exception& e) {
     std::cerr << "triadcal: internal error: " << e.what() << "\n";
+    triadcal::MpiAbortIfShared(3);  // other ranks may wait for this one
     return 3;
   }
   return 1;

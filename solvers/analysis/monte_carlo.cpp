@@ -4,6 +4,7 @@
 #include <cmath>
 #include <exception>
 #include <mutex>
+#include <numeric>
 
 #include "core/model/errors.h"
 #include "solvers/analysis/experiment_design.h"
@@ -11,53 +12,47 @@
 
 namespace triadcal {
 
-MonteCarloResult RunMonteCarlo(const Scenario& s, const MonteCarloOptions& opt) {
-  const auto t0 = std::chrono::steady_clock::now();
-  if (opt.runs < 1) throw OptionError("runs", "at least 1 run, got " + std::to_string(opt.runs));
-  bool want_filter = false;
-  for (const std::string& e : opt.estimators) {
-    if (e == "ekf" || e == "rts") {
-      want_filter = true;
-    } else if (e != "batch") {
+void CheckEstimators(const std::vector<std::string>& estimators) {
+  for (const std::string& e : estimators) {
+    if (e != "ekf" && e != "rts" && e != "batch") {
       throw OptionError("estimators", "unknown estimator '" + e + "' (ekf, rts, batch)");
     }
   }
-  if (opt.estimators.empty()) throw OptionError("estimators", "none given (ekf, rts, batch)");
+  if (estimators.empty()) throw OptionError("estimators", "none given (ekf, rts, batch)");
+}
+
+Eigen::VectorXd MonteCarloCrb(const Scenario& s, const MonteCarloOptions& opt) {
+  DesignOptions dopt;
+  dopt.epoch_s = opt.batch.epoch_s;
+  dopt.derivatives = opt.batch.derivatives;
+  dopt.observability.threads = opt.threads > 0 ? opt.threads : DefaultThreads();
+  const ObservabilityResult obs = AnalyseScenario(s, opt.layout, dopt);
+  return obs.with_constraints.cov.diagonal().cwiseMax(0.0).cwiseSqrt();
+}
+
+std::vector<MonteCarloRun> RunMonteCarloSeeds(const Scenario& s, const MonteCarloOptions& opt,
+                                              const std::vector<int>& indices) {
+  CheckEstimators(opt.estimators);
+  bool want_filter = false;
+  for (const std::string& e : opt.estimators) want_filter |= e == "ekf" || e == "rts";
   const ParameterLayout& layout = opt.layout;
-  const int n = layout.size();
   const std::size_t E = opt.estimators.size();
+  const int threads = opt.threads > 0 ? opt.threads : DefaultThreads();
 
-  MonteCarloResult res;
-  res.layout = layout;
-  res.truth = TruthInLayout(s, layout);
-  res.threads = opt.threads > 0 ? opt.threads : DefaultThreads();
-
-  // The CRB at the truth: the scenario's run without noise.
-  {
-    DesignOptions dopt;
-    dopt.epoch_s = opt.batch.epoch_s;
-    dopt.derivatives = opt.batch.derivatives;
-    dopt.observability.threads = res.threads;
-    const ObservabilityResult obs = AnalyseScenario(s, layout, dopt);
-    res.crb = obs.with_constraints.cov.diagonal().cwiseMax(0.0).cwiseSqrt();
-    res.crb_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  }
-
-  std::vector<MonteCarloRun> runs(opt.runs);
-  std::vector<std::vector<std::string>> failures(opt.runs, std::vector<std::string>(E));
+  std::vector<MonteCarloRun> runs(indices.size());
   std::mutex mutex;
   int done = 0;
-  ParallelFor(static_cast<std::size_t>(opt.runs), res.threads, [&](std::size_t k) {
+  ParallelFor(indices.size(), threads, [&](std::size_t slot) {
     Scenario q = s;
-    q.seed = opt.first_seed + k;
+    q.seed = opt.first_seed + static_cast<std::uint64_t>(indices[slot]);
     SampleTruth(&q);
     const RunData data = Simulate(q);
-    MonteCarloRun& run = runs[k];
+    MonteCarloRun& run = runs[slot];
     run.seed = q.seed;
     run.truth = TruthInLayout(q, layout);
     run.error.assign(E, Eigen::VectorXd());
     run.sigma.assign(E, Eigen::VectorXd());
+    run.failure.assign(E, std::string());
     FilterResult fr;
     std::string filter_failure;
     if (want_filter) {
@@ -81,12 +76,12 @@ MonteCarloResult RunMonteCarlo(const Scenario& s, const MonteCarloOptions& opt) 
           br = SolveBatch(q.run, data, layout, bo);
           est = &br.estimate;
         } catch (const std::exception& e) {
-          failures[k][j] = e.what();
+          run.failure[j] = e.what();
         }
       } else if (filter_failure.empty()) {
         est = name == "ekf" ? &fr.ekf : &fr.rts;
       } else {
-        failures[k][j] = filter_failure;
+        run.failure[j] = filter_failure;
       }
       if (est) {
         run.error[j] = est->theta - run.truth;
@@ -101,29 +96,35 @@ MonteCarloResult RunMonteCarlo(const Scenario& s, const MonteCarloOptions& opt) 
     }
     if (opt.progress) {
       std::lock_guard<std::mutex> lock(mutex);
-      opt.progress(++done, opt.runs);
+      opt.progress(++done, static_cast<int>(indices.size()));
     }
   });
+  return runs;
+}
 
-  for (std::size_t j = 0; j < E; ++j) {
+void SummariseMonteCarlo(const std::vector<std::string>& estimators,
+                         const std::vector<MonteCarloRun>& runs, MonteCarloResult* res) {
+  const int n = res->layout.size();
+  res->estimators.clear();
+  for (std::size_t j = 0; j < estimators.size(); ++j) {
     EstimatorStats st;
-    st.name = opt.estimators[j];
+    st.name = estimators[j];
     Eigen::VectorXd se = Eigen::VectorXd::Zero(n), se2 = Eigen::VectorXd::Zero(n);
     Eigen::VectorXd ss = Eigen::VectorXd::Zero(n), sz2 = Eigen::VectorXd::Zero(n);
     Eigen::VectorXd used = Eigen::VectorXd::Zero(n);
     st.max_abs_z = Eigen::VectorXd::Zero(n);
     st.held_runs = Eigen::VectorXi::Zero(n);
-    for (int k = 0; k < opt.runs; ++k) {
-      if (runs[k].error[j].size() == 0) {
+    for (const MonteCarloRun& run : runs) {
+      if (run.error[j].size() == 0) {
         ++st.failures;
         if (st.first_failure.empty()) {
-          st.first_failure = "seed " + std::to_string(runs[k].seed) + ": " + failures[k][j];
+          st.first_failure = "seed " + std::to_string(run.seed) + ": " + run.failure[j];
         }
         continue;
       }
       ++st.runs;
-      const Eigen::VectorXd& e = runs[k].error[j];
-      const Eigen::VectorXd& sg = runs[k].sigma[j];
+      const Eigen::VectorXd& e = run.error[j];
+      const Eigen::VectorXd& sg = run.sigma[j];
       for (int i = 0; i < n; ++i) {
         if (std::isnan(e[i])) {
           ++st.held_runs[i];
@@ -144,8 +145,24 @@ MonteCarloResult RunMonteCarlo(const Scenario& s, const MonteCarloOptions& opt) 
     st.mean_sigma = ss.cwiseQuotient(m);
     st.rms_z = sz2.cwiseQuotient(m).cwiseSqrt();
     st.pooled_rms_z = std::sqrt(sz2.sum() / std::max(1.0, used.sum()));
-    res.estimators.push_back(st);
+    res->estimators.push_back(st);
   }
+}
+
+MonteCarloResult RunMonteCarlo(const Scenario& s, const MonteCarloOptions& opt) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (opt.runs < 1) throw OptionError("runs", "at least 1 run, got " + std::to_string(opt.runs));
+  CheckEstimators(opt.estimators);
+  MonteCarloResult res;
+  res.layout = opt.layout;
+  res.truth = TruthInLayout(s, opt.layout);
+  res.threads = opt.threads > 0 ? opt.threads : DefaultThreads();
+  res.crb = MonteCarloCrb(s, opt);
+  res.crb_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::vector<int> all(opt.runs);
+  std::iota(all.begin(), all.end(), 0);
+  std::vector<MonteCarloRun> runs = RunMonteCarloSeeds(s, opt, all);
+  SummariseMonteCarlo(opt.estimators, runs, &res);
   if (opt.keep_runs) res.runs = std::move(runs);
   res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;

@@ -21,7 +21,10 @@
 // of a scatter from N runs is about 1/sqrt(2N).
 //
 // Seeds run in parallel (solvers/estimation/parallel.h), each estimator single-threaded
-// inside; the result does not depend on the number of threads.
+// inside; the result does not depend on the number of threads. The pieces
+// below (MonteCarloCrb, RunMonteCarloSeeds, SummariseMonteCarlo) let MPI ranks
+// and Slurm shards run parts of the seeds and one place sum them in seed
+// order: the statistics are then bit for bit those of one process.
 #pragma once
 
 #include <cstdint>
@@ -69,6 +72,7 @@ struct MonteCarloRun {
   Eigen::VectorXd truth;                // SI
   std::vector<Eigen::VectorXd> error;   // per estimator (empty when it failed; NaN when held)
   std::vector<Eigen::VectorXd> sigma;
+  std::vector<std::string> failure;     // per estimator: what it threw ("" when it succeeded)
 };
 
 struct MonteCarloResult {
@@ -84,5 +88,22 @@ struct MonteCarloResult {
 // Throws OptionError("estimators" or "runs", ...) for an unknown estimator
 // name or runs < 1.
 MonteCarloResult RunMonteCarlo(const Scenario& s, const MonteCarloOptions& opt);
+
+// Throws InputError when opt.estimators is empty or names an unknown estimator.
+void CheckEstimators(const std::vector<std::string>& estimators);
+
+// The CRB at the scenario's truth (SI): the scenario's run without noise, with
+// the constraints and priors the estimators use.
+Eigen::VectorXd MonteCarloCrb(const Scenario& s, const MonteCarloOptions& opt);
+
+// The runs of seeds first_seed + k for k in `indices` (in that order), on
+// opt.threads threads; opt.progress gets (done, indices.size()).
+std::vector<MonteCarloRun> RunMonteCarloSeeds(const Scenario& s, const MonteCarloOptions& opt,
+                                              const std::vector<int>& indices);
+
+// The statistics of `runs` (summed in the order given) into res->estimators;
+// res->layout must be set.
+void SummariseMonteCarlo(const std::vector<std::string>& estimators,
+                         const std::vector<MonteCarloRun>& runs, MonteCarloResult* res);
 
 }  // namespace triadcal

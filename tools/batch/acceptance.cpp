@@ -1,0 +1,48 @@
+#include "tools/batch/acceptance.h"
+
+#include <cstdio>
+
+namespace triadcal {
+
+std::string LimitViolation::Text() const {
+  if (limit == "missing") return parameter + " not in the calibration";
+  char buf[160];
+  const char* what = limit == "sigma_max" ? " sigma" : "";
+  const char* op = limit == "min" ? "<" : ">";
+  std::snprintf(buf, sizeof buf, "%s%s %.6g %s %s %.6g %s", parameter.c_str(), what, value, op,
+                limit.c_str(), bound, unit.c_str());
+  return buf;
+}
+
+std::vector<LimitViolation> CheckLimits(const std::vector<ParameterLimit>& limits,
+                                        const nlohmann::json& parameters) {
+  std::vector<LimitViolation> out;
+  for (const ParameterLimit& l : limits) {
+    if (!parameters.contains(l.parameter)) {
+      out.push_back({l.parameter, "missing", 0.0, 0.0, ""});
+      continue;
+    }
+    const nlohmann::json& p = parameters[l.parameter];
+    const double value = p.value("value", 0.0), sigma = p.value("sigma", 0.0);
+    const std::string unit = p.value("unit", "");
+    if (l.min && value < *l.min) out.push_back({l.parameter, "min", value, *l.min, unit});
+    if (l.max && value > *l.max) out.push_back({l.parameter, "max", value, *l.max, unit});
+    if (l.sigma_max && sigma > *l.sigma_max) {
+      out.push_back({l.parameter, "sigma_max", sigma, *l.sigma_max, unit});
+    }
+  }
+  return out;
+}
+
+nlohmann::json ViolationJson(const LimitViolation& v) {
+  return {{"parameter", v.parameter}, {"limit", v.limit}, {"value", v.value},
+          {"bound", v.bound},         {"unit", v.unit},   {"text", v.Text()}};
+}
+
+LimitViolation ViolationFromJson(const nlohmann::json& j) {
+  return {j.at("parameter").get<std::string>(), j.at("limit").get<std::string>(),
+          j.at("value").get<double>(), j.at("bound").get<double>(),
+          j.at("unit").get<std::string>()};
+}
+
+}  // namespace triadcal
