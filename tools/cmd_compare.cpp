@@ -18,7 +18,7 @@ namespace triadcal {
 namespace {
 
 struct CompareArgs {
-  std::string run_yaml, out_json, effects;
+  std::string run_yaml, out_json, report_html, effects;
   double epoch_s = 0.2;
 };
 
@@ -27,6 +27,7 @@ double Seconds(std::chrono::steady_clock::time_point t0) {
 }
 
 int RunCompare(const CompareArgs& a) {
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html);
   CheckOutputPath(a.out_json);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
   const ParameterLayout layout(ParseEffectList(a.effects));
@@ -86,6 +87,7 @@ int RunCompare(const CompareArgs& a) {
   out["differences_in_sigma"] = diff;
   out["largest_batch_minus_rts"] = {{"parameter", max_name}, {"sigma", max_abs}};
   WriteJson(out, a.out_json);
+  WriteReportIfAsked(a.report_html, out, a.out_json);
   std::printf("differences in units of the batch sigma; largest |batch - RTS| among estimable: "
               "%.3f (%s)\n",
               max_abs, max_name.c_str());
@@ -102,6 +104,8 @@ Command AddCompareCommand(CLI::App& app) {
   c.app = app.add_subcommand("compare", "EKF, RTS smoother and batch side by side");
   c.app->add_option("run", a->run_yaml, "run description (run.yaml)")->required();
   c.app->add_option("-o,--output", a->out_json, "output JSON")->required();
+  c.app->add_option("--report", a->report_html,
+                    "also write the HTML report of OUT (one self-contained file)");
   c.app->add_option("--effects", a->effects, "catalogue effects to estimate too, e.g. a,b");
   c.app->add_option("--epoch-s", a->epoch_s, "interval between epochs [s]")->capture_default_str();
   c.run = [a] { return RunCompare(*a); };

@@ -29,7 +29,7 @@ namespace triadcal {
 namespace {
 
 struct DesignArgs {
-  std::string scenario, out_json, plot_svg, effects;
+  std::string scenario, out_json, report_html, plot_svg, effects;
   std::string durations = "15,30,60,90,300,600,2400";
   std::string periods, amplitudes;  // default: the scenario's x 0.5, 1, 2 / x 0.25, 0.5, 1
   std::string targets = "K=0.5";
@@ -161,6 +161,7 @@ std::string DefaultSvgPath(const std::string& out_json) {
 }
 
 int RunDesign(const DesignArgs& a) {
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html);
   const auto t_start = std::chrono::steady_clock::now();
   const Scenario s = LoadScenario(a.scenario);
   const ParameterLayout layout(ParseEffectList(a.effects));
@@ -392,6 +393,7 @@ int RunDesign(const DesignArgs& a) {
   out["time_s"] = seconds;
   WriteFileAtomically(svg_path, svg);
   WriteJson(out, a.out_json);
+  WriteReportIfAsked(a.report_html, out, a.out_json);
 
   // ---- stdout
   auto print_duration_table = [&](const char* what, const std::vector<DesignPoint>& pts) {
@@ -493,6 +495,8 @@ Command AddDesignCommand(CLI::App& app) {
   c.app->add_option("scenario", a->scenario, "SCENARIO.yaml (profile, truth, declared noise)")
       ->required();
   c.app->add_option("-o,--output", a->out_json, "output JSON")->required();
+  c.app->add_option("--report", a->report_html,
+                    "also write the HTML report of OUT (one self-contained file)");
   c.app->add_option("--plot", a->plot_svg, "SVG plot (default: OUT with .svg)");
   c.app->add_option("--durations", a->durations, "run durations [s], comma-separated")
       ->capture_default_str();

@@ -13,12 +13,13 @@
 #include "tools/command_util.h"
 #include "tools/commands.h"
 #include "tools/report/fit_report.h"
+#include "tools/report/residual_plot_json.h"
 
 namespace triadcal {
 namespace {
 
 struct DiagnoseArgs {
-  std::string run_yaml, out_json, truth_json, candidates;
+  std::string run_yaml, out_json, report_html, truth_json, candidates;
   double alpha = 0.01;
   int max_effects = 4;
   double epoch_s = 0.2;
@@ -61,6 +62,7 @@ nlohmann::json StateJson(const ParameterLayout& layout, const BatchResult& r,
   j["held"] = r.held;
   j["chi2_per_dof"] = r.chi2_per_dof;
   j["residual"] = ResidualReportJson(rr);
+  j["residual_plot"] = ResidualPlotJson(rr);  // thinned series and spectrum for the report
   nlohmann::json rms = nlohmann::json::object();
   nlohmann::json white = nlohmann::json::object();
   for (const ChannelReport& c : rr.channels) {
@@ -91,6 +93,7 @@ nlohmann::json StateJson(const ParameterLayout& layout, const BatchResult& r,
 }
 
 int RunDiagnose(const DiagnoseArgs& a) {
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html);
   CheckOutputPath(a.out_json);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
   DiagnoseOptions opt;
@@ -140,6 +143,7 @@ int RunDiagnose(const DiagnoseArgs& a) {
   out["notes"] = d.notes;
   out["verdict"] = d.verdict;
   WriteJson(out, a.out_json);
+  WriteReportIfAsked(a.report_html, out, a.out_json);
 
   // The readable report.
   std::printf("diagnose: %s\n", d.verdict.c_str());
@@ -217,6 +221,8 @@ Command AddDiagnoseCommand(CLI::App& app) {
       "diagnose", "Fit, trace the residual to missing effects, add them, report before/after");
   c.app->add_option("run", a->run_yaml, "run description (run.yaml)")->required();
   c.app->add_option("-o,--output", a->out_json, "output JSON")->required();
+  c.app->add_option("--report", a->report_html,
+                    "also write the HTML report of OUT (one self-contained file)");
   c.app->add_option("--truth", a->truth_json, "truth.json of a simulated run: errors before/after");
   c.app->add_option("--candidates", a->candidates,
                     "effects to test (default: the whole catalogue), e.g. a,b");

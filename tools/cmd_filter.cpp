@@ -22,7 +22,7 @@ namespace triadcal {
 namespace {
 
 struct FilterArgs {
-  std::string run_yaml, out_json, series_csv, effects;
+  std::string run_yaml, out_json, report_html, series_csv, effects;
   double epoch_s = 0.2;
   double rate_window_s = 0.1;
   int iterations = 2;
@@ -60,6 +60,7 @@ std::string SeriesCsv(const ParameterLayout& layout, const FilterResult& r) {
 }
 
 int RunFilter(const FilterArgs& a) {
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html);
   const auto t0 = std::chrono::steady_clock::now();
   CheckOutputPath(a.out_json);
   if (!a.series_csv.empty()) CheckOutputPath(a.series_csv);
@@ -128,6 +129,7 @@ int RunFilter(const FilterArgs& a) {
   out["samples"] = run.data.size();
   out["time_s"] = seconds;
   WriteJson(out, a.out_json);
+  WriteReportIfAsked(a.report_html, out, a.out_json);
   if (!a.series_csv.empty()) WriteFileAtomically(a.series_csv, SeriesCsv(layout, r));
 
   std::printf("filter: %zu samples, %d epochs of %.3g s, %d pass(es), %.2f s\n",
@@ -182,6 +184,8 @@ Command AddFilterCommand(CLI::App& app) {
   c.app = app.add_subcommand("filter", "EKF + Rauch-Tung-Striebel smoother (the paper's filter)");
   c.app->add_option("run", args->run_yaml, "run description (run.yaml)")->required();
   c.app->add_option("-o,--output", args->out_json, "output JSON")->required();
+  c.app->add_option("--report", args->report_html,
+                    "also write the HTML report of OUT (one self-contained file)");
   c.app->add_option("--series", args->series_csv,
                     "write forward-pass estimates, sigma and innovations against time (CSV)");
   c.app->add_option("--epoch-s", args->epoch_s, "interval between measurement epochs [s]")

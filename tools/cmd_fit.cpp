@@ -7,18 +7,20 @@
 
 #include "core/model/errors.h"
 #include "core/io/file_util.h"
+#include "solvers/diagnosis/residual_analysis.h"
 #include "solvers/estimation/batch_solver.h"
 #include "tools/report/estimate_json.h"
 #include "solvers/estimation/separability.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
 #include "tools/report/fit_report.h"
+#include "tools/report/residual_plot_json.h"
 
 namespace triadcal {
 namespace {
 
 struct FitArgs {
-  std::string run_yaml, out_json, residuals_csv, effects, init = "rts", robust;
+  std::string run_yaml, out_json, report_html, residuals_csv, effects, init = "rts", robust;
   std::string linear_solver = "sparse_normal_cholesky";
   std::string covariance = "schur";
   double epoch_s = 0.5, rate_window_s = 0.1, robust_scale = 3.0;
@@ -28,6 +30,7 @@ struct FitArgs {
 };
 
 int RunFit(const FitArgs& a) {
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html);
   if (a.init != "rts" && a.init != "nominal") {
     throw InputError("--init: expected rts or nominal, got '" + a.init + "'");
   }
@@ -59,7 +62,13 @@ int RunFit(const FitArgs& a) {
   out["settings"]["init"] = a.init;
   out["settings"]["effects"] = a.effects;
   out["settings"]["robust_loss"] = a.robust.empty() ? "none" : a.robust;
+  // What the residual holds (whiteness, peaks) and, thinned, the residual
+  // itself and its spectrum: what the HTML report draws.
+  const ResidualReport rr = AnalyzeResiduals(run.description, run.data, layout, r);
+  out["residual_analysis"] = ResidualReportJson(rr);
+  out["residual_plot"] = ResidualPlotJson(rr);
   WriteJson(out, a.out_json);
+  WriteReportIfAsked(a.report_html, out, a.out_json);
   if (!a.residuals_csv.empty()) WriteFileAtomically(a.residuals_csv, ResidualsCsv(r));
 
   std::printf("fit: %zu samples, %d epochs, %s\n", run.data.size(), r.epochs,
@@ -88,6 +97,8 @@ Command AddFitCommand(CLI::App& app) {
   c.app = app.add_subcommand("fit", "Batch least-squares solution of the whole run (Ceres)");
   c.app->add_option("run", a->run_yaml, "run description (run.yaml)")->required();
   c.app->add_option("-o,--output", a->out_json, "output JSON")->required();
+  c.app->add_option("--report", a->report_html,
+                    "also write the HTML report of OUT (one self-contained file)");
   c.app->add_option("--init", a->init, "starting point: rts (EKF+RTS smoother) or nominal")
       ->capture_default_str();
   c.app->add_option("--effects", a->effects, "catalogue effects to estimate too, e.g. a,b");

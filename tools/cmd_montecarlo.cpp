@@ -19,7 +19,7 @@ namespace triadcal {
 namespace {
 
 struct MonteCarloArgs {
-  std::string scenario, out_json, effects;
+  std::string scenario, out_json, report_html, effects;
   std::string estimators = "ekf,rts,batch";
   int runs = 100;
   std::uint64_t first_seed = 1;
@@ -40,6 +40,7 @@ std::vector<std::string> SplitComma(const std::string& s) {
 }
 
 int RunMonteCarloCommand(const MonteCarloArgs& a) {
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html);
   if (a.runs < 1) throw InputError("-n: at least 1 run, got " + std::to_string(a.runs));
   if (!(a.tolerance > 0)) throw InputError("--tolerance: must be > 0");
   const Scenario s = LoadScenario(a.scenario);
@@ -160,6 +161,7 @@ int RunMonteCarloCommand(const MonteCarloArgs& a) {
   }
   out["time_s"] = {{"total", r.seconds}, {"crb", r.crb_seconds}};
   WriteJson(out, a.out_json);
+  WriteReportIfAsked(a.report_html, out, a.out_json);
 
   // ---- stdout
   std::printf("montecarlo: %s, %d runs (seeds %llu..%llu), %d threads, %.1f s (CRB %.2f s)\n",
@@ -215,6 +217,8 @@ Command AddMonteCarloCommand(CLI::App& app) {
       "montecarlo", "N simulated runs through EKF, RTS and batch: error scatter against sigma and CRB");
   c.app->add_option("scenario", a->scenario, "SCENARIO.yaml")->required();
   c.app->add_option("-o,--output", a->out_json, "output JSON")->required();
+  c.app->add_option("--report", a->report_html,
+                    "also write the HTML report of OUT (one self-contained file)");
   c.app->add_option("-n,--runs", a->runs, "number of runs (seeds first-seed .. first-seed + n - 1)")
       ->capture_default_str();
   c.app->add_option("--first-seed", a->first_seed, "first seed")->capture_default_str();

@@ -21,7 +21,7 @@ namespace triadcal {
 namespace {
 
 struct StaticArgs {
-  std::string run_yaml, out_json, reference = "auto", fix;
+  std::string run_yaml, out_json, report_html, reference = "auto", fix;
   double placement_sigma_deg = 0.0;
   StaticOptions options;
 };
@@ -199,6 +199,7 @@ void PrintReport(const LoadedRun& run, const StaticResult& r) {
 }
 
 int RunStatic(const StaticArgs& a) {
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html);
   StaticOptions opt = a.options;
   opt.fixed = SplitList(a.fix);
   if (!(a.placement_sigma_deg >= 0.0)) throw InputError("--placement-sigma-deg: must be >= 0");
@@ -206,7 +207,9 @@ int RunStatic(const StaticArgs& a) {
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
   const StaticReference ref = ChooseReference(run.description, run.data, a.reference);
   const StaticResult r = SolveStatic(run.description, run.data, ref, opt);
-  WriteJson(StaticJson(a, r, run.data.size()), a.out_json);
+  const nlohmann::json out = StaticJson(a, r, run.data.size());
+  WriteJson(out, a.out_json);
+  WriteReportIfAsked(a.report_html, out, a.out_json);
   PrintReport(run, r);
   std::printf("wrote %s\n", a.out_json.c_str());
   return 0;
@@ -221,6 +224,8 @@ Command AddStaticCommand(CLI::App& app) {
       "static", "Standard static method: still positions averaged, readings model fitted");
   c.app->add_option("run", a->run_yaml, "run description (run.yaml)")->required();
   c.app->add_option("-o,--output", a->out_json, "output JSON")->required();
+  c.app->add_option("--report", a->report_html,
+                    "also write the HTML report of OUT (one self-contained file)");
   c.app->add_option("--reference", a->reference,
                     "orientation of the positions: auto (angles, else labels, else none), "
                     "angles, labels, or none (gravity-norm fit)")

@@ -10,6 +10,7 @@
 #include "core/io/file_util.h"
 #include "core/io/run_io.h"
 #include "core/io/run_description_io.h"
+#include "tools/report/html_report.h"
 
 namespace triadcal {
 
@@ -76,6 +77,16 @@ void CheckOutputPath(const std::string& path) {
 
 void WriteJson(const nlohmann::json& j, const std::string& path) {
   WriteFileAtomically(path, j.dump(2) + "\n");
+}
+
+void WriteReportIfAsked(const std::string& report_html, const nlohmann::json& out,
+                        const std::string& out_json) {
+  if (report_html.empty()) return;
+  ReportInput in;
+  in.name = std::filesystem::path(out_json).filename().string();
+  in.out = out;
+  WriteHtmlReport({in}, report_html);
+  std::printf("wrote %s\n", report_html.c_str());
 }
 
 }  // namespace triadcal

@@ -37,6 +37,11 @@ void CheckOutputPath(const std::string& path);
 void ShowProgress(const std::string& what, double fraction);
 void EndProgress();
 
+// `--report FILE` of the long commands: the HTML report of `out` (to be
+// written as out_json) into report_html; nothing when report_html is empty.
+void WriteReportIfAsked(const std::string& report_html, const nlohmann::json& out,
+                        const std::string& out_json);
+
 // Serialises with 2-space indentation and writes atomically.
 void WriteJson(const nlohmann::json& j, const std::string& path);
 

@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
       triadcal::AddDesignCommand(app),
       triadcal::AddMonteCarloCommand(app),
       triadcal::AddInfoCommand(app),
+      triadcal::AddReportCommand(app),
   };
 
   try {
