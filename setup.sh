@@ -6,7 +6,8 @@ cd "$(dirname "$0")"
 
 packages=(build-essential cmake ninja-build pkg-config
           libceres-dev libeigen3-dev libsuitesparse-dev libcli11-dev libgtest-dev
-          libyaml-cpp-dev nlohmann-json3-dev libmatio-dev)
+          libyaml-cpp-dev nlohmann-json3-dev libmatio-dev
+          chromium)  # chromium: the HTML report's browser test (headless)
 
 missing=()
 for p in "${packages[@]}"; do

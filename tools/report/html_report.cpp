@@ -78,6 +78,12 @@ std::string HtmlReport(const std::vector<ReportInput>& inputs) {
   h += "\n</style>\n<style>\n";
   h += kReportCss;
   h += "\n</style>\n</head>\n<body>\n";
+  // Before any other script: record script errors and console errors or
+  // warnings, for the page's self-check (assets/report.js).
+  h += "<script>window.triadcalErrors=[];window.addEventListener('error',function(e){"
+       "window.triadcalErrors.push(String(e.message||e));});['error','warn'].forEach(function(k){"
+       "var f=console[k];console[k]=function(){window.triadcalErrors.push('console.'+k+': '+"
+       "Array.prototype.join.call(arguments,' '));return f.apply(console,arguments);};});</script>\n";
   h += "<div id=\"triadcal-status\" data-status=\"loading\">loading</div>\n";
   h += "<main id=\"report\"><noscript>This report draws its tables and charts with JavaScript."
        "</noscript></main>\n";

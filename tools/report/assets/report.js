@@ -7,10 +7,9 @@
 (function () {
   'use strict';
 
-  var errors = [];
-  window.addEventListener('error', function (e) {
-    errors.push(String(e.message || e));
-  });
+  // Filled from the page's first script (html_report.cpp): script errors and
+  // console.error / console.warn calls, wherever they come from.
+  var errors = window.triadcalErrors || [];
 
   // Saturated colours only: the self-check tells a drawn series from the grey
   // grid and axes by its saturation.
@@ -179,8 +178,17 @@
   }
 
   // ---------------------------------------------------------- shared parts
+  // SPEC section 3 order; effect parameters ("effect.param") after, as given.
+  var ORDER = ['Kx', 'Ky', 'Kz', 'W0x', 'W0y', 'W0z', 'alpha_x', 'alpha_y', 'beta_x', 'beta_z',
+               'gamma_y', 'gamma_z', 'Kxx', 'Kxy', 'Kxz', 'Kyx', 'Kyy', 'Kyz', 'Kzx', 'Kzy', 'Kzz',
+               'dpsi', 'dtheta_c', 'dlambda2', 'dx2', 'dy2', 'dz2'];
+  function ordered(names) {
+    var known = ORDER.filter(function (n) { return names.indexOf(n) >= 0; });
+    return known.concat(names.filter(function (n) { return ORDER.indexOf(n) < 0; }));
+  }
+  function keys(o) { return ordered(Object.keys(o || {})); }
   function paramRows(params, extra) {
-    return Object.keys(params).map(function (name) {
+    return keys(params).map(function (name) {
       var p = params[name];
       var f = fmt(p.value, p.sigma);
       var flags = [];
@@ -243,8 +251,10 @@
                                    'The residual is consistent with the declared noise.');
     s.appendChild(table(['channel', 'RMS', 'unit', 'Ljung-Box p', 'lag-1 autocorr.', 'strongest peak'],
         ra.channels.map(function (c) {
-          var pk = c.peaks && c.peaks.length ? g(c.peaks[0].freq_hz, 4) + ' Hz' +
-              (c.peaks[0].combination ? ' (' + c.peaks[0].combination + ')' : '') : '';
+          var pk = c.spectrum_peaks && c.spectrum_peaks.length ?
+              g(c.spectrum_peaks[0].freq_hz, 4) + ' Hz, ' +
+              g(100 * c.spectrum_peaks[0].power_fraction, 2) + ' % of the variance' +
+              (c.spectrum_peaks[0].bench_combination ? ' (' + c.spectrum_peaks[0].bench_combination + ')' : '') : '';
           return [c.channel, g(c.rms, 4), c.unit, g(c.ljung_box_p, 3), g(c.lag1_autocorrelation, 3), pk];
         })));
   }
@@ -363,7 +373,7 @@
                  g(a.error_vs_truth_rms_sigma, 3)]);
     }
     ba.appendChild(table(['quantity', 'before', 'after'], rows));
-    var names = Object.keys(a.parameters || {});
+    var names = keys(a.parameters);
     ba.appendChild(table(['parameter', 'before', 'after', 'unit', 'err/sigma before', 'err/sigma after'],
         names.map(function (n) {
           var pb = (b.parameters || {})[n], pa = a.parameters[n];
@@ -388,7 +398,7 @@
     }
   }
   function renderCompare(p, out) {
-    var names = Object.keys((out.batch || {}).parameters || {});
+    var names = keys((out.batch || {}).parameters);
     var s = section(p, 'EKF, RTS and batch', 'Differences in units of the batch sigma.');
     s.appendChild(table(['parameter', 'EKF', 'RTS', 'batch', 'unit', 'RTS-EKF', 'batch-RTS'],
         names.map(function (n) {
@@ -407,7 +417,7 @@
       return i + ' ' + n; }).join(', ')}));
   }
   function renderObservability(p, out) {
-    var names = Object.keys(out.crb || {});
+    var names = keys(out.crb);
     var w = (out.with_constraints || {}).crb || out.crb, wo = (out.without_constraints || {}).crb || {};
     var prior = out.prior_sigma || {};
     var s = section(p, 'Cramer-Rao sigma', 'With and without the constraints (' +
@@ -442,7 +452,7 @@
     if (d && d.durations_s && d.quasi_harmonic) {
       var units = out.units || {};
       var byUnit = {};
-      Object.keys(d.quasi_harmonic.sigma).forEach(function (n) {
+      keys(d.quasi_harmonic.sigma).forEach(function (n) {
         var u = units[n] || '';
         (byUnit[u] = byUnit[u] || []).push(n);
       });
@@ -467,7 +477,7 @@
       var cs = section(p, 'Quasi-harmonic against the static method',
                        'quasi-harmonic ' + g(c.quasi_harmonic_duration_s, 4) + ' s');
       cs.appendChild(table(['parameter', 'quasi-harmonic', 'static', 'static, same duration', 'unit', 'static / q-h'],
-          Object.keys(c.rows).map(function (n) {
+          keys(c.rows).map(function (n) {
             var r = c.rows[n];
             return [n, g(r.quasi_harmonic, 3), g(r.static, 3), g(r.static_same_duration, 3), r.unit,
                     g(r.ratio_static_over_quasi_harmonic, 3)];
@@ -475,7 +485,7 @@
     }
     if (out.profiles && out.profiles.length) {
       var ps = section(p, 'Profiles');
-      var pn = Object.keys(out.profiles[0].sigma || {});
+      var pn = keys(out.profiles[0].sigma);
       ps.appendChild(table(['periods [s]', 'amplitudes [deg]'].concat(pn), out.profiles.map(function (q) {
         return [q.period_s.join(':'), q.amplitude_deg.join(':')].concat(pn.map(function (n) {
           return g(q.sigma[n], 2);
@@ -484,7 +494,7 @@
     }
   }
   function renderMonteCarlo(p, out) {
-    var names = Object.keys(out.parameters || {});
+    var names = keys(out.parameters);
     var est = out.estimators || [];
     var s = section(p, 'Error scatter over the Cramer-Rao bound',
                     out.runs + ' runs; relative sampling error of a scatter ' +
@@ -549,7 +559,10 @@
   // The parameters of an OUT, whatever the command ("parameters", or the
   // batch's / RTS's for compare and filter).
   function mainParameters(out) {
-    if (out.parameters && out.command !== 'montecarlo') return out.parameters;
+    // Only estimates: observability, design and montecarlo hold sigmas or
+    // nominal values under their parameter keys.
+    if (['observability', 'design', 'montecarlo'].indexOf(out.command) >= 0) return null;
+    if (out.parameters) return out.parameters;
     if (out.batch && out.batch.parameters) return out.batch.parameters;
     if (out.rts && out.rts.parameters) return out.rts.parameters;
     return null;
@@ -561,6 +574,7 @@
     withP.forEach(function (it) {
       Object.keys(mainParameters(it.out)).forEach(function (n) { if (names.indexOf(n) < 0) names.push(n); });
     });
+    names = ordered(names);
     var s = section(parent, 'Per-run comparison',
         'Each run\'s estimate to the digit of its sigma; the last column is the largest ' +
         'difference from the runs\' weighted mean in units of the run\'s sigma.');
