@@ -1,5 +1,6 @@
 // `triadcal compare RUN.yaml -o OUT.json`: EKF, RTS smoother and batch solution
 // of the same run side by side, with their differences in sigma units.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -34,7 +35,13 @@ int RunCompare(const CompareArgs& a) {
 
   FilterOptions fo;
   fo.epoch_s = a.epoch_s;
-  fo.progress = [](int pass, double f) { ShowProgress("compare: filter pass " + std::to_string(pass), f); };
+  // Progress: the filter's passes the first half, the batch the second.
+  StageProgress progress("compare: ");
+  const int passes = std::max(1, fo.smoother_iterations);
+  fo.progress = [&](int pass, double f) {
+    progress.Stage("filter pass " + std::to_string(pass));
+    progress.Fraction(0.5 * (pass - 1 + f) / passes);
+  };
   auto t0 = std::chrono::steady_clock::now();
   const FilterResult fr = RunFilterSmoother(run.description, run.data, layout, fo);
   const double filter_s = Seconds(t0);
@@ -43,7 +50,8 @@ int RunCompare(const CompareArgs& a) {
   bo.epoch_s = a.epoch_s;
   bo.init = BatchInit::kGiven;  // start the batch at the smoother's answer
   bo.init_theta = fr.rts.theta;
-  bo.progress = [](const std::string& s) { ShowProgress("compare: fit " + s, 0.0); };
+  bo.progress = [&](const std::string& s) { progress.Stage("fit " + s); };
+  bo.fraction = [&](double f) { progress.Fraction(0.5 + 0.5 * f); };
   t0 = std::chrono::steady_clock::now();
   BatchResult br = SolveBatch(run.description, run.data, layout, bo);
   br.initial = fr.rts;

@@ -101,7 +101,9 @@ int RunDiagnose(const DiagnoseArgs& a) {
   opt.max_effects = a.max_effects;
   opt.fit.epoch_s = a.epoch_s;
   opt.candidates = ParseEffectList(a.candidates, "--candidates");
-  opt.progress = [](const std::string& s) { ShowProgress("diagnose: " + s, 0.0); };
+  StageProgress progress("diagnose: ");
+  opt.progress = [&](const std::string& s) { progress.Stage(s); };
+  opt.fraction = [&](double f) { progress.Fraction(f); };
   if (!(a.alpha > 0.0 && a.alpha < 1.0)) throw InputError("--alpha: must be in (0, 1)");
   std::map<std::string, double> truth;
   // Read the truth first: a bad truth file must fail before the work.

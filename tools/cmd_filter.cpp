@@ -1,5 +1,6 @@
 // `triadcal filter RUN.yaml -o OUT.json [--series FILE.csv]`: the paper's EKF
 // with the RTS smoother (solvers/estimation/kalman_smoother.h).
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -71,8 +72,10 @@ int RunFilter(const FilterArgs& a) {
   opt.derivatives.half_window_s = a.rate_window_s;
   opt.smoother_iterations = a.iterations;
   opt.keep_series = !a.series_csv.empty();
-  opt.progress = [](int pass, double f) {
-    ShowProgress("filter: pass " + std::to_string(pass), f);
+  const int passes = std::max(1, a.iterations);
+  opt.progress = [passes](int pass, double f) {
+    ShowProgress("filter: pass " + std::to_string(pass) + "/" + std::to_string(passes),
+                 (pass - 1 + f) / passes);
   };
   if (a.iterations < 1) throw InputError("--iterations: must be >= 1");
   // The same hold decision as fit: parameters the run's motion does not

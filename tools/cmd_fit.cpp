@@ -50,7 +50,9 @@ int RunFit(const FitArgs& a) {
   opt.holding.auto_hold = !a.no_auto_hold;
   opt.holding.hold = SplitList(a.hold);
   opt.holding.free = SplitList(a.free);
-  opt.progress = [](const std::string& s) { ShowProgress("fit: " + s, 0.0); };
+  StageProgress progress("fit: ");
+  opt.progress = [&](const std::string& s) { progress.Stage(s); };
+  opt.fraction = [&](double f) { progress.Fraction(f); };
   const BatchResult r = SolveBatch(run.description, run.data, layout, opt);
   EndProgress();
 

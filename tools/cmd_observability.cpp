@@ -106,8 +106,10 @@ int RunObservability(const ObservabilityArgs& a) {
     SetFromFileUnits(layout, ReadParameterValues(a.at), &theta);
     at = a.at;
   }
+  // Two stages of about equal length; neither reports from inside.
+  ShowProgress("observability: building the problem", 0.0);
   const RunProblem p = BuildRunProblem(run, data, layout, a.epoch_s, derivatives);
-  ShowProgress("observability: Fisher information", 0.0);
+  ShowProgress("observability: Fisher information", 0.5);
   const ObservabilityResult r = AnalyseObservability(run, p, theta, oo);
   EndProgress();
 

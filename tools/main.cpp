@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 
 #include "core/model/errors.h"
+#include "tools/command_util.h"
 #include "tools/commands.h"
 
 int main(int argc, char** argv) {
@@ -29,6 +30,11 @@ int main(int argc, char** argv) {
       triadcal::AddReportCommand(app),
   };
 
+  bool quiet = false;
+  for (const triadcal::Command& c : commands) {
+    c.app->add_flag("-q,--quiet", quiet, "no progress lines on stderr");
+  }
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -36,7 +42,10 @@ int main(int argc, char** argv) {
   }
   try {
     for (const triadcal::Command& c : commands) {
-      if (c.app->parsed()) return c.run();
+      if (c.app->parsed()) {
+        triadcal::SetQuiet(quiet);
+        return c.run();
+      }
     }
   } catch (const triadcal::InputError& e) {
     std::cerr << "triadcal: error: " << e.what() << "\n";

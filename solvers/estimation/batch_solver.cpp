@@ -151,6 +151,24 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
   return d;
 }
 
+namespace {
+// Reports BatchOptions::fraction from inside a Ceres solve.
+class IterationFraction : public ceres::IterationCallback {
+ public:
+  IterationFraction(double begin, double end, const std::function<void(double)>& report)
+      : at_(begin), end_(end), report_(report) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+    at_ += (end_ - at_) / 3.0;
+    if (report_) report_(at_);
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  double at_, end_;
+  const std::function<void(double)>& report_;
+};
+}  // namespace
+
 BatchResult SolveBatch(const RunDescription& run, const RunData& data,
                        const ParameterLayout& layout, const BatchOptions& opt) {
   const auto t_start = std::chrono::steady_clock::now();
@@ -162,6 +180,9 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   auto say = [&](const std::string& s) {
     if (opt.progress) opt.progress(s);
   };
+  auto done = [&](double f) {
+    if (opt.fraction) opt.fraction(f);
+  };
 
   BatchResult res;
   res.prior = p.prior;
@@ -170,6 +191,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   RunDescription run_held = run;
   if (opt.holding.auto_hold || !opt.holding.hold.empty()) {
     say("choosing the parameters this run supports");
+    done(0.0);
     const HoldDecision hd = ChooseHeldParameters(run, data, layout, opt.holding, opt.epoch_s,
                                                  opt.derivatives, opt.init_decimation_hz, threads);
     res.unsupported_at_start = hd.unsupported;
@@ -184,6 +206,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
 
   say("initialising (" + std::string(opt.init == BatchInit::kRts ? "RTS smoother" : "nominal") +
       ")");
+  done(0.1);
   res.initial = Initialise(run_held, data, layout, p, opt);
   for (int i = 0; i < n; ++i) {
     if (p.prior.sigma[i] < res.prior.sigma[i]) res.initial.theta[i] = p.prior.mean[i];
@@ -218,6 +241,9 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   int halvings = 0;
   for (int outer = 0; outer < opt.max_outer_iterations + halvings; ++outer) {
     say("relinearising pass " + std::to_string(outer + 1));
+    const double pass_begin = 0.3 + 0.65 * (1.0 - std::pow(0.5, outer));
+    const double pass_end = 0.3 + 0.65 * (1.0 - std::pow(0.5, outer + 1));
+    done(pass_begin);
     lin = Linearize(p, theta, !opt.exact_increments, threads);
     const std::vector<IntervalIncrement>& inc = lin.increments;
     const std::vector<Mat6>& LQ = lin.LQ;
@@ -276,6 +302,9 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
     theta_prev = theta;
     x_prev = x;
     cost_prev = cost_here;
+    // Each Ceres iteration moves the fraction a third of the way to the pass's end.
+    IterationFraction iteration_fraction(pass_begin, pass_end, opt.fraction);
+    if (opt.fraction) so.callbacks.push_back(&iteration_fraction);
     ceres::Solver::Summary summary;
     ceres::Solve(so, problem.get(), &summary);
     if (summary.termination_type == ceres::FAILURE) {
@@ -339,6 +368,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   res.estimate.cov = Eigen::MatrixXd::Zero(n, n);
   if (opt.compute_covariance) {
     say("covariance");
+    done(0.95);
     const auto t_cov = std::chrono::steady_clock::now();
     const bool use_ceres = opt.covariance_method == "ceres" || !opt.robust_loss.empty();
     if (!use_ceres && opt.covariance_method != "schur") {
