@@ -148,6 +148,8 @@ DiagnosisResult Diagnose(const RunDescription& run, const RunData& data,
     held = fit.held;
     candidates.erase(std::find(candidates.begin(), candidates.end(), chosen));
   }
+  say("analysing the residual");
+  if (opt.fraction) opt.fraction(0.95);
   res.after_layout = layout;
   res.after = fit;
   res.after_residuals = res.selected.empty()

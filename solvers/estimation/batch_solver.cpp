@@ -396,6 +396,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
     }
     res.covariance_seconds = Seconds(t_cov);
   }
+  done(1.0);
   return res;
 }
 
