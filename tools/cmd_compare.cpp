@@ -14,6 +14,7 @@
 #include "tools/command_util.h"
 #include "tools/commands.h"
 #include "tools/report/fit_report.h"
+#include "tools/report/value_format.h"
 
 namespace triadcal {
 namespace {
@@ -73,7 +74,8 @@ int RunCompare(const CompareArgs& a) {
   nlohmann::json diff = nlohmann::json::object();
   double max_abs = 0.0;
   std::string max_name;
-  std::printf("%-26s %13s %13s %13s %10s %9s %9s  %s\n", "parameter", "EKF", "RTS", "batch",
+  // Each estimate to the digit of its own sigma; the batch's sigma printed.
+  std::printf("%-26s %16s %16s %16s %10s %9s %9s  %s\n", "parameter", "EKF", "RTS", "batch",
               "sigma", "RTS-EKF", "bat-RTS", "unit");
   for (int i = 0; i < layout.size(); ++i) {
     const ParameterInfo& p = layout.info(i);
@@ -88,9 +90,14 @@ int RunCompare(const CompareArgs& a) {
       max_abs = std::abs(d_br);
       max_name = p.name;
     }
-    std::printf("%-26s %13.6g %13.6g %13.6g %10.3g %9.3f %9.3f  %s%s\n", p.name.c_str(),
-                fr.ekf.theta[i] / f, fr.rts.theta[i] / f, br.estimate.theta[i] / f, s / f, d_re,
-                d_br, p.unit.c_str(), rep.not_estimable.count(p.name) ? " (not estimable)" : "");
+    auto own = [&](const Estimate& e) {
+      return FormatWithSigma(e.theta[i] / f, std::sqrt(std::max(e.cov(i, i), 0.0)) / f);
+    };
+    const ValueText b = FormatWithSigma(br.estimate.theta[i] / f, s / f);
+    std::printf("%-26s %16s %16s %16s %10s %9.3f %9.3f  %s%s\n", p.name.c_str(),
+                own(fr.ekf).value.c_str(), own(fr.rts).value.c_str(), b.value.c_str(),
+                b.sigma.c_str(), d_re, d_br, p.unit.c_str(),
+                rep.not_estimable.count(p.name) ? " (not estimable)" : "");
   }
   out["differences_in_sigma"] = diff;
   out["largest_batch_minus_rts"] = {{"parameter", max_name}, {"sigma", max_abs}};

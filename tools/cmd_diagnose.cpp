@@ -14,6 +14,7 @@
 #include "tools/commands.h"
 #include "tools/report/fit_report.h"
 #include "tools/report/residual_plot_json.h"
+#include "tools/report/value_format.h"
 
 namespace triadcal {
 namespace {
@@ -176,7 +177,7 @@ int RunDiagnose(const DiagnoseArgs& a) {
               d.after.chi2_per_dof);
 
   const FitReport ra = MakeFitReport(d.after_layout, d.after);
-  std::printf("\n%-26s %13s %9s %13s %9s %8s", "parameter", "before", "sigma", "after", "sigma",
+  std::printf("\n%-26s %16s %9s %16s %9s %8s", "parameter", "before", "sigma", "after", "sigma",
               "shift/s");
   if (tp) std::printf(" %9s %9s", "err/s bef", "err/s aft");
   std::printf("  unit\n");
@@ -190,8 +191,9 @@ int RunDiagnose(const DiagnoseArgs& a) {
     if (ib >= 0) {
       const double vb = d.before.estimate.theta[ib] / f;
       const double sb = std::sqrt(std::max(0.0, d.before.estimate.cov(ib, ib))) / f;
-      std::printf("%-26s %13.6g %9.3g %13.6g %9.3g %8.2f", p.name.c_str(), vb, sb, va, sa,
-                  held ? 0.0 : (va - vb) / sa);
+      const ValueText tb = FormatWithSigma(vb, sb), ta = FormatWithSigma(va, sa);
+      std::printf("%-26s %16s %9s %16s %9s %8.2f", p.name.c_str(), tb.value.c_str(),
+                  tb.sigma.c_str(), ta.value.c_str(), ta.sigma.c_str(), held ? 0.0 : (va - vb) / sa);
       if (tp) {
         auto it = truth.find(p.name);
         if (it != truth.end() && !held) {
@@ -201,7 +203,9 @@ int RunDiagnose(const DiagnoseArgs& a) {
         }
       }
     } else {
-      std::printf("%-26s %13s %9s %13.6g %9.3g %8s", p.name.c_str(), "-", "-", va, sa, "new");
+      const ValueText ta = FormatWithSigma(va, sa);
+      std::printf("%-26s %16s %9s %16s %9s %8s", p.name.c_str(), "-", "-", ta.value.c_str(),
+                  ta.sigma.c_str(), "new");
       if (tp) {
         auto it = truth.find(p.name);
         if (it != truth.end()) std::printf(" %9s %9.2f", "-", (va - it->second) / sa);

@@ -18,6 +18,7 @@
 #include "solvers/estimation/separability.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
+#include "tools/report/value_format.h"
 
 namespace triadcal {
 namespace {
@@ -137,14 +138,15 @@ int RunFilter(const FilterArgs& a) {
 
   std::printf("filter: %zu samples, %d epochs of %.3g s, %d pass(es), %.2f s\n",
               run.data.size(), r.epochs, a.epoch_s, r.passes, seconds);
-  std::printf("%-26s %14s %10s %14s %10s  %s\n", "parameter", "EKF", "sigma", "RTS", "sigma",
+  std::printf("%-26s %16s %10s %16s %10s  %s\n", "parameter", "EKF", "sigma", "RTS", "sigma",
               "unit");
   for (int i = 0; i < layout.size(); ++i) {
     const ParameterInfo& p = layout.info(i);
     const double f = p.si_per_unit;
-    std::printf("%-26s %14.5g %10.3g %14.5g %10.3g  %s%s\n", p.name.c_str(), r.ekf.theta[i] / f,
-                std::sqrt(r.ekf.cov(i, i)) / f, r.rts.theta[i] / f, std::sqrt(r.rts.cov(i, i)) / f,
-                p.unit.c_str(),
+    const ValueText e = FormatWithSigma(r.ekf.theta[i] / f, std::sqrt(r.ekf.cov(i, i)) / f);
+    const ValueText s = FormatWithSigma(r.rts.theta[i] / f, std::sqrt(r.rts.cov(i, i)) / f);
+    std::printf("%-26s %16s %10s %16s %10s  %s%s\n", p.name.c_str(), e.value.c_str(),
+                e.sigma.c_str(), s.value.c_str(), s.sigma.c_str(), p.unit.c_str(),
                 pinned.count(p.name)     ? "  (held at nominal)"
                 : held_set.count(p.name) ? "  (not estimable: prior value)"
                                          : "");

@@ -16,6 +16,7 @@
 #include "solvers/static/static_method.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
+#include "tools/report/value_format.h"
 
 namespace triadcal {
 namespace {
@@ -168,8 +169,9 @@ void PrintReport(const LoadedRun& run, const StaticResult& r) {
       continue;
     }
     const double decl = std::sqrt(r.cov_declared(i, i)) / f;
-    std::printf("%-10s %14.6g %11.3g %11.3g %11.3g  %-6s%s\n", p.name.c_str(), r.theta[i] / f,
-                std::sqrt(r.cov(i, i)) / f, decl, decl * scatter, p.unit.c_str(),
+    const ValueText v = FormatWithSigma(r.theta[i] / f, std::sqrt(r.cov(i, i)) / f);
+    std::printf("%-10s %14s %11s %11.3g %11.3g  %-6s%s\n", p.name.c_str(), v.value.c_str(),
+                v.sigma.c_str(), decl, decl * scatter, p.unit.c_str(),
                 weak.count(p.name) ? " NOT SEPARABLE (prior value)" : "");
   }
   std::printf("sigma: %s (chi2/dof = %.3g on %.3g dof; reported = declared x %.3g)\n",
