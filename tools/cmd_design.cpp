@@ -6,7 +6,7 @@
 //   - sigma against the profile's periods and amplitudes (a small grid);
 //   - the shortest duration that reaches a target sigma (--target K=0.5);
 //   - the scenario's design (the paper's 1.5 min) against the static method
-//     (40 min) as a table, and all of it as a log-log SVG plot.
+//     (40 min) as a table; the curves are drawn by the HTML report (--report).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -23,13 +23,12 @@
 #include "solvers/analysis/experiment_design.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
-#include "tools/report/svg_plot.h"
 
 namespace triadcal {
 namespace {
 
 struct DesignArgs {
-  std::string scenario, out_json, report_html, plot_svg, effects;
+  std::string scenario, out_json, report_html, effects;
   std::string durations = "15,30,60,90,300,600,2400";
   std::string periods, amplitudes;  // default: the scenario's x 0.5, 1, 2 / x 0.25, 0.5, 1
   std::string targets = "K=0.5";
@@ -115,12 +114,6 @@ double Worst(const DesignPoint& d, const std::vector<int>& idx) {
   return w;
 }
 
-double Best(const DesignPoint& d, const std::vector<int>& idx) {
-  double b = 1e300;
-  for (int i : idx) b = std::min(b, d.sigma[i]);
-  return b;
-}
-
 bool Held(const DesignPoint& d, const std::string& name) {
   return std::find(d.unobservable.begin(), d.unobservable.end(), name) != d.unobservable.end();
 }
@@ -149,15 +142,6 @@ std::string PairText(double a, double b) {
   char t[48];
   std::snprintf(t, sizeof(t), "%g:%g", a, b);
   return t;
-}
-
-std::string DefaultSvgPath(const std::string& out_json) {
-  const std::string ext = ".json";
-  if (out_json.size() > ext.size() &&
-      out_json.compare(out_json.size() - ext.size(), ext.size(), ext) == 0) {
-    return out_json.substr(0, out_json.size() - ext.size()) + ".svg";
-  }
-  return out_json + ".svg";
 }
 
 int RunDesign(const DesignArgs& a) {
@@ -339,59 +323,23 @@ int RunDesign(const DesignArgs& a) {
                        {"quasi_harmonic_not_determined", qh_design.unobservable},
                        {"static_not_determined", st_long.unobservable}};
 
-  // ---- the plot: worst sigma of each group against duration, both methods.
-  std::vector<PlotPanel> panels;
+  // ---- what the HTML report draws (--report, or `triadcal report`): per
+  // group the worst and best sigma of both methods against duration, from
+  // "duration" above (null where the method does not determine a member).
+  nlohmann::json groups = nlohmann::json::array();
   for (const ParameterGroup& g : ParameterGroups()) {
-    PlotPanel panel;
-    panel.title = g.label;
-    panel.y_label = "sigma [" + layout.info(g.members[0]).unit + "]";
-    PlotSeries sq{"quasi-harmonic " + PairText(s.profile.period_s[0], s.profile.period_s[1]) + " s",
-                  "#1f77b4", false, {}, {}};
-    PlotSeries ss{"static, " + std::to_string(a.static_positions) + " positions", "#d62728", true,
-                  {}, {}};
-    PlotSeries sq_best = sq, ss_best = ss;
-    for (PlotSeries* b : {&sq_best, &ss_best}) {
-      b->width = 1.0;
-      b->opacity = 0.5;
-      b->in_legend = false;
-    }
-    bool static_held = false, qh_held = false;
-    for (std::size_t k = 0; k < durations.size(); ++k) {
-      const double f = layout.info(g.members[0]).si_per_unit;
-      for (PlotSeries* p : {&sq, &ss, &sq_best, &ss_best}) p->x.push_back(durations[k]);
-      // A sigma of a parameter the test does not determine is the prior's:
-      // not plotted.
-      const bool qh_k = AnyHeld(qh[k], layout, g.members), st_k = AnyHeld(st[k], layout, g.members);
-      sq.y.push_back(qh_k ? std::nan("") : Worst(qh[k], g.members) / f);
-      ss.y.push_back(st_k ? std::nan("") : Worst(st[k], g.members) / f);
-      sq_best.y.push_back(qh_k ? std::nan("") : Best(qh[k], g.members) / f);
-      ss_best.y.push_back(st_k ? std::nan("") : Best(st[k], g.members) / f);
-      static_held = static_held || st_k;
-      qh_held = qh_held || qh_k;
-    }
-    if (static_held) panel.note = "static: not determined at some or all durations";
-    if (qh_held) {
-      panel.note += std::string(panel.note.empty() ? "" : "; ") +
-                    "quasi-harmonic: not determined at some durations";
-    }
-    panel.series = {sq_best, ss_best, sq, ss};
-    panels.push_back(panel);
+    std::vector<std::string> members;
+    for (int i : g.members) members.push_back(layout.info(i).name);
+    groups.push_back({{"name", g.name},
+                      {"label", g.label},
+                      {"unit", layout.info(g.members[0]).unit},
+                      {"members", members}});
   }
-  char title[200];
-  std::snprintf(title, sizeof(title),
-                "Cramer-Rao sigma against run duration, %s (%g Hz, %g mV); thick: worst of "
-                "the group, thin: best",
-                a.scenario.substr(a.scenario.find_last_of('/') + 1).c_str(), s.profile.rate_hz,
-                s.run.noise_mV);
-  const std::string svg = LogLogPanelsSvg(
-      title, "run duration [s]", panels,
-      {{Td, FormatDouble(Td) + " s design"}, {Ts, FormatDouble(Ts) + " s static"}}, 3);
-  const std::string svg_path = a.plot_svg.empty() ? DefaultSvgPath(a.out_json) : a.plot_svg;
-  out["plot"] = svg_path;
+  out["duration"]["groups"] = groups;
+  out["duration"]["static_positions"] = a.static_positions;
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   out["time_s"] = seconds;
-  WriteFileAtomically(svg_path, svg);
   WriteJson(out, a.out_json);
   WriteReportIfAsked(a.report_html, out, a.out_json);
 
@@ -480,7 +428,7 @@ int RunDesign(const DesignArgs& a) {
                 st_design.sigma[i] / f, held(st_design), ratio);
   }
   std::printf("(ratio: static %g s sigma / quasi-harmonic %g s sigma; -: not determined by one of them)\n", Ts, Td);
-  std::printf("time %.1f s; wrote %s and %s\n", seconds, a.out_json.c_str(), svg_path.c_str());
+  std::printf("time %.1f s; wrote %s\n", seconds, a.out_json.c_str());
   return 0;
 }
 
@@ -497,7 +445,6 @@ Command AddDesignCommand(CLI::App& app) {
   c.app->add_option("-o,--output", a->out_json, "output JSON")->required();
   c.app->add_option("--report", a->report_html,
                     "also write the HTML report of OUT (one self-contained file)");
-  c.app->add_option("--plot", a->plot_svg, "SVG plot (default: OUT with .svg)");
   c.app->add_option("--durations", a->durations, "run durations [s], comma-separated")
       ->capture_default_str();
   c.app->add_option("--periods", a->periods,

@@ -120,6 +120,15 @@
       ctx.restore();
     }]}};
   }
+  // Tick labels readable at any magnitude (uPlot's default rounds 1e-4 to 0).
+  function ticks(u, splits) {
+    return splits.map(function (v) {
+      if (v === null || v === undefined) return '';
+      var a = Math.abs(v);
+      if (a !== 0 && (a < 1e-3 || a >= 1e6)) return v.toExponential(0);
+      return Number(v.toPrecision(6)).toLocaleString('en-US', {maximumFractionDigits: 6});
+    });
+  }
   // opts: {title, xLabel, yLabel, xLog, yLog, series: [{label, values, dash, points}],
   //        x: [...], marks: [{x, label}], bars}
   function chart(parent, o) {
@@ -146,7 +155,7 @@
       height: o.height || 300,
       series: series,
       scales: {x: {time: false, distr: o.xLog ? 3 : 1}, y: {distr: o.yLog ? 3 : 1}},
-      axes: [{label: o.xLabel}, {label: o.yLabel, size: 70}],
+      axes: [{label: o.xLabel, values: ticks}, {label: o.yLabel, size: 70, values: ticks}],
       legend: {show: true},
       plugins: o.marks && o.marks.length ? [markersPlugin(o.marks)] : [],
     };
@@ -234,7 +243,8 @@
     if (sp && sp.freq_hz && sp.freq_hz.length > 1) {
       chart(s, {title: 'Residual spectrum' + (label ? ' (' + label + ')' : '') +
                        ', bench frequencies marked',
-                xLabel: 'frequency [Hz]', yLabel: 'power [mg\u00b2]', yLog: true, x: sp.freq_hz,
+                xLabel: 'frequency [Hz]', yLabel: 'power [mg\u00b2]', xLog: true, yLog: true,
+                x: sp.freq_hz,
                 marks: marksFor(rp.bench_frequencies_hz),
                 series: sp.channels.map(function (c) {
                   return {label: c.name, values: c.power.map(function (v) { return v > 0 ? v : null; })};
@@ -449,21 +459,39 @@
   }
   function renderDesign(p, out) {
     var d = out.duration;
-    if (d && d.durations_s && d.quasi_harmonic) {
-      var units = out.units || {};
-      var byUnit = {};
-      keys(d.quasi_harmonic.sigma).forEach(function (n) {
-        var u = units[n] || '';
-        (byUnit[u] = byUnit[u] || []).push(n);
-      });
+    if (d && d.durations_s && d.quasi_harmonic && d.groups) {
+      var st = (out.settings || {});
       var s = section(p, 'Sigma against run duration',
-                      'Cramer-Rao sigma of the quasi-harmonic profile, log-log; one chart per unit.');
-      Object.keys(byUnit).forEach(function (u) {
-        chart(s, {title: 'sigma [' + u + '] against duration', xLabel: 'run duration [s]',
-                  yLabel: 'sigma [' + u + ']', xLog: true, yLog: true, x: d.durations_s,
-                  series: byUnit[u].map(function (n) {
-                    return {label: n, values: d.quasi_harmonic.sigma[n]};
-                  })});
+          'Cramer-Rao sigma, log-log, per group: solid the worst member, dashed the best; ' +
+          'quasi-harmonic profile against the static ' + d.static_positions + '-position method. ' +
+          'Missing points: the method does not determine a member at that duration.');
+      // Worst / best of a group's members at each duration; null when a
+      // member is not determined (its sigma is the prior's).
+      var pick = function (m, members, worst) {
+        return d.durations_s.map(function (_, k) {
+          var v = null;
+          for (var i = 0; i < members.length; ++i) {
+            var x = ((m.sigma || {})[members[i]] || [])[k];
+            if (!isNum(x)) return null;
+            v = v === null ? x : worst ? Math.max(v, x) : Math.min(v, x);
+          }
+          return v;
+        });
+      };
+      d.groups.forEach(function (grp) {
+        var series = [
+          {label: 'quasi-harmonic, worst', color: PALETTE[0], values: pick(d.quasi_harmonic, grp.members, true)},
+          {label: 'quasi-harmonic, best', color: PALETTE[0], dash: [6, 4], values: pick(d.quasi_harmonic, grp.members, false)}];
+        if (d.static) {
+          series.push({label: 'static, worst', color: PALETTE[1], values: pick(d.static, grp.members, true)});
+          series.push({label: 'static, best', color: PALETTE[1], dash: [6, 4], values: pick(d.static, grp.members, false)});
+        }
+        var marks = [];
+        if (isNum(st.design_duration_s)) marks.push({x: st.design_duration_s, label: 'design'});
+        if (isNum(st.static_duration_s)) marks.push({x: st.static_duration_s, label: 'static'});
+        chart(s, {title: grp.label + ' (' + grp.members.join(', ') + ')', xLabel: 'run duration [s]',
+                  yLabel: 'sigma [' + grp.unit + ']', xLog: true, yLog: true, x: d.durations_s,
+                  marks: marks, series: series, height: 260});
       });
     }
     if (out.targets && out.targets.length) {
