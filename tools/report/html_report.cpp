@@ -1,5 +1,6 @@
 #include "tools/report/html_report.h"
 
+#include <algorithm>
 #include <filesystem>
 
 #include "core/io/file_util.h"
@@ -51,7 +52,9 @@ std::vector<ReportInput> LoadReportInputs(const std::vector<std::string>& paths)
     try {
       in.out = nlohmann::json::parse(text);
     } catch (const nlohmann::json::parse_error& e) {
-      throw InputError(p + ": not valid JSON (at byte " + std::to_string(e.byte) + ")");
+      const std::size_t end = std::min<std::size_t>(e.byte, text.size());
+      const long line = 1 + std::count(text.begin(), text.begin() + end, '\n');
+      throw InputError(p + ":" + std::to_string(line) + ": not valid JSON");
     }
     if (!in.out.is_object() || !in.out.contains("command") || !in.out["command"].is_string()) {
       throw InputError(p + ": command: missing; not a triadcal output file");
