@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -10,8 +12,18 @@
 namespace triadcal {
 namespace {
 
-// Floats keep OUT small (9 digits instead of 17); the plot needs far fewer.
-std::vector<float> AsFloat(const std::vector<double>& x) { return {x.begin(), x.end()}; }
+// Rounded to `digits` significant digits: a plot needs few, and OUT stays
+// small (JSON numbers print in their shortest form).
+std::vector<double> Rounded(const std::vector<double>& x, int digits) {
+  std::vector<double> out;
+  out.reserve(x.size());
+  char buf[32];
+  for (double v : x) {
+    std::snprintf(buf, sizeof(buf), "%.*g", digits, v);
+    out.push_back(std::strtod(buf, nullptr));
+  }
+  return out;
+}
 
 // Buckets of n consecutive indices covering [0, size).
 int BucketSize(std::size_t size, int max_points) {
@@ -54,10 +66,10 @@ nlohmann::json ResidualPlotJson(const ResidualReport& r, int max_points) {
     }
   }
   j["decimation"] = b == 1 ? "none" : "min and max of every " + std::to_string(b) + " intervals";
-  j["t_s"] = AsFloat(t);
+  j["t_s"] = Rounded(t, 7);
   nlohmann::json chans = nlohmann::json::array();
   for (std::size_t c = 0; c < accel.size(); ++c) {
-    chans.push_back({{"name", accel[c]->name}, {"rms", accel[c]->rms}, {"values", AsFloat(y[c])}});
+    chans.push_back({{"name", accel[c]->name}, {"rms", accel[c]->rms}, {"values", Rounded(y[c], 4)}});
   }
   j["channels"] = chans;
 
@@ -79,12 +91,12 @@ nlohmann::json ResidualPlotJson(const ResidualReport& r, int max_points) {
     }
     f.push_back(fb == 1 ? s[0].freq_hz[k] : s[0].freq_hz[best]);
   }
-  spec["freq_hz"] = AsFloat(f);
+  spec["freq_hz"] = Rounded(f, 6);
   spec["unit"] = "mg^2 (periodogram |X_k|^2 / N)";
   spec["decimation"] = fb == 1 ? "none" : "max of every " + std::to_string(fb) + " bins";
   nlohmann::json sp = nlohmann::json::array();
   for (std::size_t c = 0; c < accel.size(); ++c) {
-    sp.push_back({{"name", accel[c]->name}, {"power", AsFloat(p[c])}});
+    sp.push_back({{"name", accel[c]->name}, {"power", Rounded(p[c], 3)}});
   }
   spec["channels"] = sp;
   j["spectrum"] = spec;

@@ -199,7 +199,9 @@
   function paramRows(params, extra) {
     return keys(params).map(function (name) {
       var p = params[name];
-      var f = fmt(p.value, p.sigma);
+      // Not estimable (held, or not separable): the value is the prior's and
+      // its sigma no estimate.
+      var f = p.estimable === false ? {value: g(p.value, 6), sigma: '-'} : fmt(p.value, p.sigma);
       var flags = [];
       if (p.estimable === false) flags.push('not estimable: prior value');
       if (extra) flags = flags.concat(extra(name, p));
@@ -605,23 +607,28 @@
     names = ordered(names);
     var s = section(parent, 'Per-run comparison',
         'Each run\'s estimate to the digit of its sigma; the last column is the largest ' +
-        'difference from the runs\' weighted mean in units of the run\'s sigma.');
+        'difference from the runs\' weighted mean in units of the run\'s sigma; held or not ' +
+        'estimable parameters (the prior\'s value) are left out of the mean.');
     var rows = [], dev = withP.map(function () { return []; });
     names.forEach(function (n, ni) {
       var ps = withP.map(function (it) { return mainParameters(it.out)[n]; });
+      // Held or not estimable: the prior's value, not an estimate; left out.
+      var est = function (q) { return q && q.estimable !== false && isNum(q.sigma) && q.sigma > 0; };
       var sw = 0, swx = 0;
       ps.forEach(function (q) {
-        if (q && isNum(q.sigma) && q.sigma > 0) { sw += 1 / (q.sigma * q.sigma); swx += q.value / (q.sigma * q.sigma); }
+        if (est(q)) { sw += 1 / (q.sigma * q.sigma); swx += q.value / (q.sigma * q.sigma); }
       });
       var mean = sw > 0 ? swx / sw : NaN;
-      var worst = 0;
+      var worst = null;
       ps.forEach(function (q, k) {
-        var z = q && q.sigma > 0 && isNum(mean) ? (q.value - mean) / q.sigma : null;
+        var z = est(q) && isNum(mean) ? (q.value - mean) / q.sigma : null;
         dev[k][ni] = z;
-        if (z !== null && Math.abs(z) > Math.abs(worst)) worst = z;
+        if (z !== null && (worst === null || Math.abs(z) > Math.abs(worst))) worst = z;
       });
       var unit = (ps.filter(function (q) { return q; })[0] || {}).unit || '';
-      rows.push([n].concat(ps.map(function (q) { return q ? pm(q.value, q.sigma) : '-'; }))
+      rows.push([n].concat(ps.map(function (q) {
+                     return !q ? '-' : est(q) ? pm(q.value, q.sigma) : g(q.value, 6) + ' (not estimated)';
+                   }))
                    .concat([unit, g(worst, 3)]));
     });
     s.appendChild(table(['parameter'].concat(withP.map(function (it) { return it.name; }))
