@@ -11,11 +11,10 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "tests/temp_dir_test.h"
 
@@ -65,9 +64,9 @@ std::string Unescape(std::string s) {
 
 struct BrowserResult {
   int exit_code = -1;
-  std::string status;                   // data-status of #triadcal-status
-  nlohmann::json result;                // its data-result: {charts, blank, errors}
-  std::vector<std::string> console;     // console lines chromium logged
+  std::string status;                // data-status of #triadcal-status
+  nlohmann::json result;             // its data-result: {charts, blank, errors}
+  std::vector<std::string> console;  // console lines chromium logged
 };
 
 class ReportBrowserTest : public testing_fixtures::TempDirTest {
@@ -78,8 +77,8 @@ class ReportBrowserTest : public testing_fixtures::TempDirTest {
   }
 
   int Run(const std::string& args) const {
-    return std::system((std::string(TRIADCAL_BIN) + " " + args + " > " + Path("out.txt") +
-                        " 2> " + Path("err.txt"))
+    return std::system((std::string(TRIADCAL_BIN) + " " + args + " > " + Path("out.txt") + " 2> " +
+                        Path("err.txt"))
                            .c_str());
   }
   std::string Err() const { return Slurp(Path("err.txt")); }
@@ -88,8 +87,8 @@ class ReportBrowserTest : public testing_fixtures::TempDirTest {
     return "timeout 180 " + chromium_ +
            " --headless --no-sandbox --disable-gpu --disable-quic --no-first-run"
            " --disable-background-networking --disable-component-update --disable-sync"
-           " --hide-scrollbars --user-data-dir=" + Path(profile) +
-           " --virtual-time-budget=5000";
+           " --hide-scrollbars --user-data-dir=" +
+           Path(profile) + " --virtual-time-budget=5000";
   }
 
   // Loads the page, lets it draw and check itself, and returns what it found

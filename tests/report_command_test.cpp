@@ -43,12 +43,13 @@ TEST_F(ReportCommandTest, BadInputsGiveOneExactLine) {
   const std::string foreign = WriteText("foreign.json", R"({"parameters": {}})");
   Fails(good + " " + broken, broken + ":3: not valid JSON");
   Fails(foreign, foreign + ": command: missing; not a triadcal output file");
-  Fails(Path("missing.json"), Path("missing.json") + ": cannot read (no such file or not readable)");
+  Fails(Path("missing.json"),
+        Path("missing.json") + ": cannot read (no such file or not readable)");
 }
 
 TEST_F(ReportCommandTest, PageIsSelfContainedAndOutTextCannotEndAScript) {
-  const std::string out = WriteText(
-      "o.json", R"({"command": "fit", "verdict": "</script><script>alert(1)</script><!--",
+  const std::string out =
+      WriteText("o.json", R"({"command": "fit", "verdict": "</script><script>alert(1)</script><!--",
                     "parameters": {"Kx": {"value": 171.5, "sigma": 0.08, "unit": "mV/g"}}})");
   ASSERT_EQ(Run("report " + out + " -o " + Path("r.html")), 0) << Err();
   const std::string html = Slurp(Path("r.html"));

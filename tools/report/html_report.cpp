@@ -31,11 +31,20 @@ std::string HtmlEscape(const std::string& s) {
   std::string out;
   for (char c : s) {
     switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '&':
+        out += "&amp;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -86,7 +95,8 @@ std::string HtmlReport(const std::vector<ReportInput>& inputs) {
   h += "<script>window.triadcalErrors=[];window.addEventListener('error',function(e){"
        "window.triadcalErrors.push(String(e.message||e));});['error','warn'].forEach(function(k){"
        "var f=console[k];console[k]=function(){window.triadcalErrors.push('console.'+k+': '+"
-       "Array.prototype.join.call(arguments,' '));return f.apply(console,arguments);};});</script>\n";
+       "Array.prototype.join.call(arguments,' '));return "
+       "f.apply(console,arguments);};});</script>\n";
   h += "<div id=\"triadcal-status\" data-status=\"loading\">loading</div>\n";
   h += "<main id=\"report\"><noscript>This report draws its tables and charts with JavaScript."
        "</noscript></main>\n";

@@ -12,15 +12,14 @@
 // browser test reads).
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 namespace triadcal {
 
 struct ReportInput {
-  std::string name;   // shown in the report (the OUT file's name)
+  std::string name;    // shown in the report (the OUT file's name)
   nlohmann::json out;  // the OUT file's content
 };
 

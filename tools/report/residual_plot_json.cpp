@@ -69,7 +69,8 @@ nlohmann::json ResidualPlotJson(const ResidualReport& r, int max_points) {
   j["t_s"] = Rounded(t, 7);
   nlohmann::json chans = nlohmann::json::array();
   for (std::size_t c = 0; c < accel.size(); ++c) {
-    chans.push_back({{"name", accel[c]->name}, {"rms", accel[c]->rms}, {"values", Rounded(y[c], 4)}});
+    chans.push_back(
+        {{"name", accel[c]->name}, {"rms", accel[c]->rms}, {"values", Rounded(y[c], 4)}});
   }
   j["channels"] = chans;
 
