@@ -558,12 +558,29 @@
   function renderStatic(p, out) {
     paramTable(p, out.parameters);
     if (out.positions && out.positions.length) {
-      var s = section(p, 'Static positions');
-      s.appendChild(table(['position', 'samples', 'duration [s]', 'mean [mV]', 'std [mV]'],
+      var s = section(p, 'Static positions',
+                      'Residual of each position after the fit (x, y, z and the error of |W| - 1 g)' +
+                      (isNum(out.residual_rms_mg) ? '; RMS over positions ' + g(out.residual_rms_mg, 3) + ' mg.' : '.'));
+      var pos = out.positions;
+      var axis = function (c) {
+        return pos.map(function (q) { return q.residual_mg && isNum(q.residual_mg[c]) ? q.residual_mg[c] : null; });
+      };
+      var series = [{label: 'x', points: true, values: axis(0)}, {label: 'y', points: true, values: axis(1)},
+                    {label: 'z', points: true, values: axis(2)}];
+      if (pos.some(function (q) { return isNum(q.norm_residual_mg); })) {
+        series.push({label: '|W| - 1 g', points: true, values: pos.map(function (q) {
+          return isNum(q.norm_residual_mg) ? q.norm_residual_mg : null; })});
+      }
+      chart(s, {title: 'Residual per position [mg]', xLabel: 'position index', yLabel: 'mg',
+                x: pos.map(function (_, i) { return i; }), series: series, height: 260});
+      s.appendChild(el('p', {cls: 'note', text: 'Position index: ' + pos.map(function (q, i) {
+        return i + ' ' + q.name; }).join(', ')}));
+      s.appendChild(table(['position', 'samples', 'duration [s]', 'mean [mV]', 'std [mV]', 'residual [mg]'],
           out.positions.map(function (q) {
             return [q.name, q.samples, g(q.duration_s, 4),
                     (q.mean_mV || []).map(function (x) { return g(x, 6); }).join(', '),
-                    (q.std_mV || []).map(function (x) { return g(x, 3); }).join(', ')];
+                    (q.std_mV || []).map(function (x) { return g(x, 3); }).join(', '),
+                    (q.residual_mg || []).map(function (x) { return g(x, 3); }).join(', ')];
           })));
     }
   }
