@@ -187,6 +187,35 @@ TEST_F(ReportBrowserTest, SeveralRunsGiveThePerRunComparison) {
   EXPECT_TRUE(r.console.empty()) << Joined(r.console);
 }
 
+// Every command's renderer on one page: each chart draws, nothing logs.
+TEST_F(ReportBrowserTest, EveryCommandsReportDraws) {
+  if (chromium_.empty()) GTEST_SKIP() << "chromium is not installed (setup.sh installs it)";
+  MakeFitReport("fit", 7);
+  const std::string run = Path("fit/run.yaml");
+  ASSERT_EQ(Run("filter " + run + " -o " + Path("filter.json")), 0) << Err();
+  ASSERT_EQ(Run("compare " + run + " -o " + Path("compare.json")), 0) << Err();
+  ASSERT_EQ(Run("observability " + run + " -o " + Path("obs.json")), 0) << Err();
+  ASSERT_EQ(Run("diagnose " + run + " -o " + Path("diag.json") +
+                " --candidates angle_latency --truth " + Path("fit/truth.json")),
+            0)
+      << Err();
+  ASSERT_EQ(Run("design " + Path("fit.yaml") + " -o " + Path("design.json") +
+                " --durations 30,60,120 --periods 30:12 --amplitudes 360:90 --static-duration 600"),
+            0)
+      << Err();
+  std::string outputs;
+  for (const char* f : {"fit", "filter", "compare", "obs", "diag", "design"}) {
+    outputs += " " + Path(std::string(f) + ".json");
+  }
+  ASSERT_EQ(Run("report" + outputs + " -o " + Path("all.html")), 0) << Err();
+  const BrowserResult r = Load(Path("all.html"));
+  EXPECT_EQ(r.status, "ok") << r.result.dump();
+  // fit 2, compare 1, observability 1, diagnose 4 (before and after), design
+  // 6 groups, the per-run comparison 1.
+  EXPECT_EQ(r.result["charts"].get<int>(), 15) << r.result.dump();
+  EXPECT_TRUE(r.console.empty()) << Joined(r.console);
+}
+
 // The check fails when it should: a console error, a script error, or a
 // chart with nothing drawn.
 TEST_F(ReportBrowserTest, CheckFailsOnConsoleErrorScriptErrorAndBlankChart) {
