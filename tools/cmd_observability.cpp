@@ -83,6 +83,7 @@ int RunObservability(const ObservabilityArgs& a) {
   derivatives.half_window_s = a.rate_window_s;
 
   // The run (recorded or simulated), its description and the point of evaluation.
+  ShowProgress("observability: loading the run", 0.0);
   RunDescription run;
   RunData data;
   Eigen::VectorXd theta;
@@ -106,10 +107,12 @@ int RunObservability(const ObservabilityArgs& a) {
     SetFromFileUnits(layout, ReadParameterValues(a.at), &theta);
     at = a.at;
   }
-  // Two stages of about equal length; neither reports from inside.
-  ShowProgress("observability: building the problem", 0.0);
+  // Stages, none reporting from inside. Measured shares (paper's run 90 s at
+  // 1 kHz; a 25-min real run at 100 Hz): loading the run 64 % / 29 %,
+  // building the problem 8 % / 1 %, the Fisher information 28 % / 70 %.
+  ShowProgress("observability: building the problem", 0.35);
   const RunProblem p = BuildRunProblem(run, data, layout, a.epoch_s, derivatives);
-  ShowProgress("observability: Fisher information", 0.5);
+  ShowProgress("observability: Fisher information", 0.4);
   const ObservabilityResult r = AnalyseObservability(run, p, theta, oo);
   EndProgress();
 
