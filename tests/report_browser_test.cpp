@@ -4,7 +4,8 @@
 // pixels of each canvas and records the result in #triadcal-status). The
 // failure cases prove the check can fail: a console error, a script error and
 // a blank chart (a residual series without values) each make it fail.
-// Skipped when chromium is absent. A screenshot is kept in
+// Skipped when chromium is absent (TRIADCAL_CHROMIUM names another browser
+// binary; set empty, it skips too). A screenshot is kept in
 // build/test-artifacts/report.png.
 #include <gtest/gtest.h>
 
