@@ -364,14 +364,31 @@
     (out.ranking || []).forEach(function (t) {
       if (t.note) hide.push(t.effect + ': ' + t.note);
     });
+    // The last round's candidates with some evidence (p < 0.05) that did not
+    // pass the selection threshold: present perhaps, too weak to add.
+    var tests = out.tests || [];
+    var last = tests.reduce(function (m, t) { return Math.max(m, t.round || 0); }, 0);
+    tests.forEach(function (t) {
+      if (t.round === last && !t.selected && isNum(t.p_value) && t.p_value < 0.05) {
+        hide.push(t.effect + ': some evidence in round ' + t.round + ' (p = ' + g(t.p_value, 2) +
+                  ', threshold ' + g(t.threshold, 2) + '), not selected');
+      }
+    });
+    var heldAfter = (out.after || {}).held || [];
+    if (heldAfter.length) {
+      hide.push('held at nominal (the run cannot determine them; an error there moves into the ' +
+                'other parameters): ' + heldAfter.join(', '));
+    }
     (out.notes || []).forEach(function (n) { hide.push(n); });
     if (out.after && out.after.residual && out.after.residual.structure) {
       hide.push('remaining structure: ' + out.after.residual.structure_summary);
     }
     var hs = section(p, 'What could hide',
-        'Effects this run could not test or tell apart; they may remain in the estimates.');
+        'Effects this run could not test or tell apart, near-misses of the last round, and ' +
+        'parameters held at nominal: they may remain in the estimates.');
     if (hide.length) hs.appendChild(el('ul', null, hide.map(function (x) { return el('li', {text: x}); })));
-    else hs.appendChild(el('p', {text: 'Every candidate was tested; none is left untested.'}));
+    else hs.appendChild(el('p', {text: 'Every candidate was tested, none came near the threshold ' +
+                                         'in the last round, and no parameter is held.'}));
 
     var b = out.before || {}, a = out.after || {};
     var ba = section(p, 'Before and after', 'effects after: ' + ((a.effects || []).join(', ') || 'none'));
