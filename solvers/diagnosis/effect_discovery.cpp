@@ -83,7 +83,8 @@ DiagnosisResult Diagnose(const RunDescription& run, const RunData& data,
   if (opt.fraction) {
     fit_opt.fraction = [&](double f) { opt.fraction(span_begin + (span_end - span_begin) * f); };
   }
-  double round_begin = 0.15, round_end = 0.9;
+  // Each round takes 60 % of what is left before 0.95 (the closing analysis).
+  double round_begin = 0.15, round_end = 0.15 + 0.6 * 0.8;
   say("fitting the declared model");
   BatchOptions first = fit_opt;
   res.before_layout = ParameterLayout();
@@ -98,7 +99,8 @@ DiagnosisResult Diagnose(const RunDescription& run, const RunData& data,
     std::vector<CandidateTest> tests;
     const double fit_share = (round_end - round_begin) / (candidates.size() + 1.0);
     for (Effect e : candidates) {
-      say("round " + std::to_string(round) + ": testing " + GetEffectSpec(e).name);
+      say("round " + std::to_string(round) + ": testing " + GetEffectSpec(e).name + " (" +
+          std::to_string(tests.size() + 1) + "/" + std::to_string(candidates.size()) + ")");
       span_begin = round_begin + fit_share * tests.size();
       span_end = span_begin + fit_share;
       const ParameterLayout aug(WithEffect(current, e));
@@ -143,7 +145,7 @@ DiagnosisResult Diagnose(const RunDescription& run, const RunData& data,
     fit = FitLayout(run, data, next, Embed(layout, fit.estimate.theta, next), held,
                     FreeNames(layout, held), fit_opt, true);
     round_begin = round_end;
-    round_end += 0.75 * (1.0 - round_end);
+    round_end += 0.6 * (0.95 - round_end);
     layout = next;
     held = fit.held;
     candidates.erase(std::find(candidates.begin(), candidates.end(), chosen));
