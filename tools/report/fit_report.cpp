@@ -96,8 +96,10 @@ void PrintParameterTable(const ParameterLayout& layout, const BatchResult& r,
   for (int i = 0; i < layout.size(); ++i) {
     const ParameterInfo& pi = layout.info(i);
     const double f = pi.si_per_unit;
-    const ValueText v = FormatWithSigma(r.estimate.theta[i] / f,
-                                        std::sqrt(std::max(0.0, r.estimate.cov(i, i))) / f);
+    // A held parameter's sigma is its pinning prior's, not an estimate: "-".
+    const double sigma =
+        rep.held.count(pi.name) ? 0.0 : std::sqrt(std::max(0.0, r.estimate.cov(i, i))) / f;
+    const ValueText v = FormatWithSigma(r.estimate.theta[i] / f, sigma);
     std::printf("%-26s %16s %10s %10.5g  %s%s\n", pi.name.c_str(), v.value.c_str(),
                 v.sigma.c_str(), r.initial.theta[i] / f, pi.unit.c_str(),
                 rep.held.count(pi.name)            ? "  (held at nominal)"
