@@ -62,6 +62,10 @@
     return {value: fixedNoMinusZero(Math.round(value / unit) * unit, 0),
             sigma: fixedNoMinusZero(Math.round(sigma / unit) * unit, 0)};
   }
+  // An estimate, or the prior's value of a held / not estimable parameter.
+  function pe(q) {
+    return q.estimable === false ? g(q.value, 6) + ' (not estimated)' : pm(q.value, q.sigma);
+  }
   function pm(value, sigma) {
     var f = fmt(value, sigma);
     return f.sigma === '-' ? f.value : f.value + ' \u00b1 ' + f.sigma;
@@ -407,7 +411,7 @@
         names.map(function (n) {
           var pb = (b.parameters || {})[n], pa = a.parameters[n];
           var eb = b.error_vs_truth && b.error_vs_truth[n], ea = a.error_vs_truth && a.error_vs_truth[n];
-          return [n, pb ? pm(pb.value, pb.sigma) : 'new', pm(pa.value, pa.sigma), pa.unit,
+          return [n, pb ? pe(pb) : 'new', pe(pa), pa.unit,
                   eb ? g(eb.error_in_sigma, 3) : '-', ea ? g(ea.error_in_sigma, 3) : '-'];
         })));
     residualCharts(p, b.residual_plot, 'before');
