@@ -1,5 +1,6 @@
 // `triadcal compare RUN.yaml -o OUT.json`: EKF, RTS smoother and batch solution
 // of the same run side by side, with their differences in sigma units.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -15,12 +16,13 @@
 #include "tools/commands.h"
 #include "tools/provenance.h"
 #include "tools/report/fit_report.h"
+#include "tools/report/value_format.h"
 
 namespace triadcal {
 namespace {
 
 struct CompareArgs {
-  std::string run_yaml, out_json, effects;
+  std::string run_yaml, out_json, report_html, effects;
   double epoch_s = kDefaultEpoch_s;
 };
 
@@ -29,6 +31,7 @@ double Seconds(std::chrono::steady_clock::time_point t0) {
 }
 
 int RunCompare(const CompareArgs& a) {
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html);
   CheckOutputPath(a.out_json);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
   CheckOverwrite(a.out_json);  // before the long work
@@ -36,7 +39,13 @@ int RunCompare(const CompareArgs& a) {
 
   FilterOptions fo;
   fo.epoch_s = a.epoch_s;
-  fo.progress = [](int pass, double f) { ShowProgress("compare: filter pass " + std::to_string(pass), f); };
+  // Progress: the filter's passes the first half, the batch the second.
+  StageProgress progress("compare: ");
+  const int passes = std::max(1, fo.smoother_iterations);
+  fo.progress = [&](int pass, double f) {
+    progress.Stage("filter pass " + std::to_string(pass));
+    progress.Fraction(0.5 * (pass - 1 + f) / passes);
+  };
   auto t0 = std::chrono::steady_clock::now();
   const FilterResult fr = RunFilterSmoother(run.description, run.data, layout, fo);
   const double filter_s = Seconds(t0);
@@ -45,7 +54,8 @@ int RunCompare(const CompareArgs& a) {
   bo.epoch_s = a.epoch_s;
   bo.init = BatchInit::kGiven;  // start the batch at the smoother's answer
   bo.init_theta = fr.rts.theta;
-  bo.progress = [](const std::string& s) { ShowProgress("compare: fit " + s, 0.0); };
+  bo.progress = [&](const std::string& s) { progress.Stage("fit " + s); };
+  bo.fraction = [&](double f) { progress.Fraction(0.5 + 0.5 * f); };
   t0 = std::chrono::steady_clock::now();
   BatchResult br = SolveBatch(run.description, run.data, layout, bo);
   br.initial = fr.rts;
@@ -67,7 +77,8 @@ int RunCompare(const CompareArgs& a) {
   nlohmann::json diff = nlohmann::json::object();
   double max_abs = 0.0;
   std::string max_name;
-  std::printf("%-26s %13s %13s %13s %10s %9s %9s  %s\n", "parameter", "EKF", "RTS", "batch",
+  // Each estimate to the digit of its own sigma; the batch's sigma printed.
+  std::printf("%-26s %16s %16s %16s %10s %9s %9s  %s\n", "parameter", "EKF", "RTS", "batch",
               "sigma", "RTS-EKF", "bat-RTS", "unit");
   for (int i = 0; i < layout.size(); ++i) {
     const ParameterInfo& p = layout.info(i);
@@ -82,13 +93,19 @@ int RunCompare(const CompareArgs& a) {
       max_abs = std::abs(d_br);
       max_name = p.name;
     }
-    std::printf("%-26s %13.6g %13.6g %13.6g %10.3g %9.3f %9.3f  %s%s\n", p.name.c_str(),
-                fr.ekf.theta[i] / f, fr.rts.theta[i] / f, br.estimate.theta[i] / f, s / f, d_re,
-                d_br, p.unit.c_str(), rep.not_estimable.count(p.name) ? " (not estimable)" : "");
+    auto own = [&](const Estimate& e) {
+      return FormatWithSigma(e.theta[i] / f, std::sqrt(std::max(e.cov(i, i), 0.0)) / f);
+    };
+    const ValueText b = FormatWithSigma(br.estimate.theta[i] / f, s / f);
+    std::printf("%-26s %16s %16s %16s %10s %9.3f %9.3f  %s%s\n", p.name.c_str(),
+                own(fr.ekf).value.c_str(), own(fr.rts).value.c_str(), b.value.c_str(),
+                b.sigma.c_str(), d_re, d_br, p.unit.c_str(),
+                rep.not_estimable.count(p.name) ? " (not estimable)" : "");
   }
   out["differences_in_sigma"] = diff;
   out["largest_batch_minus_rts"] = {{"parameter", max_name}, {"sigma", max_abs}};
   WriteJson(out, a.out_json);
+  WriteReportIfAsked(a.report_html, out, a.out_json);
   std::printf("differences in units of the batch sigma; largest |batch - RTS| among estimable: "
               "%.3f (%s)\n",
               max_abs, max_name.c_str());
@@ -105,6 +122,8 @@ Command AddCompareCommand(CLI::App& app) {
   c.app = app.add_subcommand("compare", "EKF, RTS smoother and batch side by side");
   c.app->add_option("run", a->run_yaml, "run description (run.yaml)")->required();
   c.app->add_option("-o,--output", a->out_json, "output JSON")->required();
+  c.app->add_option("--report", a->report_html,
+                    "also write the HTML report of OUT (one self-contained file)");
   c.app->add_option("--effects", a->effects, "catalogue effects to estimate too, e.g. a,b");
   c.app->add_option("--epoch-s", a->epoch_s, "interval between epochs [s]")->capture_default_str();
   c.run = [a] { return RunCompare(*a); };

@@ -7,7 +7,7 @@
 //   - sigma against the profile's periods and amplitudes (a small grid);
 //   - the shortest duration that reaches a target sigma (--target K=0.5);
 //   - the scenario's design (the paper's 1.5 min) against the static method
-//     (40 min) as a table, and all of it as a log-log SVG plot.
+//     (40 min) as a table; the curves are drawn by the HTML report (--report).
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -30,7 +30,7 @@ namespace triadcal {
 namespace {
 
 struct DesignArgs {
-  std::string scenario, out_json, plot_svg, effects;
+  std::string scenario, out_json, report_html, effects;
   std::string durations = "15,30,60,90,300,600,2400";
   std::string periods, amplitudes;  // default: the scenario's x 0.5, 1, 2 / x 0.25, 0.5, 1
   std::string targets = "K=0.5";
@@ -94,14 +94,6 @@ std::vector<DesignTarget> ParseTargets(const std::string& text, const ParameterL
   return out;
 }
 
-std::string DefaultSvgPath(const std::string& out_json) {
-  const std::string ext = ".json";
-  if (out_json.size() > ext.size() &&
-      out_json.compare(out_json.size() - ext.size(), ext.size(), ext) == 0) {
-    return out_json.substr(0, out_json.size() - ext.size()) + ".svg";
-  }
-  return out_json + ".svg";
-}
 
 // The flags of the DesignStudyOptions settings, for errors found below.
 const std::map<std::string, std::string>& DesignFlags() {
@@ -133,6 +125,7 @@ DesignStudyOptions StudyOptions(const DesignArgs& a, const ParameterLayout& layo
 }
 
 int RunDesign(const DesignArgs& a) {
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html);
   const auto t_start = std::chrono::steady_clock::now();
   const Scenario s = LoadScenario(a.scenario);
   RecordInput("scenario", a.scenario);
@@ -145,17 +138,14 @@ int RunDesign(const DesignArgs& a) {
 
     const DesignReportSettings settings{a.scenario, a.effects, a.epoch_s, a.static_positions};
     nlohmann::json out = DesignJson(s, layout, options, r, settings);
-    const std::string svg = DesignPlotSvg(s, layout, r, settings);
-    const std::string svg_path = a.plot_svg.empty() ? DefaultSvgPath(a.out_json) : a.plot_svg;
-    out["plot"] = svg_path;
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
     out["time_s"] = seconds;
-    WriteFileAtomically(svg_path, svg);
     WriteJson(out, a.out_json);
+    WriteReportIfAsked(a.report_html, out, a.out_json);
 
     PrintDesign(s, layout, options, r, settings);
-    std::printf("time %.1f s; wrote %s and %s\n", seconds, a.out_json.c_str(), svg_path.c_str());
+    std::printf("time %.1f s; wrote %s\n", seconds, a.out_json.c_str());
     return 0;
   });
 }
@@ -172,7 +162,8 @@ Command AddDesignCommand(CLI::App& app) {
   c.app->add_option("scenario", a->scenario, "SCENARIO.yaml (profile, truth, declared noise)")
       ->required();
   c.app->add_option("-o,--output", a->out_json, "output JSON")->required();
-  c.app->add_option("--plot", a->plot_svg, "SVG plot (default: OUT with .svg)");
+  c.app->add_option("--report", a->report_html,
+                    "also write the HTML report of OUT (one self-contained file)");
   c.app->add_option("--durations", a->durations, "run durations [s], comma-separated")
       ->capture_default_str();
   c.app->add_option("--periods", a->periods,

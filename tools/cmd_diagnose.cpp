@@ -17,12 +17,14 @@
 #include "tools/provenance.h"
 #include "tools/diagnose_job.h"
 #include "tools/report/fit_report.h"
+#include "tools/report/residual_plot_json.h"
+#include "tools/report/value_format.h"
 
 namespace triadcal {
 namespace {
 
 struct DiagnoseArgs {
-  std::string run_yaml, out_json, truth_json, candidates;
+  std::string run_yaml, out_json, report_html, truth_json, candidates;
   double alpha = 0.01;
   int max_effects = 4;
   double epoch_s = kDefaultEpoch_s;
@@ -35,6 +37,7 @@ std::map<std::string, double> ReadTruth(const std::string& path) {
 }
 
 int RunDiagnose(const DiagnoseArgs& a) {
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html);
   CheckOutputPath(a.out_json);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
   CheckOverwrite(a.out_json);  // before the long work
@@ -47,7 +50,9 @@ int RunDiagnose(const DiagnoseArgs& a) {
   // the noise absorb the very structure under test).
   opt.fit.estimate_noise = false;
   opt.candidates = ParseEffectList(a.candidates, "--candidates");
-  opt.progress = [](const std::string& s) { ShowProgress("diagnose: " + s, 0.0); };
+  StageProgress progress("diagnose: ");
+  opt.progress = [&](const std::string& s) { progress.Stage(s); };
+  opt.fraction = [&](double f) { progress.Fraction(f); };
   if (!(a.alpha > 0.0 && a.alpha < 1.0)) throw InputError("--alpha: must be in (0, 1)");
   std::map<std::string, double> truth;
   // Read the truth first: a bad truth file must fail before the work.
@@ -61,6 +66,7 @@ int RunDiagnose(const DiagnoseArgs& a) {
 
   const nlohmann::json out = DiagnoseJson(a.run_yaml, a.alpha, d, tp);
   WriteJson(out, a.out_json);
+  WriteReportIfAsked(a.report_html, out, a.out_json);
 
   // The readable report.
   std::printf("diagnose: %s\n", d.verdict.c_str());
@@ -91,7 +97,7 @@ int RunDiagnose(const DiagnoseArgs& a) {
               d.after.chi2_per_dof);
 
   const FitReport ra = MakeFitReport(d.after_layout, d.after);
-  std::printf("\n%-26s %13s %9s %13s %9s %8s", "parameter", "before", "sigma", "after", "sigma",
+  std::printf("\n%-26s %16s %9s %16s %9s %8s", "parameter", "before", "sigma", "after", "sigma",
               "shift/s");
   if (tp) std::printf(" %9s %9s", "err/s bef", "err/s aft");
   std::printf("  unit\n");
@@ -105,8 +111,9 @@ int RunDiagnose(const DiagnoseArgs& a) {
     if (ib >= 0) {
       const double vb = d.before.estimate.theta[ib] / f;
       const double sb = std::sqrt(std::max(0.0, d.before.estimate.cov(ib, ib))) / f;
-      std::printf("%-26s %13.6g %9.3g %13.6g %9.3g %8.2f", p.name.c_str(), vb, sb, va, sa,
-                  held ? 0.0 : (va - vb) / sa);
+      const ValueText tb = FormatWithSigma(vb, sb), ta = FormatWithSigma(va, sa);
+      std::printf("%-26s %16s %9s %16s %9s %8.2f", p.name.c_str(), tb.value.c_str(),
+                  tb.sigma.c_str(), ta.value.c_str(), ta.sigma.c_str(), held ? 0.0 : (va - vb) / sa);
       if (tp) {
         auto it = truth.find(p.name);
         if (it != truth.end() && !held) {
@@ -116,7 +123,9 @@ int RunDiagnose(const DiagnoseArgs& a) {
         }
       }
     } else {
-      std::printf("%-26s %13s %9s %13.6g %9.3g %8s", p.name.c_str(), "-", "-", va, sa, "new");
+      const ValueText ta = FormatWithSigma(va, sa);
+      std::printf("%-26s %16s %9s %16s %9s %8s", p.name.c_str(), "-", "-", ta.value.c_str(),
+                  ta.sigma.c_str(), "new");
       if (tp) {
         auto it = truth.find(p.name);
         if (it != truth.end()) std::printf(" %9s %9.2f", "-", (va - it->second) / sa);
@@ -138,6 +147,8 @@ Command AddDiagnoseCommand(CLI::App& app) {
       "diagnose", "Fit, trace the residual to missing effects, add them, report before/after");
   c.app->add_option("run", a->run_yaml, "run description (run.yaml)")->required();
   c.app->add_option("-o,--output", a->out_json, "output JSON")->required();
+  c.app->add_option("--report", a->report_html,
+                    "also write the HTML report of OUT (one self-contained file)");
   c.app->add_option("--truth", a->truth_json, "truth.json of a simulated run: errors before/after");
   c.app->add_option("--candidates", a->candidates,
                     "effects to test (default: the whole catalogue), e.g. a,b");

@@ -1,5 +1,6 @@
 // `triadcal filter RUN.yaml -o OUT.json [--series FILE.csv]`: the paper's EKF
 // with the RTS smoother (solvers/estimation/kalman_smoother.h).
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -18,12 +19,13 @@
 #include "tools/command_util.h"
 #include "tools/commands.h"
 #include "tools/provenance.h"
+#include "tools/report/value_format.h"
 
 namespace triadcal {
 namespace {
 
 struct FilterArgs {
-  std::string run_yaml, out_json, series_csv, effects;
+  std::string run_yaml, out_json, report_html, series_csv, effects;
   double epoch_s = kDefaultEpoch_s;
   double rate_window_s = 0.1;
   int iterations = 2;
@@ -61,6 +63,7 @@ std::string SeriesCsv(const ParameterLayout& layout, const FilterResult& r) {
 }
 
 int RunFilter(const FilterArgs& a) {
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html);
   const auto t0 = std::chrono::steady_clock::now();
   CheckOutputPath(a.out_json);
   if (!a.series_csv.empty()) CheckOutputPath(a.series_csv);
@@ -72,8 +75,10 @@ int RunFilter(const FilterArgs& a) {
   opt.derivatives.half_window_s = a.rate_window_s;
   opt.smoother_iterations = a.iterations;
   opt.keep_series = !a.series_csv.empty();
-  opt.progress = [](int pass, double f) {
-    ShowProgress("filter: pass " + std::to_string(pass), f);
+  const int passes = std::max(1, a.iterations);
+  opt.progress = [passes](int pass, double f) {
+    ShowProgress("filter: pass " + std::to_string(pass) + "/" + std::to_string(passes),
+                 (pass - 1 + f) / passes);
   };
   if (a.iterations < 1) throw InputError("--iterations: must be >= 1");
   // The same hold decision as fit: parameters the run's motion does not
@@ -138,18 +143,20 @@ int RunFilter(const FilterArgs& a) {
   out["samples"] = run.data.size();
   out["time_s"] = seconds;
   WriteJson(out, a.out_json);
+  WriteReportIfAsked(a.report_html, out, a.out_json);
   if (!a.series_csv.empty()) WriteFileAtomically(a.series_csv, SeriesCsv(layout, r));
 
   std::printf("filter: %zu samples, %d epochs of %.3g s, %d pass(es), %.2f s\n",
               run.data.size(), r.epochs, a.epoch_s, r.passes, seconds);
-  std::printf("%-26s %14s %10s %14s %10s  %s\n", "parameter", "EKF", "sigma", "RTS", "sigma",
+  std::printf("%-26s %16s %10s %16s %10s  %s\n", "parameter", "EKF", "sigma", "RTS", "sigma",
               "unit");
   for (int i = 0; i < layout.size(); ++i) {
     const ParameterInfo& p = layout.info(i);
     const double f = p.si_per_unit;
-    std::printf("%-26s %14.5g %10.3g %14.5g %10.3g  %s%s\n", p.name.c_str(), r.ekf.theta[i] / f,
-                std::sqrt(r.ekf.cov(i, i)) / f, r.rts.theta[i] / f, std::sqrt(r.rts.cov(i, i)) / f,
-                p.unit.c_str(),
+    const ValueText e = FormatWithSigma(r.ekf.theta[i] / f, std::sqrt(r.ekf.cov(i, i)) / f);
+    const ValueText s = FormatWithSigma(r.rts.theta[i] / f, std::sqrt(r.rts.cov(i, i)) / f);
+    std::printf("%-26s %16s %10s %16s %10s  %s%s\n", p.name.c_str(), e.value.c_str(),
+                e.sigma.c_str(), s.value.c_str(), s.sigma.c_str(), p.unit.c_str(),
                 pinned.count(p.name)     ? "  (held at nominal)"
                 : held_set.count(p.name) ? "  (not estimable: prior value)"
                                          : "");
@@ -192,6 +199,8 @@ Command AddFilterCommand(CLI::App& app) {
   c.app = app.add_subcommand("filter", "EKF + Rauch-Tung-Striebel smoother (the paper's filter)");
   c.app->add_option("run", args->run_yaml, "run description (run.yaml)")->required();
   c.app->add_option("-o,--output", args->out_json, "output JSON")->required();
+  c.app->add_option("--report", args->report_html,
+                    "also write the HTML report of OUT (one self-contained file)");
   c.app->add_option("--series", args->series_csv,
                     "write forward-pass estimates, sigma and innovations against time (CSV)");
   c.app->add_option("--epoch-s", args->epoch_s, "interval between measurement epochs [s]")

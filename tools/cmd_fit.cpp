@@ -7,6 +7,7 @@
 
 #include "core/model/errors.h"
 #include "core/io/file_util.h"
+#include "solvers/diagnosis/residual_analysis.h"
 #include "solvers/estimation/batch_solver.h"
 #include "tools/report/estimate_json.h"
 #include "solvers/estimation/separability.h"
@@ -15,24 +16,29 @@
 #include "tools/commands.h"
 #include "tools/provenance.h"
 #include "tools/fit_job.h"
+#include "tools/report/html_report.h"
 #include "tools/report/fit_report.h"
+#include "tools/report/residual_plot_json.h"
 
 namespace triadcal {
 namespace {
 
 struct FitArgs {
-  std::string run_yaml, out_json, residuals_csv;
+  std::string run_yaml, out_json, report_html, residuals_csv;
   FitSettings fit;
 };
 
 int RunFit(const FitArgs& a) {
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html);
   CheckFitSettings(a.fit);
   CheckOutputPath(a.out_json);
   if (!a.residuals_csv.empty()) CheckOutputPath(a.residuals_csv);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
   CheckOverwrite(a.out_json);  // before the long work
-  const FitOutcome f = FitRun(a.fit, a.run_yaml, run,
-                              [](const std::string& s) { ShowProgress("fit: " + s, 0.0); });
+  StageProgress progress("fit: ");
+  const FitOutcome f = FitRun(
+      a.fit, a.run_yaml, run, [&](const std::string& s) { progress.Stage(s); },
+      [&](double x) { progress.Fraction(x); });
   EndProgress();
   const ParameterLayout& layout = f.layout;
   const BatchResult& r = f.result;
@@ -40,6 +46,7 @@ int RunFit(const FitArgs& a) {
   const std::string warning = NoiseWarning(a.run_yaml, run, r);
   if (!warning.empty()) std::fprintf(stderr, "triadcal: warning: %s\n", warning.c_str());
   WriteJson(f.json, a.out_json);
+  WriteReportIfAsked(a.report_html, f.json, a.out_json);
   if (!a.residuals_csv.empty()) WriteFileAtomically(a.residuals_csv, ResidualsCsv(r));
 
   std::printf("fit: %zu samples, %d epochs, %s\n", run.data.size(), r.epochs,
@@ -71,6 +78,8 @@ Command AddFitCommand(CLI::App& app) {
   c.app = app.add_subcommand("fit", "Batch least-squares solution of the whole run (Ceres)");
   c.app->add_option("run", a->run_yaml, "run description (run.yaml)")->required();
   c.app->add_option("-o,--output", a->out_json, "output JSON")->required();
+  c.app->add_option("--report", a->report_html,
+                    "also write the HTML report of OUT (one self-contained file)");
   AddFitOptions(c.app, &a->fit);
   c.app->add_option("--threads", a->fit.threads, "threads (0: all cores)")->capture_default_str();
   c.app->add_option("--residuals", a->residuals_csv, "write the residuals per epoch (CSV)");

@@ -32,7 +32,7 @@ namespace triadcal {
 namespace {
 
 struct MonteCarloArgs {
-  std::string scenario, out_json, effects, shard;
+  std::string scenario, out_json, report_html, effects, shard;
   std::string estimators = "ekf,rts,batch";
   int runs = 100;
   std::uint64_t first_seed = 1;
@@ -44,6 +44,7 @@ struct MonteCarloArgs {
 
 int RunMonteCarloCommand(const MonteCarloArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html);
   if (a.runs < 1) throw InputError("-n: at least 1 run, got " + std::to_string(a.runs));
   if (!(a.tolerance > 0)) throw InputError("--tolerance: must be > 0");
   const Shard shard = ParseShard(a.shard);
@@ -122,6 +123,7 @@ int RunMonteCarloCommand(const MonteCarloArgs& a) {
                                        runs);
   }
   WriteJson(out, a.out_json);
+  WriteReportIfAsked(a.report_html, out, a.out_json);
   PrintMonteCarlo(mine_settings, r, out);
   if (MpiSize() > 1) std::printf("%d MPI ranks of %d threads each\n", MpiSize(), opt.threads);
   if (!shard.whole()) {
@@ -145,6 +147,8 @@ Command AddMonteCarloCommand(CLI::App& app) {
       "montecarlo", "N simulated runs through EKF, RTS and batch: error scatter against sigma and CRB");
   c.app->add_option("scenario", a->scenario, "SCENARIO.yaml")->required();
   c.app->add_option("-o,--output", a->out_json, "output JSON")->required();
+  c.app->add_option("--report", a->report_html,
+                    "also write the HTML report of OUT (one self-contained file)");
   c.app->add_option("-n,--runs", a->runs, "number of runs (seeds first-seed .. first-seed + n - 1)")
       ->capture_default_str();
   c.app->add_option("--first-seed", a->first_seed, "first seed")->capture_default_str();

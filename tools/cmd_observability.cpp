@@ -29,7 +29,7 @@ namespace triadcal {
 namespace {
 
 struct ObservabilityArgs {
-  std::string input, out_json, at, effects;
+  std::string input, out_json, report_html, at, effects;
   double epoch_s = kDefaultEpoch_s, rate_window_s = 0.1;
   double unobservable_below = ObservabilityThresholds{}.unobservable;
   double weak_below = ObservabilityThresholds{}.weak;
@@ -49,6 +49,7 @@ bool IsScenario(const std::string& path) {
 }
 
 int RunObservability(const ObservabilityArgs& a) {
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html);
   if (!(a.unobservable_below > 0.0) || !(a.weak_below >= a.unobservable_below)) {
     throw InputError("--unobservable-below, --weak-below: expected 0 < unobservable <= weak");
   }
@@ -60,6 +61,7 @@ int RunObservability(const ObservabilityArgs& a) {
   derivatives.half_window_s = a.rate_window_s;
 
   // The run (recorded or simulated), its description and the point of evaluation.
+  ShowProgress("observability: loading the run", 0.0);
   RunDescription run;
   RunData data;
   Eigen::VectorXd theta;
@@ -84,8 +86,12 @@ int RunObservability(const ObservabilityArgs& a) {
     SetFromFileUnits(layout, ReadParameterValues(a.at), &theta);
     at = a.at;
   }
+  // Stages, none reporting from inside. Measured shares (paper's run 90 s at
+  // 1 kHz; a 25-min real run at 100 Hz): loading the run 64 % / 29 %,
+  // building the problem 8 % / 1 %, the Fisher information 28 % / 70 %.
+  ShowProgress("observability: building the problem", 0.35);
   const RunProblem p = BuildRunProblem(run, data, layout, a.epoch_s, derivatives);
-  ShowProgress("observability: Fisher information", 0.0);
+  ShowProgress("observability: Fisher information", 0.4);
   const ObservabilityResult r = AnalyseObservability(run, p, theta, oo);
   EndProgress();
 
@@ -102,6 +108,7 @@ int RunObservability(const ObservabilityArgs& a) {
                      {"declared_noise_mV", run.noise_mV},
                      {"declared_angle_noise_arcsec", run.angle_noise_rad / kArcsecToRad}};
   WriteJson(out, a.out_json);
+  WriteReportIfAsked(a.report_html, out, a.out_json);
 
   std::printf("observability: %s, %zu samples over %.4g s, %zu epochs; evaluated at %s; %.2f s\n",
               source.c_str(), r.samples, r.duration_s, r.epochs, at.c_str(), r.seconds);
@@ -121,6 +128,8 @@ Command AddObservabilityCommand(CLI::App& app) {
   c.app->add_option("input", a->input, "RUN.yaml (recorded motion) or SCENARIO.yaml (profile)")
       ->required();
   c.app->add_option("-o,--output", a->out_json, "output JSON")->required();
+  c.app->add_option("--report", a->report_html,
+                    "also write the HTML report of OUT (one self-contained file)");
   c.app->add_option("--at", a->at,
                     "evaluate at these parameters (fit/filter OUT or truth.json) instead of the "
                     "nominal values (run) or the truth (scenario)");

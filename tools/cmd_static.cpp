@@ -18,12 +18,13 @@
 #include "tools/command_util.h"
 #include "tools/commands.h"
 #include "tools/provenance.h"
+#include "tools/report/value_format.h"
 
 namespace triadcal {
 namespace {
 
 struct StaticArgs {
-  std::string run_yaml, out_json, reference = "auto", fix;
+  std::string run_yaml, out_json, report_html, reference = "auto", fix;
   double placement_sigma_deg = 0.0;
   StaticOptions options;
 };
@@ -170,8 +171,9 @@ void PrintReport(const LoadedRun& run, const StaticResult& r) {
       continue;
     }
     const double decl = std::sqrt(r.cov_declared(i, i)) / f;
-    std::printf("%-10s %14.6g %11.3g %11.3g %11.3g  %-6s%s\n", p.name.c_str(), r.theta[i] / f,
-                std::sqrt(r.cov(i, i)) / f, decl, decl * scatter, p.unit.c_str(),
+    const ValueText v = FormatWithSigma(r.theta[i] / f, std::sqrt(r.cov(i, i)) / f);
+    std::printf("%-10s %14s %11s %11.3g %11.3g  %-6s%s\n", p.name.c_str(), v.value.c_str(),
+                v.sigma.c_str(), decl, decl * scatter, p.unit.c_str(),
                 weak.count(p.name) ? " NOT SEPARABLE (prior value)" : "");
   }
   std::printf("sigma: %s (chi2/dof = %.3g on %.3g dof; reported = declared x %.3g)\n",
@@ -228,6 +230,7 @@ StaticReference Reference(const StaticArgs& a, const LoadedRun& run) {
 }
 
 int RunStatic(const StaticArgs& a) {
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html);
   StaticOptions opt = a.options;
   opt.fixed = SplitList(a.fix);
   if (!(a.placement_sigma_deg >= 0.0)) throw InputError("--placement-sigma-deg: must be >= 0");
@@ -237,7 +240,9 @@ int RunStatic(const StaticArgs& a) {
   const StaticResult r = WithFlags(StaticFlags(), [&] {
     return SolveStatic(run.description, run.data, Reference(a, run), opt);
   });
-  WriteJson(StaticJson(a, r, run.data.size()), a.out_json);
+  const nlohmann::json out = StaticJson(a, r, run.data.size());
+  WriteJson(out, a.out_json);
+  WriteReportIfAsked(a.report_html, out, a.out_json);
   PrintReport(run, r);
   std::printf("wrote %s\n", a.out_json.c_str());
   return 0;
@@ -252,6 +257,8 @@ Command AddStaticCommand(CLI::App& app) {
       "static", "Standard static method: still positions averaged, readings model fitted");
   c.app->add_option("run", a->run_yaml, "run description (run.yaml)")->required();
   c.app->add_option("-o,--output", a->out_json, "output JSON")->required();
+  c.app->add_option("--report", a->report_html,
+                    "also write the HTML report of OUT (one self-contained file)");
   c.app->add_option("--reference", a->reference,
                     "orientation of the positions: auto (angles, else labels, else none), "
                     "angles, labels, or none (gravity-norm fit)")

@@ -1,6 +1,9 @@
 #include "tools/command_util.h"
 
+#include <algorithm>
+#include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <sstream>
@@ -11,6 +14,7 @@
 #include "core/io/run_io.h"
 #include "core/io/run_description_io.h"
 #include "tools/provenance.h"
+#include "tools/report/html_report.h"
 
 namespace triadcal {
 
@@ -63,24 +67,68 @@ std::vector<Effect> ParseEffectList(const std::string& list, const RunData& data
 }
 
 namespace {
-bool& ProgressShown() {
-  static bool shown = false;
-  return shown;
+
+struct ProgressState {
+  bool quiet = false;
+  bool shown = false;  // a terminal line is on screen
+  bool started = false;
+  std::chrono::steady_clock::time_point last;
+};
+
+ProgressState& Progress() {
+  static ProgressState state;
+  return state;
 }
+
+double PipedIntervalSeconds() {
+  const char* env = std::getenv("TRIADCAL_PROGRESS_INTERVAL_S");
+  if (env && *env) {
+    char* end = nullptr;
+    const double v = std::strtod(env, &end);
+    if (end != env && v >= 0.0) return v;
+  }
+  return 5.0;
+}
+
 }  // namespace
 
+void SetQuiet(bool quiet) { Progress().quiet = quiet; }
+
 void ShowProgress(const std::string& what, double fraction) {
-  if (!isatty(fileno(stderr))) return;
-  std::fprintf(stderr, "\r%s %3.0f%%", what.c_str(), 100.0 * fraction);
+  ProgressState& p = Progress();
+  if (p.quiet) return;
+  const auto now = std::chrono::steady_clock::now();
+  const bool tty = isatty(fileno(stderr));
+  if (!p.started) {
+    p.started = true;
+    // Piped: the first line after one interval, so short commands stay silent.
+    p.last = tty ? now - std::chrono::seconds(1) : now;
+  }
+  const double since = std::chrono::duration<double>(now - p.last).count();
+  char pct[16] = "";
+  if (fraction >= 0.0) {
+    std::snprintf(pct, sizeof(pct), "  %3.0f%%", 100.0 * std::min(1.0, fraction));
+  }
+  if (tty) {
+    if (since < 0.1) return;
+    std::fprintf(stderr, "\r%-72.72s%s", what.c_str(), pct);
+    p.shown = true;
+  } else {
+    if (since < PipedIntervalSeconds()) return;
+    std::fprintf(stderr, "%s%s\n", what.c_str(), pct);
+  }
   std::fflush(stderr);
-  ProgressShown() = true;
+  p.last = now;
 }
 
 void EndProgress() {
-  if (ProgressShown()) {
-    std::fprintf(stderr, "\r%60s\r", "");
-    ProgressShown() = false;
+  ProgressState& p = Progress();
+  if (p.shown) {
+    std::fprintf(stderr, "\r%80s\r", "");
+    std::fflush(stderr);
+    p.shown = false;
   }
+  p.started = false;
 }
 
 void CheckOutputPath(const std::string& path) {
@@ -97,6 +145,16 @@ void WriteJson(const nlohmann::json& j, const std::string& path) {
   nlohmann::json stamped = j;
   stamped["provenance"] = CurrentProvenance();
   WriteFileAtomically(path, stamped.dump(2) + "\n");
+}
+
+void WriteReportIfAsked(const std::string& report_html, const nlohmann::json& out,
+                        const std::string& out_json) {
+  if (report_html.empty()) return;
+  ReportInput in;
+  in.name = std::filesystem::path(out_json).filename().string();
+  in.out = out;
+  WriteHtmlReport({in}, report_html);
+  std::printf("wrote %s\n", report_html.c_str());
 }
 
 }  // namespace triadcal

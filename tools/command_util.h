@@ -3,7 +3,9 @@
 #pragma once
 
 #include <map>
+#include <algorithm>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -57,9 +59,38 @@ std::vector<Effect> ParseEffectList(const std::string& list, const RunData& data
 // not writable: InputError("PATH: cannot write (folder missing or not writable)").
 void CheckOutputPath(const std::string& path);
 
-// A progress line on stderr ("filter: pass 1/2  37%"), only on a terminal.
+// Progress on stderr ("fit: relinearising pass 2  57%"). On a terminal one
+// line rewritten in place (at most 10 times a second); otherwise (piped, in
+// a log) one line every few seconds (TRIADCAL_PROGRESS_INTERVAL_S, default
+// 5), each ending in a newline. Nothing with SetQuiet(true) (`--quiet`).
+// A negative fraction prints the stage without a percentage.
 void ShowProgress(const std::string& what, double fraction);
 void EndProgress();
+void SetQuiet(bool quiet);
+
+// One progress line from a stage text and a fraction that solvers report
+// through separate callbacks (e.g. BatchOptions::progress and ::fraction).
+class StageProgress {
+ public:
+  explicit StageProgress(std::string prefix) : prefix_(std::move(prefix)) {}
+  void Stage(const std::string& stage) {
+    stage_ = stage;
+    ShowProgress(prefix_ + stage_, fraction_);
+  }
+  void Fraction(double fraction) {
+    fraction_ = std::max(fraction_, fraction);  // estimates never step back
+    ShowProgress(prefix_ + stage_, fraction_);
+  }
+
+ private:
+  std::string prefix_, stage_;
+  double fraction_ = 0.0;
+};
+
+// `--report FILE` of the long commands: the HTML report of `out` (to be
+// written as out_json) into report_html; nothing when report_html is empty.
+void WriteReportIfAsked(const std::string& report_html, const nlohmann::json& out,
+                        const std::string& out_json);
 
 // Adds "provenance" (tools/provenance.h), refuses to replace an output of
 // other inputs (CheckOverwrite), serialises with 2-space indentation and

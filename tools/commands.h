@@ -29,5 +29,6 @@ Command AddMonteCarloCommand(CLI::App& app);  // Monte Carlo against the CRB (cm
 Command AddExportCommand(CLI::App& app);  // calibration -> C99 code or matrices (cmd_export.cpp)
 Command AddBatchCommand(CLI::App& app);  // a manifest of runs, filed by serial (cmd_batch.cpp)
 Command AddMergeCommand(CLI::App& app);  // shards of montecarlo/batch -> one output (cmd_merge.cpp)
+Command AddReportCommand(CLI::App& app);  // HTML report from OUT files (cmd_report.cpp)
 
 }  // namespace triadcal

@@ -4,6 +4,7 @@
 
 #include "tools/report/estimate_json.h"
 #include "tools/report/fit_report.h"
+#include "tools/report/residual_plot_json.h"
 
 namespace triadcal {
 namespace {
@@ -18,6 +19,7 @@ nlohmann::json StateJson(const ParameterLayout& layout, const BatchResult& r,
   j["held"] = r.held;
   j["chi2_per_dof"] = r.chi2_per_dof;
   j["residual"] = ResidualReportJson(rr);
+  j["residual_plot"] = ResidualPlotJson(rr);  // thinned series and spectrum for the report
   nlohmann::json rms = nlohmann::json::object();
   nlohmann::json white = nlohmann::json::object();
   for (const ChannelReport& c : rr.channels) {

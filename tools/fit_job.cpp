@@ -3,6 +3,8 @@
 #include <cstdio>
 
 #include "core/model/errors.h"
+#include "solvers/diagnosis/residual_analysis.h"
+#include "tools/report/residual_plot_json.h"
 
 namespace triadcal {
 
@@ -56,7 +58,8 @@ int FitExitStatus(const FitSettings& s, const std::string& run_yaml, const Batch
 }
 
 FitOutcome FitRun(const FitSettings& a, const std::string& run_yaml, const LoadedRun& run,
-                  const std::function<void(const std::string&)>& progress) {
+                  const std::function<void(const std::string&)>& progress,
+                  const std::function<void(double)>& fraction) {
   CheckFitSettings(a);
   FitOutcome f;
   f.layout = ParameterLayout(ParseEffectList(a.effects, run.data));
@@ -73,6 +76,7 @@ FitOutcome FitRun(const FitSettings& a, const std::string& run_yaml, const Loade
   opt.holding.hold = SplitList(a.hold);
   opt.holding.free = SplitList(a.free);
   opt.progress = progress;
+  opt.fraction = fraction;
   f.result = SolveBatch(run.description, run.data, f.layout, opt);
   f.report = MakeFitReport(f.layout, f.result);
   f.json = FitJson(f.layout, f.result, f.report, a.correlations);
@@ -82,6 +86,11 @@ FitOutcome FitRun(const FitSettings& a, const std::string& run_yaml, const Loade
   f.json["settings"]["init"] = a.init;
   f.json["settings"]["effects"] = a.effects;
   f.json["settings"]["robust_loss"] = a.robust.empty() ? "none" : a.robust;
+  // What the residual holds (whiteness, peaks) and, thinned, the residual
+  // itself and its spectrum: what the HTML report draws.
+  const ResidualReport rr = AnalyzeResiduals(run.description, run.data, f.layout, f.result);
+  f.json["residual_analysis"] = ResidualReportJson(rr);
+  f.json["residual_plot"] = ResidualPlotJson(rr);
   return f;
 }
 

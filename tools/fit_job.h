@@ -38,8 +38,10 @@ struct FitOutcome {
 void CheckFitSettings(const FitSettings& s);
 
 // Fits `run` (read from run_yaml); progress lines go to `progress` (may be empty).
+// fraction (may be empty) gets the fraction of the work done.
 FitOutcome FitRun(const FitSettings& s, const std::string& run_yaml, const LoadedRun& run,
-                  const std::function<void(const std::string&)>& progress);
+                  const std::function<void(const std::string&)>& progress,
+                  const std::function<void(double)>& fraction = nullptr);
 
 // The warning line when the declared noise is not what the residuals hold
 // ("" when it is, or when the run asked for noise_mV: auto).

@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include "core/model/errors.h"
+#include "tools/command_util.h"
 #include "tools/commands.h"
 #include "tools/provenance.h"
 #include "tools/distribution/mpi_context.h"
@@ -34,11 +35,14 @@ int main(int argc, char** argv) {
       triadcal::AddExportCommand(app),
       triadcal::AddBatchCommand(app),
       triadcal::AddMergeCommand(app),
+      triadcal::AddReportCommand(app),
   };
 
+  bool quiet = false;
   for (const triadcal::Command& c : commands) {
     c.app->add_flag("--force", triadcal::ForceOverwrite(),
                     "replace outputs that hold results of other inputs");
+    c.app->add_flag("-q,--quiet", quiet, "no progress lines on stderr");
   }
   triadcal::SetCommandLine(argc, argv);
   try {
@@ -53,6 +57,7 @@ int main(int argc, char** argv) {
       // other command runs once, on rank 0.
       const std::string name = c.app->get_name();
       if (!triadcal::MpiRoot() && name != "montecarlo" && name != "batch") return 0;
+      triadcal::SetQuiet(quiet);
       return c.run();
     }
   } catch (const triadcal::InputError& e) {

@@ -89,8 +89,16 @@ DiagnosisResult Diagnose(const RunDescription& run, const RunData& data,
     }
   }
 
+  // Progress: every fit reports into [span_begin, span_end].
+  double span_begin = 0.0, span_end = 0.15;
+  BatchOptions fit_opt = opt.fit;
+  if (opt.fraction) {
+    fit_opt.fraction = [&](double f) { opt.fraction(span_begin + (span_end - span_begin) * f); };
+  }
+  // Each round takes 60 % of what is left before 0.95 (the closing analysis).
+  double round_begin = 0.15, round_end = 0.15 + 0.6 * 0.8;
   say("fitting the declared model");
-  BatchOptions first = opt.fit;
+  BatchOptions first = fit_opt;
   res.before_layout = ParameterLayout();
   res.before = SolveBatch(run, data, res.before_layout, first);
   res.before_residuals = AnalyzeResiduals(run, data, res.before_layout, res.before);
@@ -101,14 +109,18 @@ DiagnosisResult Diagnose(const RunDescription& run, const RunData& data,
   std::vector<std::string> held = fit.held;
   for (int round = 1; round <= opt.max_effects && !candidates.empty(); ++round) {
     std::vector<CandidateTest> tests;
+    const double fit_share = (round_end - round_begin) / (candidates.size() + 1.0);
     for (Effect e : candidates) {
-      say("round " + std::to_string(round) + ": testing " + GetEffectSpec(e).name);
+      say("round " + std::to_string(round) + ": testing " + GetEffectSpec(e).name + " (" +
+          std::to_string(tests.size() + 1) + "/" + std::to_string(candidates.size()) + ")");
+      span_begin = round_begin + fit_share * tests.size();
+      span_end = span_begin + fit_share;
       const ParameterLayout aug(WithEffect(current, e));
       CandidateTest t;
       t.effect = e;
       t.round = round;
       const BatchResult r = FitLayout(run, data, aug, Embed(layout, fit.estimate.theta, aug), held,
-                                      FreeNames(layout, held), opt.fit, false);
+                                      FreeNames(layout, held), fit_opt, false);
       const int k = static_cast<int>(GetEffectSpec(e).params.size());
       int held_new = 0;
       for (const std::string& h : r.held) {
@@ -140,12 +152,18 @@ DiagnosisResult Diagnose(const RunDescription& run, const RunData& data,
     current.push_back(chosen);
     const ParameterLayout next(current);
     say("refitting with " + GetEffectSpec(chosen).name);
+    span_begin = round_end - fit_share;
+    span_end = round_end;
     fit = FitLayout(run, data, next, Embed(layout, fit.estimate.theta, next), held,
-                    FreeNames(layout, held), opt.fit, true);
+                    FreeNames(layout, held), fit_opt, true);
+    round_begin = round_end;
+    round_end += 0.6 * (0.95 - round_end);
     layout = next;
     held = fit.held;
     candidates.erase(std::find(candidates.begin(), candidates.end(), chosen));
   }
+  say("analysing the residual");
+  if (opt.fraction) opt.fraction(0.95);
   res.after_layout = layout;
   res.after = fit;
   res.after_residuals = res.selected.empty()

@@ -37,6 +37,12 @@ struct DiagnoseOptions {
   int max_effects = 4;
   std::vector<Effect> candidates;  // empty: the whole catalogue (that the run can carry)
   std::function<void(const std::string&)> progress;
+  // Estimated fraction done, 0..1: the first fit 0-0.15; each round (its
+  // candidates' fits, then the refit if one is selected) 60 % of what is
+  // left before 0.95, round 1 0.15-0.63 (rounds are not known in advance);
+  // the closing residual analysis 0.95; within a fit, the fit's own
+  // BatchOptions::fraction.
+  std::function<void(double)> fraction;
 };
 
 struct CandidateTest {

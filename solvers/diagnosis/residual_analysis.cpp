@@ -81,11 +81,13 @@ ResidualReport AnalyzeResiduals(const RunDescription& run, const RunData& data,
                         data.t_s[mids[j]], W.x(), W.y(), W.z()};
     for (int s = 0; s < n_sig; ++s) sig[s].push_back(v[s]);
     if (data.has_temp()) sig[n_sig].push_back(data.temp_C[mids[j]]);
+    rep.t_s.push_back(data.t_s[mids[j]]);
   }
   for (int s = 0; s < n_sig; ++s) signals.push_back({sig_names[s], sig[s]});
   if (data.has_temp()) signals.push_back({"temp_C", sig[n_sig]});
 
   const double dt = (fit.epoch_t.back() - fit.epoch_t.front()) / (E - 1);
+  rep.dt_s = dt;
   rep.f1_hz = DominantFrequency(sig[0], dt);
   double span2 = 0.0;
   for (double x : sig[1]) span2 = std::max(span2, std::abs(x - sig[1][0]));
@@ -97,6 +99,7 @@ ResidualReport AnalyzeResiduals(const RunDescription& run, const RunData& data,
     ChannelReport ch;
     ch.name = name;
     ch.unit = unit;
+    ch.series = x;
     double ss = 0.0, sum = 0.0;
     for (double v : x) {
       ss += v * v;

@@ -36,6 +36,7 @@ struct ChannelReport {
   WhitenessTest whiteness;
   std::vector<SpectralPeak> peaks;                            // strongest first
   std::vector<std::pair<std::string, double>> correlations;   // |r| largest first
+  std::vector<double> series;  // the channel per interval (ResidualReport::t_s), for plots
 };
 
 struct ResidualReport {
@@ -43,6 +44,8 @@ struct ResidualReport {
   double chi2_per_dof = 0.0;
   int degrees_of_freedom = 0;
   double f1_hz = 0.0, f2_hz = 0.0;  // bench frequencies found in the angles
+  std::vector<double> t_s;          // interval midpoints of the channel series [s]
+  double dt_s = 0.0;                // their mean spacing (the periodogram's)
   // Evidence of structure: a channel's Ljung-Box p below this, or chi2/dof
   // more than 4 standard deviations above 1.
   double whiteness_alpha = 1e-3;

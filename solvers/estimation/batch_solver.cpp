@@ -181,6 +181,22 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
 
 namespace {
 
+// Reports BatchOptions::fraction from inside a Ceres solve.
+class IterationFraction : public ceres::IterationCallback {
+ public:
+  IterationFraction(double begin, double end, const std::function<void(double)>& report)
+      : at_(begin), end_(end), report_(report) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+    at_ += (end_ - at_) / 3.0;
+    if (report_) report_(at_);
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  double at_, end_;
+  const std::function<void(double)>& report_;
+};
+
 // The Ceres problem of one linearisation: the trajectory blocks, theta_free,
 // one process cost per interval, one measurement cost per epoch, the prior
 // and constraint rows.
@@ -286,9 +302,12 @@ void Relinearise(const RunProblem& p, const StateSpaceModel& model, const Eigen:
   res->converged = false;
   for (int outer = 0; outer < opt.max_outer_iterations + halvings; ++outer) {
     say("relinearising pass " + std::to_string(outer + 1));
+    const double pass_begin = 0.3 + 0.65 * (1.0 - std::pow(0.5, outer));
+    const double pass_end = 0.3 + 0.65 * (1.0 - std::pow(0.5, outer + 1));
+    if (opt.fraction) opt.fraction(pass_begin);
     st->lin = Linearize(p, model.Expand(theta_free), !opt.exact_increments, threads);
     st->lp = BuildCeresProblem(model, st->lin, A, b, opt, &x, &theta_free);
-    const ceres::Solver::Options so = SolverOptions(opt, threads, E, &x, &theta_free);
+    ceres::Solver::Options so = SolverOptions(opt, threads, E, &x, &theta_free);
     // The true cost at this point (before solving), to judge the last step.
     double cost_here = 0.0;
     st->lp.problem->Evaluate(ceres::Problem::EvaluateOptions(), &cost_here, nullptr, nullptr,
@@ -302,6 +321,9 @@ void Relinearise(const RunProblem& p, const StateSpaceModel& model, const Eigen:
     theta_prev = theta_free;
     x_prev = x;
     cost_prev = cost_here;
+    // Each Ceres iteration moves the fraction a third of the way to the pass's end.
+    IterationFraction iteration_fraction(pass_begin, pass_end, opt.fraction);
+    if (opt.fraction) so.callbacks.push_back(&iteration_fraction);
     ceres::Solver::Summary summary;
     ceres::Solve(so, st->lp.problem.get(), &summary);
     if (summary.termination_type == ceres::FAILURE) {
@@ -432,6 +454,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   // 1. Which parameters are estimated: the held ones leave the problem.
   if (opt.holding.auto_hold || !opt.holding.hold.empty()) {
     say("choosing the parameters this run supports");
+    if (opt.fraction) opt.fraction(0.0);
     const HoldDecision hd = ChooseHeldParameters(run, data, layout, opt.holding, opt.epoch_s,
                                                  opt.derivatives, opt.init_decimation_hz, threads);
     res.unsupported_at_start = hd.unsupported;
@@ -446,6 +469,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   // 2. The start.
   say("initialising (" + std::string(opt.init == BatchInit::kRts ? "RTS smoother" : "nominal") +
       ")");
+  if (opt.fraction) opt.fraction(0.1);
   res.initial = Initialise(run, data, layout, p, opt, res.held);
   res.init_seconds = Seconds(t_start);
   Eigen::VectorXd theta_free = model.Free(res.initial.theta);
@@ -507,11 +531,14 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   res.estimate.cov = Eigen::MatrixXd::Zero(p.n, p.n);
   if (opt.compute_covariance) {
     say("covariance");
+    done(0.95);
     const auto t_cov = std::chrono::steady_clock::now();
     res.estimate.cov = ExpandCovariance(
         p, FreeCovariance(p, st.lin, st.lp, theta, &st.theta_free, &st.x, A, opt, threads));
     res.covariance_seconds = Seconds(t_cov);
   }
+  done(1.0);
+  if (opt.fraction) opt.fraction(1.0);
   return res;
 }
 

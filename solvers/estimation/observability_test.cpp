@@ -464,11 +464,11 @@ TEST(DesignCommand, WritesTablePlotAndTargets) {
   const Cli c("design_cmd");
   ASSERT_EQ(c.Run("design " + c.Path("scen.yaml") + " -o " + c.Path("d.json") +
                   " --durations 30,60,120 --periods 30:12,15:6 --amplitudes 360:90 "
-                  "--target K=0.3,dx2=2 --static-duration 600"),
+                  "--target K=0.3,dx2=2 --static-duration 600 --report " + c.Path("d.html")),
             0)
       << c.Err();
   const nlohmann::json d = nlohmann::json::parse(Slurp(c.Path("d.json")));
-  for (const char* key : {"duration", "profiles", "targets", "comparison", "plot", "units"}) {
+  for (const char* key : {"duration", "profiles", "targets", "comparison", "units"}) {
     EXPECT_TRUE(d.contains(key)) << key;
   }
   EXPECT_EQ(d["duration"]["durations_s"].size(), 3u);
@@ -480,21 +480,23 @@ TEST(DesignCommand, WritesTablePlotAndTargets) {
   const nlohmann::json& cmp = d["comparison"];
   EXPECT_EQ(cmp["static_not_determined"], (nlohmann::json{"dx2", "dy2", "dz2"}));
   EXPECT_TRUE(cmp["quasi_harmonic_not_determined"].empty());
-  const std::string svg = Slurp(c.Path("d.svg"));
-  EXPECT_EQ(svg.rfind("<svg", 0), 0u);
-  EXPECT_NE(svg.find("run duration [s]"), std::string::npos);
-  EXPECT_NE(svg.find("sigma [mV/g]"), std::string::npos);
-  EXPECT_NE(svg.find("</svg>"), std::string::npos);
+  // The curves the HTML report draws (its browser test: tests/report_browser_test.cpp).
+  EXPECT_EQ(d["duration"]["groups"].size(), 6u);
+  EXPECT_EQ(d["duration"]["groups"][0]["unit"], "mV/g");
+  const std::string html = Slurp(c.Path("d.html"));
+  EXPECT_NE(html.find("\"command\":\"design\""), std::string::npos);
   const std::string table = Slurp(c.Path("out.txt"));
   EXPECT_NE(table.find("static 12-position method"), std::string::npos);
 
   auto fails = [&](const std::string& args, const std::string& message) {
     fs::remove(c.Path("bad.json"));
-    fs::remove(c.Path("bad.svg"));
-    EXPECT_NE(c.Run("design " + c.Path("scen.yaml") + " -o " + c.Path("bad.json") + " " + args), 0);
+    fs::remove(c.Path("bad.html"));
+    EXPECT_NE(c.Run("design " + c.Path("scen.yaml") + " -o " + c.Path("bad.json") + " --report " +
+                    c.Path("bad.html") + " " + args),
+              0);
     EXPECT_EQ(c.Err(), "triadcal: error: " + message + "\n") << args;
     EXPECT_FALSE(fs::exists(c.Path("bad.json")));
-    EXPECT_FALSE(fs::exists(c.Path("bad.svg")));
+    EXPECT_FALSE(fs::exists(c.Path("bad.html")));
   };
   fails("--target Q=1", "--target: unknown parameter or group 'Q' (a parameter name or K, W0, "
                         "angles, K_ij, bench, dR)");

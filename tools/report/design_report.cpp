@@ -5,7 +5,6 @@
 
 #include "core/io/file_util.h"
 #include "core/model/units.h"
-#include "tools/report/svg_plot.h"
 
 namespace triadcal {
 namespace {
@@ -222,68 +221,23 @@ nlohmann::json DesignJson(const Scenario& s, const ParameterLayout& layout,
   out["profiles"] = GridJson(layout, r);
   out["targets"] = TargetsJson(layout, options, r);
   out["comparison"] = ComparisonJson(layout, r, settings);
+  // What the HTML report draws (--report, or `triadcal report`): per group
+  // the worst and best sigma of both methods against duration, from
+  // "duration" above (null where the method does not determine a member).
+  nlohmann::json groups = nlohmann::json::array();
+  for (const ParameterGroup& g : ParameterGroups()) {
+    std::vector<std::string> members;
+    for (int i : g.members) members.push_back(layout.info(i).name);
+    groups.push_back({{"name", g.name},
+                      {"label", g.label},
+                      {"unit", layout.info(g.members[0]).unit},
+                      {"members", members}});
+  }
+  out["duration"]["groups"] = groups;
+  out["duration"]["static_positions"] = settings.static_positions;
   return out;
 }
 
-std::string DesignPlotSvg(const Scenario& s, const ParameterLayout& layout, const DesignStudy& r,
-                          const DesignReportSettings& settings) {
-  std::vector<PlotPanel> panels;
-  for (const ParameterGroup& g : ParameterGroups()) {
-    PlotPanel panel;
-    panel.title = g.label;
-    panel.y_label = "sigma [" + layout.info(g.members[0]).unit + "]";
-    PlotSeries sq{"quasi-harmonic " + PairText(s.profile.period_s[0], s.profile.period_s[1]) + " s",
-                  "#1f77b4",
-                  false,
-                  {},
-                  {}};
-    PlotSeries ss{"static, " + std::to_string(settings.static_positions) + " positions",
-                  "#d62728",
-                  true,
-                  {},
-                  {}};
-    PlotSeries sq_best = sq, ss_best = ss;
-    for (PlotSeries* b : {&sq_best, &ss_best}) {
-      b->width = 1.0;
-      b->opacity = 0.5;
-      b->in_legend = false;
-    }
-    bool static_held = false, qh_held = false;
-    for (std::size_t k = 0; k < r.durations_s.size(); ++k) {
-      const double f = layout.info(g.members[0]).si_per_unit;
-      for (PlotSeries* p : {&sq, &ss, &sq_best, &ss_best}) p->x.push_back(r.durations_s[k]);
-      // A sigma of a parameter the test does not determine is the prior's:
-      // not plotted.
-      const DesignPoint& qh = r.quasi_harmonic[k];
-      const DesignPoint& st = r.static_test[k];
-      const bool qh_k = AnyUndetermined(qh, layout, g.members);
-      const bool st_k = AnyUndetermined(st, layout, g.members);
-      sq.y.push_back(qh_k ? std::nan("") : WorstSigma(qh, g.members) / f);
-      ss.y.push_back(st_k ? std::nan("") : WorstSigma(st, g.members) / f);
-      sq_best.y.push_back(qh_k ? std::nan("") : BestSigma(qh, g.members) / f);
-      ss_best.y.push_back(st_k ? std::nan("") : BestSigma(st, g.members) / f);
-      static_held = static_held || st_k;
-      qh_held = qh_held || qh_k;
-    }
-    if (static_held) panel.note = "static: not determined at some or all durations";
-    if (qh_held) {
-      panel.note += std::string(panel.note.empty() ? "" : "; ") +
-                    "quasi-harmonic: not determined at some durations";
-    }
-    panel.series = {sq_best, ss_best, sq, ss};
-    panels.push_back(panel);
-  }
-  const std::string& path = settings.scenario_path;
-  char title[200];
-  std::snprintf(title, sizeof(title),
-                "Cramer-Rao sigma against run duration, %s (%g Hz, %g mV); thick: worst of "
-                "the group, thin: best",
-                path.substr(path.find_last_of('/') + 1).c_str(), s.profile.rate_hz, s.run.noise_mV);
-  const double Td = r.design_duration_s, Ts = r.static_duration_s;
-  return LogLogPanelsSvg(
-      title, "run duration [s]", panels,
-      {{Td, FormatDouble(Td) + " s design"}, {Ts, FormatDouble(Ts) + " s static"}}, 3);
-}
 
 void PrintDesign(const Scenario& s, const ParameterLayout& layout,
                  const DesignStudyOptions& options, const DesignStudy& r,

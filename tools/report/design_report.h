@@ -23,10 +23,6 @@ nlohmann::json DesignJson(const Scenario& s, const ParameterLayout& layout,
                           const DesignStudyOptions& options, const DesignStudy& r,
                           const DesignReportSettings& settings);
 
-// Worst (thick) and best (thin) sigma of each parameter group against duration.
-std::string DesignPlotSvg(const Scenario& s, const ParameterLayout& layout, const DesignStudy& r,
-                          const DesignReportSettings& settings);
-
 // The tables on stdout, up to the comparison's footnote.
 void PrintDesign(const Scenario& s, const ParameterLayout& layout,
                  const DesignStudyOptions& options, const DesignStudy& r,

@@ -8,6 +8,7 @@
 #include "solvers/diagnosis/statistics.h"
 #include "solvers/estimation/observability.h"
 #include "tools/report/estimate_json.h"
+#include "tools/report/value_format.h"
 
 namespace triadcal {
 
@@ -145,13 +146,17 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
 
 void PrintParameterTable(const ParameterLayout& layout, const BatchResult& r,
                          const FitReport& rep) {
-  std::printf("%-26s %14s %10s %10s  %s\n", "parameter", "value", "sigma", "start", "unit");
+  // Values to the digit of their sigma (value_format.h).
+  std::printf("%-26s %16s %10s %10s  %s\n", "parameter", "value", "sigma", "start", "unit");
   for (int i = 0; i < layout.size(); ++i) {
     const ParameterInfo& pi = layout.info(i);
     const double f = pi.si_per_unit;
-    std::printf("%-26s %14.6g %10.3g %10.5g  %s%s\n", pi.name.c_str(), r.estimate.theta[i] / f,
-                std::sqrt(std::max(0.0, r.estimate.cov(i, i))) / f, r.initial.theta[i] / f,
-                pi.unit.c_str(),
+    // A held parameter's sigma is its pinning prior's, not an estimate: "-".
+    const double sigma =
+        rep.held.count(pi.name) ? 0.0 : std::sqrt(std::max(0.0, r.estimate.cov(i, i))) / f;
+    const ValueText v = FormatWithSigma(r.estimate.theta[i] / f, sigma);
+    std::printf("%-26s %16s %10s %10.5g  %s%s\n", pi.name.c_str(), v.value.c_str(),
+                v.sigma.c_str(), r.initial.theta[i] / f, pi.unit.c_str(),
                 rep.held.count(pi.name)            ? "  (held at nominal)"
                 : rep.not_estimable.count(pi.name) ? "  (not estimable: prior value)"
                                                    : "");
