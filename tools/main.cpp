@@ -1,6 +1,7 @@
 // triadcal: calibration of a MEMS accelerometer triad from a two-axis bench run.
 #include <exception>
 #include <iostream>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -60,6 +61,19 @@ int main(int argc, char** argv) {
       triadcal::SetQuiet(quiet);
       return c.run();
     }
+  } catch (const triadcal::OptionError& e) {
+    // A setting the estimators rejected, named by its flag here.
+    static const std::map<std::string, std::string> kFlags = {
+        {"epoch_s", "--epoch-s"},           {"robust_loss", "--robust"},
+        {"linear_solver", "--linear-solver"}, {"covariance_method", "--covariance"},
+        {"hold_free", "--hold/--free"},       {"effects", "--effects"}};
+    const auto it = kFlags.find(e.option());
+    if (triadcal::MpiRoot()) {
+      std::cerr << "triadcal: error: "
+                << (it == kFlags.end() ? std::string(e.what()) : it->second + ": " + e.problem())
+                << "\n";
+    }
+    return 2;
   } catch (const triadcal::InputError& e) {
     // Every rank reads the same input and fails the same way: rank 0 says so.
     if (triadcal::MpiRoot()) std::cerr << "triadcal: error: " << e.what() << "\n";

@@ -65,14 +65,14 @@ std::unique_ptr<ceres::LossFunction> MakeLoss(const BatchOptions& opt) {
   if (opt.robust_loss.empty()) return nullptr;
   if (opt.robust_loss == "huber") return std::make_unique<ceres::HuberLoss>(opt.robust_scale);
   if (opt.robust_loss == "cauchy") return std::make_unique<ceres::CauchyLoss>(opt.robust_scale);
-  throw InputError("robust loss: unknown '" + opt.robust_loss + "' (huber, cauchy)");
+  throw OptionError("robust_loss", "unknown loss '" + opt.robust_loss + "' (huber, cauchy)");
 }
 
 ceres::LinearSolverType SolverType(const std::string& name) {
   if (name == "sparse_normal_cholesky") return ceres::SPARSE_NORMAL_CHOLESKY;
   if (name == "sparse_schur") return ceres::SPARSE_SCHUR;
   if (name == "dense_qr") return ceres::DENSE_QR;
-  throw InputError("linear solver: unknown '" + name +
+  throw OptionError("linear_solver", "unknown '" + name +
                    "' (sparse_normal_cholesky, sparse_schur, dense_qr)");
 }
 
@@ -151,7 +151,7 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
   }
   auto index_of = [&](const std::string& name) {
     const int i = layout.IndexOf(name);
-    if (i < 0) throw InputError("held or freed parameter: unknown '" + name + "'");
+    if (i < 0) throw OptionError("hold_free", "unknown parameter '" + name + "'");
     return i;
   };
   for (const std::string& h : o.hold) held[index_of(h)] = true;
@@ -398,7 +398,8 @@ Eigen::MatrixXd FreeCovariance(const RunProblem& p, const BatchLinearization& li
   const int nf = static_cast<int>(theta_free->size());
   const bool use_ceres = opt.covariance_method == "ceres" || !opt.robust_loss.empty();
   if (!use_ceres && opt.covariance_method != "schur") {
-    throw InputError("covariance method: unknown '" + opt.covariance_method + "' (schur, ceres)");
+    throw OptionError("covariance_method",
+                      "unknown method '" + opt.covariance_method + "' (schur, ceres)");
   }
   if (!use_ceres) {
     // The process costs' own Jacobians by theta (with the derivative of
@@ -531,13 +532,12 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   res.estimate.cov = Eigen::MatrixXd::Zero(p.n, p.n);
   if (opt.compute_covariance) {
     say("covariance");
-    done(0.95);
+    if (opt.fraction) opt.fraction(0.95);
     const auto t_cov = std::chrono::steady_clock::now();
     res.estimate.cov = ExpandCovariance(
         p, FreeCovariance(p, st.lin, st.lp, theta, &st.theta_free, &st.x, A, opt, threads));
     res.covariance_seconds = Seconds(t_cov);
   }
-  done(1.0);
   if (opt.fraction) opt.fraction(1.0);
   return res;
 }

@@ -54,7 +54,7 @@ std::vector<ConstraintRow> ResolveConstraints(const RunDescription& run,
       const int i = layout.IndexOf(name);
       if (i < 0) {
         throw InputError(run.yaml_path + ": constraints: '" + k.expr + "' names '" + name +
-                         "', which is not estimated in this run (add it with --effects)");
+                         "', which is not estimated in this run (add its effect to the estimated ones)");
       }
       row.c[i] += coef;
     }
@@ -66,7 +66,7 @@ std::vector<ConstraintRow> ResolveConstraints(const RunDescription& run,
 RunProblem BuildRunProblem(const RunDescription& run, const RunData& data,
                            const ParameterLayout& layout, double epoch_s,
                            const AngleDerivativeOptions& derivatives) {
-  if (!(epoch_s > 0.0)) throw InputError("--epoch-s: must be > 0");
+  if (!(epoch_s > 0.0)) throw OptionError("epoch_s", "must be > 0");
   RunProblem p;
   p.cfg = MakeModelConfig(run, layout);
   if (data.has_temp()) p.cfg.temp_ref_C = data.temp_C.front();
