@@ -6,6 +6,7 @@
 #include "core/io/constraint_parser.h"
 #include "core/model/errors.h"
 #include "core/io/file_util.h"
+#include "core/io/plausibility.h"
 #include "core/io/yaml_fields.h"
 
 namespace triadcal {
@@ -141,6 +142,7 @@ RunDescription ParseRunDescription(const YAML::Node& node, const std::string& ya
   if (node["data_format"]) ParseDataFormat(node["data_format"], at.Child("data_format"), &run);
   if (node["positions"]) run.positions = ParsePositions(node["positions"], at.Child("positions"));
   DefaultTriadForGReadings(node["triad"], &run);
+  CheckDescriptionPlausible(run, where);
   return run;
 }
 

@@ -12,6 +12,7 @@
 #include "core/io/data_table.h"
 #include "core/model/errors.h"
 #include "core/io/file_util.h"
+#include "core/io/plausibility.h"
 #include "core/io/run_validation.h"
 #include "core/model/units.h"
 
@@ -183,15 +184,20 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
     CheckSampleCount(table, keep.size(), "distinct time stamps");
   }
   Warn(warnings, GapWarning(t.values));
-  for (ChannelValues& l : lambda) UnwrapDegrees(&l.values);
 
   // Units of the readings and angles, judged against the nominal triad.
-  double scale_of_imu_axis[3], range_of_imu_axis[3];
+  double scale_of_imu_axis[3], range_of_imu_axis[3], bias_of_imu_axis[3];
   for (int i = 0; i < 3; ++i) {
     const int j = run.axis_source[i];
     scale_of_imu_axis[j] = run.scale_mV_per_g[i];
+    bias_of_imu_axis[j] = run.axis_sign[i] * run.bias_mV[i];
     range_of_imu_axis[j] = run.scale_mV_per_g[i] + std::abs(run.bias_mV[i]);
   }
+  CheckSamplesPlausible(table, {&t, {&lambda[0], &lambda[1]}, {&w[0], &w[1], &w[2]},
+                                {&rate[0], &rate[1]}},
+                        scale_of_imu_axis, bias_of_imu_axis);
+  for (ChannelValues& l : lambda) UnwrapDegrees(&l.values);
+  CheckAngleRates(table, t, lambda);
   for (int j = 0; j < 3; ++j) {
     // Only readings taken as mV: a declared V, g or mg is the user's word.
     const std::string unit = SourceOf(run, w[j].name).unit;
@@ -203,6 +209,7 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
   // or by gravity only): there is nothing to judge the angle unit by.
   if (!SourceOf(run, "lambda1").constant || !SourceOf(run, "lambda2").constant) {
     CheckAnglesInDegrees(table, lambda, w, scale_of_imu_axis);
+    CheckAnglesNotRadiansWindowed(table, lambda, w, scale_of_imu_axis, run.noise_mV);
   }
   for (const ChannelValues& c : w) Warn(warnings, SaturationWarning(c));
 
