@@ -297,4 +297,45 @@ void CheckAnglesNotRadiansWindowed(const DataTable& table, const ChannelValues (
   }
 }
 
+std::vector<std::string> CheckConstantChannels(const DataTable& table,
+                                               const ChannelValues (&lambda)[2],
+                                               const bool (&lambda_from_file)[2],
+                                               const ChannelValues (&w)[3],
+                                               const bool (&w_from_file)[3]) {
+  auto constant = [](const ChannelValues& c) {
+    return !c.values.empty() &&
+           std::all_of(c.values.begin(), c.values.end(), [&](double v) { return v == c.values[0]; });
+  };
+  auto span = [](const ChannelValues& c) {
+    if (c.values.empty()) return 0.0;
+    const auto [lo, hi] = std::minmax_element(c.values.begin(), c.values.end());
+    return *hi - *lo;
+  };
+  std::vector<std::string> warnings;
+  const bool still[2] = {constant(lambda[0]), constant(lambda[1])};
+  if (lambda_from_file[0] && lambda_from_file[1] && still[0] && still[1]) {
+    throw InputError(table.path + ": " + lambda[0].label + ", " + lambda[1].label +
+                     ": both angles are constant (" + Num(lambda[0].values[0]) + " and " +
+                     Num(lambda[1].values[0]) +
+                     " deg) in every sample: no bench motion was recorded (for a run without a "
+                     "bench declare them with columns.lambda1: {value: 0}, lambda2: {value: 0})");
+  }
+  for (int i = 0; i < 2; ++i) {
+    if (lambda_from_file[i] && still[i] && !still[1 - i]) {
+      warnings.push_back(lambda[i].label + " is constant (" + Num(lambda[i].values[0]) +
+                         " deg) in every sample: no motion about the " +
+                         (i == 0 ? "outer" : "inner") +
+                         " axis (a single-axis rig declares it with {value: ...})");
+    }
+  }
+  const bool moving = span(lambda[0]) > 10.0 || span(lambda[1]) > 10.0;
+  for (int i = 0; i < 3; ++i) {
+    if (!w_from_file[i] || !constant(w[i])) continue;
+    warnings.push_back(w[i].label + ": every sample is " + Num(w[i].values[0]) +
+                       (moving ? " while the bench turns: a dead channel or a damaged file"
+                               : ": a dead channel, or a bench that never moved"));
+  }
+  return warnings;
+}
+
 }  // namespace triadcal

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "core/io/data_table.h"
 #include "core/io/run_validation.h"
@@ -67,5 +68,16 @@ void CheckAngleRates(const DataTable& table, const ChannelValues& t,
 void CheckAnglesNotRadiansWindowed(const DataTable& table, const ChannelValues (&lambda)[2],
                                    const ChannelValues (&w)[3],
                                    const double (&nominal_scale)[3], double nominal_noise);
+
+// Channels read from the file (not declared constant) that never change where
+// motion is expected: both angles constant is an error (no bench motion; a run
+// without a bench declares them with {value: ...}). One angle constant while
+// the other moves, or a reading constant (a dead channel, a damaged file, or a
+// bench that never moved), is a warning (returned, one line each).
+std::vector<std::string> CheckConstantChannels(const DataTable& table,
+                                               const ChannelValues (&lambda)[2],
+                                               const bool (&lambda_from_file)[2],
+                                               const ChannelValues (&w)[3],
+                                               const bool (&w_from_file)[3]);
 
 }  // namespace triadcal

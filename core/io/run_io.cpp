@@ -198,6 +198,16 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
                         scale_of_imu_axis, bias_of_imu_axis);
   for (ChannelValues& l : lambda) UnwrapDegrees(&l.values);
   CheckAngleRates(table, t, lambda);
+  {
+    const bool lambda_from_file[2] = {!SourceOf(run, "lambda1").constant,
+                                      !SourceOf(run, "lambda2").constant};
+    bool w_from_file[3];
+    for (int j = 0; j < 3; ++j) w_from_file[j] = !SourceOf(run, w[j].name).constant;
+    for (const std::string& line :
+         CheckConstantChannels(table, lambda, lambda_from_file, w, w_from_file)) {
+      Warn(warnings, line);
+    }
+  }
   for (int j = 0; j < 3; ++j) {
     // Only readings taken as mV: a declared V, g or mg is the user's word.
     const std::string unit = SourceOf(run, w[j].name).unit;
