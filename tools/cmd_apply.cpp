@@ -19,6 +19,7 @@ struct ApplyArgs {
 };
 
 int RunApply(const ApplyArgs& a) {
+  CheckOutputPath(a.out_csv);
   const Calibration cal = LoadCalibration(a.calibration_json);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
   const std::vector<Eigen::Vector3d> W = ApplyCalibration(cal, run.description, run.data);

@@ -103,7 +103,8 @@ Command AddCompareCommand(CLI::App& app) {
   c.app->add_option("run", a->run_yaml, "run description (run.yaml)")->required();
   c.app->add_option("-o,--output", a->out_json, "output JSON")->required();
   c.app->add_option("--effects", a->effects, "catalogue effects to estimate too, e.g. a,b");
-  c.app->add_option("--epoch-s", a->epoch_s, "interval between epochs [s]")->capture_default_str();
+  c.app->add_option("--epoch-s", a->epoch_s, "interval between epochs [s]")->capture_default_str()
+      ->check(kEpochRange);
   c.run = [a] { return RunCompare(*a); };
   return c;
 }

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <set>
 #include <sstream>
@@ -162,6 +163,8 @@ std::string DefaultSvgPath(const std::string& out_json) {
 
 int RunDesign(const DesignArgs& a) {
   const auto t_start = std::chrono::steady_clock::now();
+  CheckOutputPath(a.out_json);
+  CheckOutputPath(a.plot_svg.empty() ? DefaultSvgPath(a.out_json) : a.plot_svg);
   const Scenario s = LoadScenario(a.scenario);
   const ParameterLayout layout(ParseEffectList(a.effects));
   const int n = layout.size();
@@ -390,8 +393,15 @@ int RunDesign(const DesignArgs& a) {
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   out["time_s"] = seconds;
-  WriteFileAtomically(svg_path, svg);
+  // JSON first: when it cannot be written no SVG is left behind, and when the
+  // SVG cannot be written the JSON that names it is taken back.
   WriteJson(out, a.out_json);
+  try {
+    WriteFileAtomically(svg_path, svg);
+  } catch (...) {
+    std::filesystem::remove(a.out_json);
+    throw;
+  }
 
   // ---- stdout
   auto print_duration_table = [&](const char* what, const std::vector<DesignPoint>& pts) {
@@ -516,7 +526,8 @@ Command AddDesignCommand(CLI::App& app) {
       ->capture_default_str();
   c.app->add_option("--effects", a->effects, "catalogue effects to include, e.g. a,b");
   c.app->add_option("--epoch-s", a->epoch_s, "interval between trajectory epochs [s]")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(kEpochRange);
   c.app->add_option("--threads", a->threads, "threads (0: all cores)")->capture_default_str();
   c.run = [a] { return RunDesign(*a); };
   return c;

@@ -39,7 +39,7 @@ NamedValues ReadParameterValues(const std::string& path) {
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(ReadFile(path));
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {  // syntax, or a number like 1e309
     throw InputError(path + ": not valid JSON (" + std::string(e.what()) + ")");
   }
   const nlohmann::json* params = nullptr;
@@ -147,7 +147,8 @@ Command AddObservabilityCommand(CLI::App& app) {
                     "nominal values (run) or the truth (scenario)");
   c.app->add_option("--effects", a->effects, "catalogue effects to include, e.g. a,b");
   c.app->add_option("--epoch-s", a->epoch_s, "interval between trajectory epochs [s]")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(kEpochRange);
   c.app->add_option("--rate-window-s", a->rate_window_s,
                     "half window of the local cubic fit giving lambda' from the angles [s]")
       ->capture_default_str();

@@ -18,7 +18,7 @@ LoadedRun LoadRunOrThrow(const std::string& run_yaml) {
   r.description = LoadRunDescription(run_yaml);
   RunWarnings warnings;
   r.data = LoadRunData(r.description, &warnings);
-  for (const std::string& w : warnings.lines) std::cerr << "triadcal: warning: " << w << "\n";
+  for (const std::string& w : warnings.lines) std::cerr << "triadcal: warning: " << OneLine(w) << "\n";
   return r;
 }
 
@@ -72,6 +72,7 @@ void CheckOutputPath(const std::string& path) {
   if (!fs::is_directory(dir) || access(dir.c_str(), W_OK) != 0) {
     throw InputError(path + ": cannot write (folder missing or not writable)");
   }
+  NoteOutputFile(path);
 }
 
 void WriteJson(const nlohmann::json& j, const std::string& path) {

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include "core/model/effects.h"
@@ -36,6 +37,11 @@ void CheckOutputPath(const std::string& path);
 // A progress line on stderr ("filter: pass 1/2  37%"), only on a terminal.
 void ShowProgress(const std::string& what, double fraction);
 void EndProgress();
+
+// Bounds of --epoch-s [s]: below 10 ms an epoch holds about one sample and the
+// problem grows past what a run needs (and past minutes of solving); above 10 s
+// the bench (periods of seconds) turns by more than one swing between epochs.
+inline const CLI::Range kEpochRange(0.01, 10.0);
 
 // Serialises with 2-space indentation and writes atomically.
 void WriteJson(const nlohmann::json& j, const std::string& path);

@@ -66,7 +66,7 @@ Calibration LoadCalibration(const std::string& path) {
   json root;
   try {
     root = json::parse(ReadFile(path));
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // syntax, or a number like 1e309
     throw InputError(path + ": not valid JSON (" + std::string(e.what()) + ")");
   }
   Calibration cal;

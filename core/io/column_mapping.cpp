@@ -152,7 +152,7 @@ std::map<std::string, ColumnSource> ParseColumns(const YAML::Node& node, const Y
   names.push_back(kLabelChannel);
   CheckKeys(node, at, names);
   for (const auto& kv : node) {
-    const std::string name = kv.first.Scalar();
+    const std::string name = KeyOf(kv.first, at);
     if (name == kLabelChannel) {
       out[name] = ParseLabelColumn(kv.second, at.Child(name));
       continue;
@@ -174,7 +174,7 @@ std::map<std::string, Eigen::Vector3d> ParsePositions(const YAML::Node& node,
   }
   std::map<std::string, Eigen::Vector3d> out;
   for (const auto& kv : node) {
-    const std::string label = kv.first.Scalar();
+    const std::string label = KeyOf(kv.first, at);
     const YamlPlace p = at.Child(label);
     if (out.count(label)) p.Fail("given twice");
     Eigen::Vector3d v;
@@ -219,12 +219,12 @@ Eigen::Vector3d ImuToPlatform(const RunDescription& run, const Eigen::Vector3d& 
 
 void ParseMounting(const YAML::Node& node, const YamlPlace& at, RunDescription* run) {
   CheckKeys(node, at, {"axes"});
-  if (!node["axes"]) at.Fail("missing 'axes' (e.g. axes: [\"+y\", \"-z\", \"+x\"])");
+  if (!node["axes"]) at.Fail("missing 'axes' (e.g. axes: [\"+y\", \"-z\", \"-x\"])");
   const YamlPlace axes_at = at.Child("axes");
   const YAML::Node axes = node["axes"];
   if (!axes.IsSequence() || axes.size() != 3) {
     axes_at.Fail(
-        "expected a list of 3 signed IMU axes like [\"+y\", \"-z\", \"+x\"], got " +
+        "expected a list of 3 signed IMU axes like [\"+y\", \"-z\", \"-x\"], got " +
         (axes.IsSequence() ? std::to_string(axes.size()) + " entries" : DescribeNode(axes)));
   }
   bool used[3] = {false, false, false};
@@ -248,6 +248,15 @@ void ParseMounting(const YAML::Node& node, const YamlPlace& at, RunDescription* 
     used[src] = true;
     run->axis_source[i] = src;
     run->axis_sign[i] = sign;
+  }
+  if (MountingDeterminant(*run) < 0) {
+    RunDescription flipped = *run;
+    flipped.axis_sign[2] = -flipped.axis_sign[2];
+    const std::string axes = "[" + MountingAxisText(*run, 0) + ", " + MountingAxisText(*run, 1) +
+                             ", " + MountingAxisText(*run, 2) + "]";
+    axes_at.Fail(axes + " is a reflection (determinant -1), not a rotation: flip the sign of "
+                 "one axis (e.g. [" + MountingAxisText(flipped, 0) + ", " +
+                 MountingAxisText(flipped, 1) + ", " + MountingAxisText(flipped, 2) + "])");
   }
 }
 

@@ -8,7 +8,7 @@
 //     wx: {var: acc_x, unit: g}            # `var` is a synonym of `source`
 //     label: part                          # optional text column: position label
 //   mounting:
-//     axes: ["+y", "-z", "+x"]  # platform x = +IMU y, platform y = -IMU z, z = +IMU x
+//     axes: ["+y", "-z", "-x"]  # platform x = +IMU y, platform y = -IMU z, z = -IMU x
 //   positions:                  # optional, with label: which IMU direction points up
 //     x_p: "+x"                 # (default: the Ferraris convention, see below)
 //     tilted: [0.7071, 0, 0.7071]

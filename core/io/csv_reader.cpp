@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "core/io/data_table.h"
+#include "core/io/file_util.h"
 #include "core/model/errors.h"
 
 namespace triadcal {
@@ -16,6 +17,7 @@ namespace triadcal {
 namespace {
 
 std::string ReadWholeFile(const std::string& path) {
+  NoteInputFile(path);
   std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!f) throw InputError(path + ": cannot read (no such file or not readable)");
   std::string data;

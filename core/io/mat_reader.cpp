@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "core/io/data_table.h"
+#include "core/io/file_util.h"
 #include "core/model/errors.h"
 
 namespace triadcal {
@@ -180,6 +181,7 @@ DataTable ReadMatTable(const std::string& path, const std::vector<std::string>& 
   if (!std::filesystem::is_regular_file(path)) {
     throw InputError(path + ": cannot read (no such file or not readable)");
   }
+  NoteInputFile(path);
   std::string log;
   const MatLogCapture capture(&log);
   MatFile mat(Mat_Open(path.c_str(), MAT_ACC_RDONLY), &Mat_Close);

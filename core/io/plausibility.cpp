@@ -131,7 +131,8 @@ void CheckConstraints(const RunDescription& run, const DefaultScales& d,
     const ParameterInfo& info = d.layout.info(first);
     const std::string key = "constraints[" + std::to_string(c) + "] (\"" + con.expr + "\")";
     if (!std::isfinite(scale)) {
-      Fail(where, key, "coefficients too large (the combination overflows)");
+      Fail(where, key, "coefficients too large: the combination's prior scale overflows "
+                       "(bound: finite)");
     }
     if (con.sigma_si < B::kMinConstraintRatio * scale) {
       Fail(where, key,

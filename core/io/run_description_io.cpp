@@ -65,7 +65,7 @@ void ParsePriors(const YAML::Node& node, const YamlPlace& at, RunDescription* ru
   for (const EffectSpec& e : EffectCatalogue()) all.push_back(e.id);
   const ParameterLayout every(all);
   for (const auto& kv : node) {
-    const std::string name = kv.first.as<std::string>();
+    const std::string name = KeyOf(kv.first, at);
     const YamlPlace p = at.Child(name);
     if (every.IndexOf(name) < 0) p.Fail("unknown parameter (see `triadcal params`)");
     run->prior_sigma[name] = ReadPositive(kv.second, p);

@@ -235,11 +235,6 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
   }
   data.temp_C = std::move(temp.values);
   data.label = std::move(labels);
-  if (MountingDeterminant(run) < 0) {
-    Warn(warnings, std::string("mounting.axes [") + MountingAxisText(run, 0) + ", " +
-                       MountingAxisText(run, 1) + ", " + MountingAxisText(run, 2) +
-                       "] is a reflection (determinant -1), not a rotation: check the signs");
-  }
   return data;
 }
 

@@ -12,4 +12,8 @@ class InputError : public std::runtime_error {
   explicit InputError(const std::string& what) : std::runtime_error(what) {}
 };
 
+// The text of an error as one printable line: control characters (a newline,
+// a tab, an escape byte read from a file) become \n, \t or \xNN.
+std::string OneLine(const std::string& text);
+
 }  // namespace triadcal

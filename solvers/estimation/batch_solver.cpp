@@ -230,16 +230,17 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
     for (std::size_t e = 0; e < E; ++e) problem->AddParameterBlock(&x[6 * e], 6);
     problem->AddParameterBlock(theta.data(), n);
     for (std::size_t e = 0; e + 1 < E; ++e) {
+      ceres::LossFunction* loss = MakeLoss(opt).release();  // may throw: before the cost
       process_costs[e] = new ProcessCost(&inc[e], &lin.theta_lin, LQ[e],
                                          opt.exact_increments ? &p : nullptr, p.epochs[e],
                                          p.epochs[e + 1]);
-      problem->AddResidualBlock(process_costs[e], MakeLoss(opt).release(), &x[6 * e],
-                                &x[6 * (e + 1)], theta.data());
+      problem->AddResidualBlock(process_costs[e], loss, &x[6 * e], &x[6 * (e + 1)],
+                                theta.data());
     }
     for (std::size_t e = 0; e < E; ++e) {
+      ceres::LossFunction* loss = MakeLoss(opt).release();
       measurement_costs[e] = new MeasurementCost(&p, p.epochs[e], LR[e]);
-      problem->AddResidualBlock(measurement_costs[e], MakeLoss(opt).release(), &x[6 * e],
-                                theta.data());
+      problem->AddResidualBlock(measurement_costs[e], loss, &x[6 * e], theta.data());
     }
     problem->AddResidualBlock(new LinearThetaCost(A, b), nullptr, theta.data());
 
@@ -279,7 +280,10 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
     ceres::Solver::Summary summary;
     ceres::Solve(so, problem.get(), &summary);
     if (summary.termination_type == ceres::FAILURE) {
-      throw std::runtime_error("Ceres failed: " + summary.message);
+      throw std::runtime_error(
+          "Ceres failed: " + summary.message +
+          " (most likely cause in the input: a reading, angle or time far outside the "
+          "rest of the run, or a prior or constraint sigma that fixes a parameter)");
     }
     res.outer_iterations = outer + 1;
     res.ceres_iterations += static_cast<int>(summary.iterations.size()) - 1;
