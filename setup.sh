@@ -6,7 +6,8 @@ cd "$(dirname "$0")"
 
 packages=(build-essential cmake ninja-build pkg-config
           libceres-dev libeigen3-dev libsuitesparse-dev libcli11-dev libgtest-dev
-          libyaml-cpp-dev nlohmann-json3-dev libmatio-dev)
+          libyaml-cpp-dev nlohmann-json3-dev libmatio-dev
+          clang libclang-rt-14-dev)  # fuzz/: libFuzzer and the sanitizer runtimes
 
 missing=()
 for p in "${packages[@]}"; do

@@ -7,17 +7,22 @@
 #include <unistd.h>
 
 #include "core/model/errors.h"
+#include "core/io/column_mapping.h"
 #include "core/io/file_util.h"
 #include "core/io/run_io.h"
 #include "core/io/run_description_io.h"
+#include "solvers/static/mounting_search.h"
 
 namespace triadcal {
 
 LoadedRun LoadRunOrThrow(const std::string& run_yaml) {
   LoadedRun r;
   r.description = LoadRunDescription(run_yaml);
+  SetReadingsUnitName(ReadingsUnit(r.description));  // output units named for what was read
   RunWarnings warnings;
   r.data = LoadRunData(r.description, &warnings);
+  const std::string mounting = MountingWarning(r.description, r.data);
+  if (!mounting.empty()) warnings.lines.push_back(mounting);
   for (const std::string& w : warnings.lines) std::cerr << "triadcal: warning: " << OneLine(w) << "\n";
   return r;
 }

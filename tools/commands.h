@@ -26,5 +26,6 @@ Command AddApplyCommand(CLI::App& app);   // calibration -> specific force (cmd_
 Command AddObservabilityCommand(CLI::App& app);  // CRB, unobservable directions (cmd_observability.cpp)
 Command AddDesignCommand(CLI::App& app);  // experiment design from the CRB (cmd_design.cpp)
 Command AddMonteCarloCommand(CLI::App& app);  // Monte Carlo against the CRB (cmd_montecarlo.cpp)
+Command AddMountingCommand(CLI::App& app);  // mounting and zeros from the data (cmd_mounting.cpp)
 
 }  // namespace triadcal

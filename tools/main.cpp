@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
       triadcal::AddObservabilityCommand(app),
       triadcal::AddDesignCommand(app),
       triadcal::AddMonteCarloCommand(app),
+      triadcal::AddMountingCommand(app),
       triadcal::AddInfoCommand(app),
   };
 

@@ -37,7 +37,7 @@ ColumnSource ParseOneColumn(const ChannelInfo& ch, const YAML::Node& node, const
         "got " +
         DescribeNode(node));
   }
-  CheckKeys(node, at, {"source", "var", "unit", "scale", "offset", "value"});
+  CheckKeys(node, at, {"source", "var", "unit", "scale", "offset", "value", "counts_per_g"});
   int given = 0;
   for (const char* key : {"source", "var"}) {
     if (node[key]) {
@@ -63,6 +63,12 @@ ColumnSource ParseOneColumn(const ChannelInfo& ch, const YAML::Node& node, const
     if (c.scale == 0.0) at.Child("scale").Fail("must not be 0");
   }
   if (node["offset"]) c.offset = ReadNumber(node["offset"], at.Child("offset"));
+  if (node["counts_per_g"]) {
+    if (c.unit != "counts") at.Child("counts_per_g").Fail("only with unit: counts");
+    c.counts_per_g = ReadPositive(node["counts_per_g"], at.Child("counts_per_g"));
+  } else if (c.unit == "counts") {
+    at.Fail("readings in counts need their count scale: counts_per_g (e.g. 16384)");
+  }
   return c;
 }
 
@@ -115,7 +121,7 @@ std::vector<std::string> AllowedUnits(ChannelKind kind) {
     case ChannelKind::kRate:
       return {"deg/s", "rad/s"};
     case ChannelKind::kReading:
-      return {"mV", "V", "g", "mg"};
+      return {"mV", "V", "g", "mg", "m/s^2", "m/s\u00b2", "counts"};
     case ChannelKind::kTemperature:
       return {"C"};
   }
@@ -133,6 +139,10 @@ double OurUnitsPerSourceUnit(ChannelKind kind, const std::string& unit) {
       return u == "deg/s" ? 1.0 : u == "rad/s" ? 1.0 / kDegToRad : 0.0;
     case ChannelKind::kReading:
       // g and mg: 1 g = 1000 mV, i.e. a nominal scale of 1000 mV/g.
+      // m/s^2: at standard gravity, as accelerometer datasheets. counts stay counts
+      // (the triad's nominal scale is then counts_per_g, in counts/g).
+      if (u == "m/s^2" || u == "m/s\u00b2") return 1000.0 / kStandardGravity;
+      if (u == "counts") return 1.0;
       return u == "mV" ? 1.0 : u == "V" ? 1000.0 : u == "g" ? 1000.0 : u == "mg" ? 1.0 : 0.0;
     case ChannelKind::kTemperature:
       return u == "C" ? 1.0 : 0.0;
@@ -269,6 +279,19 @@ ColumnSource SourceOf(const RunDescription& run, const std::string& name) {
   return c;
 }
 
+std::string ReadingsUnit(const RunDescription& run) {
+  std::string unit;
+  for (const char* ch : {"wx", "wy", "wz"}) {
+    const std::string u = SourceOf(run, ch).unit;
+    const std::string named = u == "counts" ? "counts"
+                              : (u == "g" || u == "mg" || u == "m/s^2" || u == "m/s\u00b2") ? "mg"
+                                                                                          : "mV";
+    if (!unit.empty() && named != unit) return "mV";  // mixed: the parser refuses counts mixed
+    unit = named;
+  }
+  return unit;
+}
+
 int MountingDeterminant(const RunDescription& run) {
   // det of the signed permutation matrix P (row i has axis_sign[i] at column axis_source[i]).
   int inversions = 0;
@@ -317,6 +340,9 @@ void EmitColumns(const std::map<std::string, ColumnSource>& columns, YAML::Emitt
     if (unit != DefaultUnit(ch.kind)) *out << YAML::Key << "unit" << YAML::Value << unit;
     if (c.scale != 1.0) *out << YAML::Key << "scale" << YAML::Value << FormatDouble(c.scale);
     if (c.offset != 0.0) *out << YAML::Key << "offset" << YAML::Value << FormatDouble(c.offset);
+    if (c.counts_per_g) {
+      *out << YAML::Key << "counts_per_g" << YAML::Value << FormatDouble(*c.counts_per_g);
+    }
     *out << YAML::EndMap;
   }
   *out << YAML::EndMap;

@@ -249,7 +249,8 @@ TEST_F(RunDescriptionTest, ErrorsNameTheKey) {
             f + ": mounting.axes: expected a list of 3 signed IMU axes like [\"+y\", \"-z\", "
                 "\"-x\"], got 2 entries");
   EXPECT_EQ(ErrorOf("data: run.csv\ncolumns: {wx: {source: a, unit: volts}}\n"),
-            f + ": columns.wx.unit: unknown unit 'volts' for wx (allowed: mV, V, g, mg)");
+            f + ": columns.wx.unit: unknown unit 'volts' for wx (allowed: mV, V, g, mg, m/s^2, "
+                "m/s\xC2\xB2, counts)");
   EXPECT_EQ(ErrorOf("data: run.csv\ncolumns: {w_x: a}\n"),
             f + ": columns.w_x: unknown key (allowed: t, lambda1, lambda2, wx, wy, wz, "
                 "lambda1_rate, lambda2_rate, temp_C, label)");
