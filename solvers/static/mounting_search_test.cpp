@@ -22,8 +22,13 @@ struct Remounted {
 
 Remounted RemountedRun(double zero1_deg, double zero2_deg) {
   Scenario s = testing_fixtures::PaperScenario(20.0, 60.0, 2.0, 15.0, 5);
-  SetFromFileUnits(s.truth_layout, {{"dtheta_c", zero1_deg * 60.0}, {"dlambda2", zero2_deg * 60.0},
-                                    {"dpsi", 0.0}},
+  // The zeros are told apart from the triad's own misalignment only by the
+  // constraint (SPEC section 4: dlambda2 moves with gamma_y, gamma_z); with the
+  // six angles at 0 the search must find the zeros themselves.
+  SetFromFileUnits(s.truth_layout,
+                   {{"dtheta_c", zero1_deg * 60.0}, {"dlambda2", zero2_deg * 60.0}, {"dpsi", 0.0},
+                    {"alpha_x", 0.0}, {"alpha_y", 0.0}, {"beta_x", 0.0}, {"beta_z", 0.0},
+                    {"gamma_y", 0.0}, {"gamma_z", 0.0}},
                    &s.truth);
   Remounted r;
   r.run = s.run;
