@@ -401,6 +401,15 @@ TEST_F(CliInputErrors, SimulateRefusesRunsTooShortToUse) {
               {"sim"});
 }
 
+TEST_F(CliInputErrors, DesignLeavesNoSvgWhenItsJsonFails) {
+  // OUT is a folder: the JSON cannot be written, and the SVG (OUT with .svg)
+  // must not be left behind either.
+  const std::string sc = WriteText("sc.yaml", "profile: {duration_s: 20, rate_hz: 20}\n");
+  fs::create_directories(Path("out.json"));
+  ExpectError("design " + sc + " -o " + Path("out.json") + " --durations 10,20",
+              Path("out.json") + ": cannot write: Is a directory", {"out.svg"});
+}
+
 TEST_F(CliInputErrors, ControlCharactersAreEscaped) {
   const std::string csv = CsvWithField(12, 3, "1\x1b[2J");
   ExpectError(FitBad("data: bad.csv\n"),
