@@ -110,9 +110,10 @@ TEST_F(CliInputErrors, HugeTimeStampIsRefused) {
 TEST_F(CliInputErrors, HugeReadingIsRefused) {
   const std::string csv = CsvWithField(40, 4, "1e300");
   ExpectError(FitBad("data: bad.csv\n"),
-              csv + ":40: column 'wy': 1e+300 is 5.747e+297 g from the nominal bias at the "
-                    "nominal scale 174 per g (bound 1000 g): check columns.wy.unit and "
-                    "triad.scale_mV_per_g");
+              csv +
+                  ":40: column 'wy': 1e+300 is 5.747e+297 g from the nominal bias at the "
+                  "nominal scale 174 per g (bound 1000 g): check columns.wy.unit and "
+                  "triad.scale_mV_per_g");
 }
 
 TEST_F(CliInputErrors, HugeAngleInOneRowIsRefused) {
@@ -203,10 +204,10 @@ TEST_F(CliInputErrors, AnglesInRadiansOverALongRun) {
             " lambda2: {source: lambda2, scale: 0.0174532925199432958}}\n");
   const CliResult r = Run("fit " + Path("rad.yaml") + " -o " + Path("out.json"));
   EXPECT_EQ(r.exit_code, 2) << r.err;
-  EXPECT_EQ(r.err.rfind("triadcal: error: " + Path("run.csv") +
-                            ": column 'lambda1', column 'lambda2': in ",
-                        0),
-            0u)
+  EXPECT_EQ(
+      r.err.rfind(
+          "triadcal: error: " + Path("run.csv") + ": column 'lambda1', column 'lambda2': in ", 0),
+      0u)
       << r.err;
   EXPECT_NE(r.err.find("the angles look like radians, not degrees; set columns.lambda1.unit and "
                        "columns.lambda2.unit to rad\n"),
@@ -240,8 +241,9 @@ TEST_F(CliInputErrors, DecimalCommaShiftsTheColumns) {
 TEST_F(CliInputErrors, DuplicateColumnName) {
   const std::string csv = CsvWithLine(1, "t,lambda1,lambda2,wx,wy,wx");
   ExpectError(FitBad("data: bad.csv\n"),
-              csv + ":1: column 'wx' appears twice (fields 4 and 6); rename one, or name the "
-                    "columns with data_format.header");
+              csv +
+                  ":1: column 'wx' appears twice (fields 4 and 6); rename one, or name the "
+                  "columns with data_format.header");
 }
 
 // ---- group 4: damaged MAT files
@@ -263,8 +265,8 @@ void WriteMat(const std::string& path, const std::vector<std::vector<double>>& c
 
 TEST_F(CliInputErrors, TruncatedMatFileSaysDamaged) {
   const RunData d = Simulate(testing_fixtures::PaperScenario(50.0, 20.0, 2.0, 15.0, 11));
-  std::vector<std::vector<double>> cols = {d.t_s, d.lambda_rad[0], d.lambda_rad[1],
-                                           d.w_mV[0], d.w_mV[1], d.w_mV[2]};
+  std::vector<std::vector<double>> cols = {d.t_s,     d.lambda_rad[0], d.lambda_rad[1],
+                                           d.w_mV[0], d.w_mV[1],       d.w_mV[2]};
   for (double& x : cols[1]) x /= 0.0174532925199432958;
   for (double& x : cols[2]) x /= 0.0174532925199432958;
   for (const matio_compression c : {MAT_COMPRESSION_NONE, MAT_COMPRESSION_ZLIB}) {
@@ -274,8 +276,7 @@ TEST_F(CliInputErrors, TruncatedMatFileSaysDamaged) {
     WriteText("cut.mat", text.substr(0, text.size() * 9 / 10));
     const CliResult r = Run(FitBad("data: cut.mat\n"));
     EXPECT_EQ(r.exit_code, 2) << r.err;
-    EXPECT_EQ(r.err.rfind("triadcal: error: " + Path("cut.mat") + ": damaged MATLAB file (", 0),
-              0u)
+    EXPECT_EQ(r.err.rfind("triadcal: error: " + Path("cut.mat") + ": damaged MATLAB file (", 0), 0u)
         << r.err;
     EXPECT_FALSE(fs::exists(Path("out.json")));
   }
@@ -340,10 +341,10 @@ TEST_F(CliInputErrors, ApplyNeverOverwritesItsInput) {
 }
 
 TEST_F(CliInputErrors, FitResidualsOntoTheDataFileWritesNothing) {
-  ExpectError("fit " + Path("run.yaml") + " -o " + Path("out.json") + " --residuals " +
-                  Path("run.csv"),
-              Path("run.csv") + ": is the input file '" + Path("run.csv") +
-                  "' (an output never replaces an input; choose another name)");
+  ExpectError(
+      "fit " + Path("run.yaml") + " -o " + Path("out.json") + " --residuals " + Path("run.csv"),
+      Path("run.csv") + ": is the input file '" + Path("run.csv") +
+          "' (an output never replaces an input; choose another name)");
 }
 
 TEST_F(CliInputErrors, TwoOutputsOneFile) {
@@ -356,11 +357,11 @@ TEST_F(CliInputErrors, ApplyWithoutARealInverse) {
   // u = W + Kxx W^2 with Kxx = -1/g peaks at u = 0.25 g: readings of 1 g have
   // no real W, and Newton's last iterate must not be written.
   const std::string cal = WriteText("cal.json", CalibrationJson(-1.0));
-  const CliResult r =
-      Run("apply " + cal + " " + Path("run.yaml") + " -o " + Path("w.csv"));
+  const CliResult r = Run("apply " + cal + " " + Path("run.yaml") + " -o " + Path("w.csv"));
   EXPECT_EQ(r.exit_code, 2) << r.err;
-  EXPECT_EQ(r.err.rfind("triadcal: error: " + cal + ": the calibration has no real inverse for "
-                                                    "sample ",
+  EXPECT_EQ(r.err.rfind("triadcal: error: " + cal +
+                            ": the calibration has no real inverse for "
+                            "sample ",
                         0),
             0u)
       << r.err;
@@ -381,24 +382,23 @@ TEST_F(CliInputErrors, JsonNumberOutOfRange) {
 }
 
 TEST_F(CliInputErrors, EpochOutOfBounds) {
-  ExpectError("fit " + Path("run.yaml") + " -o " + Path("out.json") + " --epoch-s 1e-9",
-              "--epoch-s: Value 1e-9 not in range 0.010000 to 10.000000 (see `triadcal fit --help`)");
+  ExpectError(
+      "fit " + Path("run.yaml") + " -o " + Path("out.json") + " --epoch-s 1e-9",
+      "--epoch-s: Value 1e-9 not in range 0.010000 to 10.000000 (see `triadcal fit --help`)");
 }
 
 TEST_F(CliInputErrors, YamlKeysThatAreNotNames) {
-  ExpectError(FitBad("data: run.csv\npriors: {[a, b]: 1}\n"),
-              Path("bad.yaml") +
-                  ": priors: expected a name as key, got a list (a list or map is no key)");
+  ExpectError(
+      FitBad("data: run.csv\npriors: {[a, b]: 1}\n"),
+      Path("bad.yaml") + ": priors: expected a name as key, got a list (a list or map is no key)");
   ExpectError(FitBad("data: run.csv\n? [bench]\n: 1\n"),
               Path("bad.yaml") + ": expected a name as key, got a list (a list or map is no key)");
 }
 
 TEST_F(CliInputErrors, SimulateRefusesRunsTooShortToUse) {
-  const std::string sc =
-      WriteText("sc.yaml", "profile: {duration_s: 0.01, rate_hz: 100}\n");
+  const std::string sc = WriteText("sc.yaml", "profile: {duration_s: 0.01, rate_hz: 100}\n");
   ExpectError("simulate " + sc + " -o " + Path("sim"),
-              sc + ": profile: duration_s * rate_hz = 1 samples; a run needs at least 10",
-              {"sim"});
+              sc + ": profile: duration_s * rate_hz = 1 samples; a run needs at least 10", {"sim"});
 }
 
 TEST_F(CliInputErrors, DesignLeavesNoSvgWhenItsJsonFails) {
@@ -412,8 +412,7 @@ TEST_F(CliInputErrors, DesignLeavesNoSvgWhenItsJsonFails) {
 
 TEST_F(CliInputErrors, ControlCharactersAreEscaped) {
   const std::string csv = CsvWithField(12, 3, "1\x1b[2J");
-  ExpectError(FitBad("data: bad.csv\n"),
-              csv + ":12: column 'wx': not a number: '1\\x1B[2J'");
+  ExpectError(FitBad("data: bad.csv\n"), csv + ":12: column 'wx': not a number: '1\\x1B[2J'");
 }
 
 TEST_F(CliInputErrors, CommandLineSyntaxIsOneLine) {

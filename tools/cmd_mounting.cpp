@@ -5,7 +5,6 @@
 // the best one.
 #include <cstdio>
 #include <memory>
-
 #include <nlohmann/json.hpp>
 
 #include "core/model/units.h"
@@ -24,11 +23,12 @@ struct MountingArgs {
 int RunMounting(const MountingArgs& a) {
   if (!a.out_json.empty()) CheckOutputPath(a.out_json);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
-  const std::vector<MountingFit> fits = SearchMountings(
-      run.description, run.data, a.zero_range_deg * kDegToRad, 5.0 * kDegToRad);
-  std::printf("mounting: %zu samples; gravity misfit of each proper mounting [g], zeros fitted "
-              "within +-%g deg\n",
-              run.data.size(), a.zero_range_deg);
+  const std::vector<MountingFit> fits =
+      SearchMountings(run.description, run.data, a.zero_range_deg * kDegToRad, 5.0 * kDegToRad);
+  std::printf(
+      "mounting: %zu samples; gravity misfit of each proper mounting [g], zeros fitted "
+      "within +-%g deg\n",
+      run.data.size(), a.zero_range_deg);
   std::printf("  %-22s %10s %10s %10s   %s\n", "axes", "misfit_g", "zero1_deg", "zero2_deg",
               "scale per g (x, y, z)");
   nlohmann::json list = nlohmann::json::array();
@@ -48,9 +48,10 @@ int RunMounting(const MountingArgs& a) {
   const MountingFit& best = fits.front();
   std::printf("\nsuggested run.yaml lines (the zeros as offsets of the recorded angles):\n");
   std::printf("  mounting: {axes: %s}\n", best.AxesText().c_str());
-  std::printf("  columns: {lambda1: {source: ..., offset: %.2f}, lambda2: {source: ..., offset: "
-              "%.2f}}\n",
-              best.zero_rad[0] / kDegToRad, best.zero_rad[1] / kDegToRad);
+  std::printf(
+      "  columns: {lambda1: {source: ..., offset: %.2f}, lambda2: {source: ..., offset: "
+      "%.2f}}\n",
+      best.zero_rad[0] / kDegToRad, best.zero_rad[1] / kDegToRad);
   if (fits.size() > 1 && fits[1].rms_g < 1.5 * best.rms_g) {
     std::printf("note: %s fits almost as well (%.4g g): the run does not tell them apart well\n",
                 fits[1].AxesText().c_str(), fits[1].rms_g);

@@ -44,11 +44,11 @@ class InputUnitsTest : public testing_fixtures::TempDirTest {
 
 TEST_F(InputUnitsTest, CountsKeepTheirScaleAndNameTheOutputUnits) {
   WriteRun(16384.0, 0.0);
-  const RunDescription run = LoadRunDescription(WriteText(
-      "run.yaml",
-      "data: run.csv\ncolumns:\n  wx: {source: ax, unit: counts, counts_per_g: 16384}\n"
-      "  wy: {source: ay, unit: counts, counts_per_g: 16000}\n"
-      "  wz: {source: az, unit: counts, counts_per_g: 16384}\n"));
+  const RunDescription run = LoadRunDescription(
+      WriteText("run.yaml",
+                "data: run.csv\ncolumns:\n  wx: {source: ax, unit: counts, counts_per_g: 16384}\n"
+                "  wy: {source: ay, unit: counts, counts_per_g: 16000}\n"
+                "  wz: {source: az, unit: counts, counts_per_g: 16384}\n"));
   EXPECT_EQ(run.scale_mV_per_g[0], 16384.0);
   EXPECT_EQ(run.scale_mV_per_g[1], 16000.0);
   EXPECT_EQ(run.bias_mV[0], 0.0);

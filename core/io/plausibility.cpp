@@ -46,8 +46,8 @@ void CheckBench(const RunDescription& run, const std::string& where) {
   }
   if (run.g_mps2 < B::kMinG_mps2 || run.g_mps2 > B::kMaxG_mps2) {
     Fail(where, "bench.g_mps2",
-         Num(run.g_mps2) + " m/s^2 is outside [" + Num(B::kMinG_mps2) + ", " +
-             Num(B::kMaxG_mps2) + "] (gravity on the Earth's surface; the unit is m/s^2)");
+         Num(run.g_mps2) + " m/s^2 is outside [" + Num(B::kMinG_mps2) + ", " + Num(B::kMaxG_mps2) +
+             "] (gravity on the Earth's surface; the unit is m/s^2)");
   }
 }
 
@@ -106,16 +106,15 @@ void CheckPriors(const RunDescription& run, const DefaultScales& d, const std::s
     const double ratio = sigma / def;
     if (ratio < 1.0 / B::kPriorRatio || ratio > B::kPriorRatio) {
       Fail(where, "priors." + name,
-           Num(sigma) + " " + info.unit + " is " + Num(ratio) + " times the default " +
-               Num(def) + " " + info.unit + " (bound: between 1e-6 and 1e6 times; beyond, " +
+           Num(sigma) + " " + info.unit + " is " + Num(ratio) + " times the default " + Num(def) +
+               " " + info.unit + " (bound: between 1e-6 and 1e6 times; beyond, " +
                "the prior either fixes the parameter or adds nothing, and ruins the "
                "conditioning)");
     }
   }
 }
 
-void CheckConstraints(const RunDescription& run, const DefaultScales& d,
-                      const std::string& where) {
+void CheckConstraints(const RunDescription& run, const DefaultScales& d, const std::string& where) {
   for (std::size_t c = 0; c < run.constraints.size(); ++c) {
     const Constraint& con = run.constraints[c];
     double scale2 = 0.0;
@@ -131,8 +130,9 @@ void CheckConstraints(const RunDescription& run, const DefaultScales& d,
     const ParameterInfo& info = d.layout.info(first);
     const std::string key = "constraints[" + std::to_string(c) + "] (\"" + con.expr + "\")";
     if (!std::isfinite(scale)) {
-      Fail(where, key, "coefficients too large: the combination's prior scale overflows "
-                       "(bound: finite)");
+      Fail(where, key,
+           "coefficients too large: the combination's prior scale overflows "
+           "(bound: finite)");
     }
     if (con.sigma_si < B::kMinConstraintRatio * scale) {
       Fail(where, key,
@@ -187,14 +187,14 @@ void CheckSamplesPlausible(const DataTable& table, const ChannelSet& c,
     for (std::size_t k = 1; k < t.size(); ++k) dt[k - 1] = t[k] - t[k - 1];
     const double median = Median(dt);
     if (median > B::kMaxMedianInterval_s) {
-      throw InputError(table.path + ": " + c.t->label + ": median sample interval " +
-                       Num(median) + " s is beyond the bound " + Num(B::kMaxMedianInterval_s) +
+      throw InputError(table.path + ": " + c.t->label + ": median sample interval " + Num(median) +
+                       " s is beyond the bound " + Num(B::kMaxMedianInterval_s) +
                        " s (the bench swings with periods of seconds): is the time in ms? "
                        "set columns.t.unit: ms");
     }
     if (median < B::kMinMedianInterval_s) {
-      throw InputError(table.path + ": " + c.t->label + ": median sample interval " +
-                       Num(median) + " s is below the bound " + Num(B::kMinMedianInterval_s) +
+      throw InputError(table.path + ": " + c.t->label + ": median sample interval " + Num(median) +
+                       " s is below the bound " + Num(B::kMinMedianInterval_s) +
                        " s (50 kHz): is the time in us, or in s declared as ms?");
     }
   }
@@ -223,9 +223,9 @@ void CheckSamplesPlausible(const DataTable& table, const ChannelSet& c,
       if (std::abs(w.values[k] - nominal_bias[i]) > bound) {
         throw InputError(table.Where(k) + ": " + w.label + ": " + Num(w.values[k]) + " is " +
                          Num(std::abs(w.values[k] - nominal_bias[i]) / nominal_scale[i]) +
-                         " g from the nominal bias at the nominal scale " +
-                         Num(nominal_scale[i]) + " per g (bound " + Num(B::kMaxReadingInG) +
-                         " g): check columns." + w.name + ".unit and triad.scale_mV_per_g");
+                         " g from the nominal bias at the nominal scale " + Num(nominal_scale[i]) +
+                         " per g (bound " + Num(B::kMaxReadingInG) + " g): check columns." +
+                         w.name + ".unit and triad.scale_mV_per_g");
       }
     }
   }
@@ -240,9 +240,8 @@ void CheckAngleRates(const DataTable& table, const ChannelValues& t,
       const double step = std::abs(v[k] - v[k - 1]);
       const double dt = ts[k] - ts[k - 1];
       if (step > 1.0 && step > B::kMaxRate_deg_s * dt) {
-        throw InputError(table.Where(k) + ": " + l.label + ": jumps by " + Num(step) +
-                         " deg in " + Num(dt) + " s, beyond the bound " +
-                         Num(B::kMaxRate_deg_s) +
+        throw InputError(table.Where(k) + ": " + l.label + ": jumps by " + Num(step) + " deg in " +
+                         Num(dt) + " s, beyond the bound " + Num(B::kMaxRate_deg_s) +
                          " deg/s (10 turns per second): a wild angle, or the time unit is "
                          "wrong");
       }
@@ -251,8 +250,8 @@ void CheckAngleRates(const DataTable& table, const ChannelValues& t,
 }
 
 void CheckAnglesNotRadiansWindowed(const DataTable& table, const ChannelValues (&lambda)[2],
-                                   const ChannelValues (&w)[3],
-                                   const double (&nominal_scale)[3], double nominal_noise) {
+                                   const ChannelValues (&w)[3], const double (&nominal_scale)[3],
+                                   double nominal_noise) {
   constexpr double kWindowPath_deg = 6.0;
   const std::size_t n = lambda[0].values.size();
   if (lambda[1].values.size() != n) return;
@@ -304,8 +303,8 @@ std::vector<std::string> CheckConstantChannels(const DataTable& table,
                                                const ChannelValues (&w)[3],
                                                const bool (&w_from_file)[3]) {
   auto constant = [](const ChannelValues& c) {
-    return !c.values.empty() &&
-           std::all_of(c.values.begin(), c.values.end(), [&](double v) { return v == c.values[0]; });
+    return !c.values.empty() && std::all_of(c.values.begin(), c.values.end(),
+                                            [&](double v) { return v == c.values[0]; });
   };
   auto span = [](const ChannelValues& c) {
     if (c.values.empty()) return 0.0;

@@ -26,10 +26,10 @@ struct PlausibilityBounds {
   static constexpr double kMaxG_mps2 = 9.9;
   static constexpr double kMinScale = 1e-3;  // readings unit per g
   static constexpr double kMaxScale = 1e8;
-  static constexpr double kMaxBiasInG = 1000.0;      // |bias| / scale
-  static constexpr double kMinNoiseInG = 1e-7;       // noise / scale
+  static constexpr double kMaxBiasInG = 1000.0;  // |bias| / scale
+  static constexpr double kMinNoiseInG = 1e-7;   // noise / scale
   static constexpr double kMaxNoiseInG = 1.0;
-  static constexpr double kPriorRatio = 1e6;         // override vs default sigma
+  static constexpr double kPriorRatio = 1e6;           // override vs default sigma
   static constexpr double kMinConstraintRatio = 1e-6;  // sigma vs its prior scale
   static constexpr double kMaxConstraintValue = 1e3;   // |value| in prior scales
   static constexpr double kMaxAbsTime_s = 1e11;
@@ -38,7 +38,7 @@ struct PlausibilityBounds {
   static constexpr double kMinMedianInterval_s = 2e-5;
   static constexpr double kMaxAbsAngle_deg = 1e7;
   static constexpr double kMaxRate_deg_s = 3600.0;
-  static constexpr double kMaxReadingInG = 1000.0;   // |reading - bias| / scale
+  static constexpr double kMaxReadingInG = 1000.0;  // |reading - bias| / scale
 };
 
 // The run description: bench, triad, priors and constraints. `where` is the
@@ -66,8 +66,8 @@ void CheckAngleRates(const DataTable& table, const ChannelValues& t,
 // degrees) move by under 6 deg, gravity cannot turn by more than 0.1 g, yet the
 // readings swing by more than 0.5 g in most of them.
 void CheckAnglesNotRadiansWindowed(const DataTable& table, const ChannelValues (&lambda)[2],
-                                   const ChannelValues (&w)[3],
-                                   const double (&nominal_scale)[3], double nominal_noise);
+                                   const ChannelValues (&w)[3], const double (&nominal_scale)[3],
+                                   double nominal_noise);
 
 // Channels read from the file (not declared constant) that never change where
 // motion is expected: both angles constant is an error (no bench motion; a run

@@ -115,8 +115,8 @@ MountingFit Fit(const std::vector<std::vector<double>>& imu, const std::vector<s
 std::string MountingFit::AxesText() const {
   std::string s = "[";
   for (int i = 0; i < 3; ++i) {
-    s += std::string(i ? ", " : "") + "\"" + (axis_sign[i] < 0 ? "-" : "+") + "xyz"[axis_source[i]] +
-         "\"";
+    s += std::string(i ? ", " : "") + "\"" + (axis_sign[i] < 0 ? "-" : "+") +
+         "xyz"[axis_source[i]] + "\"";
   }
   return s + "]";
 }
@@ -153,13 +153,13 @@ std::vector<MountingFit> SearchMountings(const RunDescription& run, const RunDat
     const std::vector<Eigen::Vector3d> W = GravityProjection(run, data, idx, z1, z2);
     for (std::size_t m = 0; m < mountings.size(); ++m) {
       const int src[3] = {mountings[m].first[0], mountings[m].first[1], mountings[m].first[2]};
-      const double sg[3] = {mountings[m].second[0], mountings[m].second[1],
-                            mountings[m].second[2]};
+      const double sg[3] = {mountings[m].second[0], mountings[m].second[1], mountings[m].second[2]};
       const MountingFit f = Fit(imu, idx, W, src, sg, z1, z2);
       // Prefer the smaller zeros among fits equal to 0.1 %.
-      const bool better = f.rms_g < best[m].rms_g * 0.999 ||
-                          (f.rms_g <= best[m].rms_g * 1.001 &&
-                           std::hypot(z1, z2) < std::hypot(best[m].zero_rad[0], best[m].zero_rad[1]));
+      const bool better =
+          f.rms_g < best[m].rms_g * 0.999 ||
+          (f.rms_g <= best[m].rms_g * 1.001 &&
+           std::hypot(z1, z2) < std::hypot(best[m].zero_rad[0], best[m].zero_rad[1]));
       if (better) best[m] = f;
     }
   };
@@ -177,12 +177,10 @@ std::vector<MountingFit> SearchMountings(const RunDescription& run, const RunDat
           if (a == 0 && b == 0) continue;
           const double z1 = c1 + a * step, z2 = c2 + b * step;
           if (std::abs(z1) > zero_range_rad || std::abs(z2) > zero_range_rad) continue;
-          const MountingFit f = Fit(imu, idx, GravityProjection(run, data, idx, z1, z2),
-                                    {best[m].axis_source[0], best[m].axis_source[1],
-                                     best[m].axis_source[2]},
-                                    {best[m].axis_sign[0], best[m].axis_sign[1],
-                                     best[m].axis_sign[2]},
-                                    z1, z2);
+          const MountingFit f =
+              Fit(imu, idx, GravityProjection(run, data, idx, z1, z2),
+                  {best[m].axis_source[0], best[m].axis_source[1], best[m].axis_source[2]},
+                  {best[m].axis_sign[0], best[m].axis_sign[1], best[m].axis_sign[2]}, z1, z2);
           if (f.rms_g < best[m].rms_g) best[m] = f;
         }
       }

@@ -25,11 +25,11 @@ namespace triadcal {
 struct MountingFit {
   int axis_source[3] = {0, 1, 2};
   double axis_sign[3] = {1.0, 1.0, 1.0};
-  double zero_rad[2] = {0.0, 0.0};  // z1 (outer, dtheta_c), z2 (inner, dlambda2)
-  double rms_g = 0.0;               // RMS misfit of the gravity projection [g]
+  double zero_rad[2] = {0.0, 0.0};    // z1 (outer, dtheta_c), z2 (inner, dlambda2)
+  double rms_g = 0.0;                 // RMS misfit of the gravity projection [g]
   double scale[3] = {0.0, 0.0, 0.0};  // fitted K_i [readings unit per g]
   double bias[3] = {0.0, 0.0, 0.0};
-  std::string AxesText() const;     // ["+y", "-z", "-x"]
+  std::string AxesText() const;  // ["+y", "-z", "-x"]
 };
 
 // Readings of the IMU's own axes from a loaded run (LoadRunData applied the

@@ -26,9 +26,15 @@ Remounted RemountedRun(double zero1_deg, double zero2_deg) {
   // constraint (SPEC section 4: dlambda2 moves with gamma_y, gamma_z); with the
   // six angles at 0 the search must find the zeros themselves.
   SetFromFileUnits(s.truth_layout,
-                   {{"dtheta_c", zero1_deg * 60.0}, {"dlambda2", zero2_deg * 60.0}, {"dpsi", 0.0},
-                    {"alpha_x", 0.0}, {"alpha_y", 0.0}, {"beta_x", 0.0}, {"beta_z", 0.0},
-                    {"gamma_y", 0.0}, {"gamma_z", 0.0}},
+                   {{"dtheta_c", zero1_deg * 60.0},
+                    {"dlambda2", zero2_deg * 60.0},
+                    {"dpsi", 0.0},
+                    {"alpha_x", 0.0},
+                    {"alpha_y", 0.0},
+                    {"beta_x", 0.0},
+                    {"beta_z", 0.0},
+                    {"gamma_y", 0.0},
+                    {"gamma_z", 0.0}},
                    &s.truth);
   Remounted r;
   r.run = s.run;
@@ -54,17 +60,16 @@ TEST(MountingSearch, FindsTheMountingAndTheZeros) {
   EXPECT_EQ(fits[0].AxesText(), "[\"+y\", \"-z\", \"-x\"]");
   EXPECT_NEAR(fits[0].zero_rad[0] / kDegToRad, 2.0, 0.3);
   EXPECT_NEAR(fits[0].zero_rad[1] / kDegToRad, -3.0, 0.3);
-  EXPECT_LT(fits[0].rms_g, 0.05);       // dynamic terms and the triad's own errors
-  EXPECT_GT(fits[1].rms_g, 0.2);        // every other mounting is far worse
+  EXPECT_LT(fits[0].rms_g, 0.05);  // dynamic terms and the triad's own errors
+  EXPECT_GT(fits[1].rms_g, 0.2);   // every other mounting is far worse
   for (int i = 0; i < 3; ++i) EXPECT_NEAR(fits[0].scale[i], 174.0, 4.0) << i;
 }
 
 TEST(MountingSearch, DeclaredMountingThatFitsWorseIsAWarning) {
   const Remounted r = RemountedRun(0.0, 0.0);
   const std::string w = MountingWarning(r.run, r.data);
-  EXPECT_EQ(w.rfind("mounting.axes [\"+x\", \"+y\", \"+z\"] fits the data worse (gravity misfit ",
-                    0),
-            0u)
+  EXPECT_EQ(
+      w.rfind("mounting.axes [\"+x\", \"+y\", \"+z\"] fits the data worse (gravity misfit ", 0), 0u)
       << w;
   EXPECT_NE(w.find("than [\"+y\", \"-z\", \"-x\"] ("), std::string::npos) << w;
   // Declared right: no warning.
