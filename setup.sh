@@ -9,7 +9,8 @@ packages=(build-essential cmake ninja-build pkg-config
           libyaml-cpp-dev nlohmann-json3-dev libmatio-dev
           pybind11-dev python3-dev python3-numpy python3-pytest
           libopenmpi-dev openmpi-bin
-          chromium)  # chromium: the HTML report's browser test (headless)
+          chromium  # the HTML report's browser test (headless)
+          clang libclang-rt-14-dev)  # fuzz/: libFuzzer and the sanitizer runtimes
 
 missing=()
 for p in "${packages[@]}"; do

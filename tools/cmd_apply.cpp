@@ -20,6 +20,7 @@ struct ApplyArgs {
 };
 
 int RunApply(const ApplyArgs& a) {
+  CheckOutputPath(a.out_csv);
   const Calibration cal = LoadCalibration(a.calibration_json);
   RecordInput("calibration", a.calibration_json);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);

@@ -125,7 +125,8 @@ Command AddCompareCommand(CLI::App& app) {
   c.app->add_option("--report", a->report_html,
                     "also write the HTML report of OUT (one self-contained file)");
   c.app->add_option("--effects", a->effects, "catalogue effects to estimate too, e.g. a,b");
-  c.app->add_option("--epoch-s", a->epoch_s, "interval between epochs [s]")->capture_default_str();
+  c.app->add_option("--epoch-s", a->epoch_s, "interval between epochs [s]")->capture_default_str()
+      ->check(kEpochRange);
   c.run = [a] { return RunCompare(*a); };
   return c;
 }

@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <nlohmann/json.hpp>
 
@@ -127,6 +128,8 @@ DesignStudyOptions StudyOptions(const DesignArgs& a, const ParameterLayout& layo
 int RunDesign(const DesignArgs& a) {
   if (!a.report_html.empty()) CheckOutputPath(a.report_html);
   const auto t_start = std::chrono::steady_clock::now();
+  CheckOutputPath(a.out_json);
+  CheckOutputPath(a.plot_svg.empty() ? DefaultSvgPath(a.out_json) : a.plot_svg);
   const Scenario s = LoadScenario(a.scenario);
   RecordInput("scenario", a.scenario);
   CheckOverwrite(a.out_json);  // before the long work
@@ -188,7 +191,8 @@ Command AddDesignCommand(CLI::App& app) {
       ->capture_default_str();
   c.app->add_option("--effects", a->effects, "catalogue effects to include, e.g. a,b");
   c.app->add_option("--epoch-s", a->epoch_s, "interval between trajectory epochs [s]")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(kEpochRange);
   c.app->add_option("--threads", a->threads, "threads (0: all cores)")->capture_default_str();
   c.run = [a] { return RunDesign(*a); };
   return c;

@@ -155,7 +155,8 @@ Command AddDiagnoseCommand(CLI::App& app) {
   c.app->add_option("--alpha", a->alpha, "false-selection rate per round")->capture_default_str();
   c.app->add_option("--max-effects", a->max_effects, "at most this many effects")
       ->capture_default_str();
-  c.app->add_option("--epoch-s", a->epoch_s, "interval between epochs [s]")->capture_default_str();
+  c.app->add_option("--epoch-s", a->epoch_s, "interval between epochs [s]")->capture_default_str()
+      ->check(kEpochRange);
   c.run = [a] { return RunDiagnose(*a); };
   return c;
 }

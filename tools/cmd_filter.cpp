@@ -204,7 +204,8 @@ Command AddFilterCommand(CLI::App& app) {
   c.app->add_option("--series", args->series_csv,
                     "write forward-pass estimates, sigma and innovations against time (CSV)");
   c.app->add_option("--epoch-s", args->epoch_s, "interval between measurement epochs [s]")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(kEpochRange);
   c.app->add_option("--rate-window-s", args->rate_window_s,
                     "half window of the local cubic fit giving lambda' from the angles [s]")
       ->capture_default_str();

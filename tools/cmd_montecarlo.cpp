@@ -159,7 +159,8 @@ Command AddMonteCarloCommand(CLI::App& app) {
                     "machine)")
       ->capture_default_str();
   c.app->add_option("--effects", a->effects, "catalogue effects to estimate too, e.g. a,b");
-  c.app->add_option("--epoch-s", a->epoch_s, "interval between epochs [s]")->capture_default_str();
+  c.app->add_option("--epoch-s", a->epoch_s, "interval between epochs [s]")->capture_default_str()
+      ->check(kEpochRange);
   c.app->add_option("--tolerance", a->tolerance,
                     "relative tolerance of scatter / CRB reported as within or outside")
       ->capture_default_str();

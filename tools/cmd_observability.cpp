@@ -135,7 +135,8 @@ Command AddObservabilityCommand(CLI::App& app) {
                     "nominal values (run) or the truth (scenario)");
   c.app->add_option("--effects", a->effects, "catalogue effects to include, e.g. a,b");
   c.app->add_option("--epoch-s", a->epoch_s, "interval between trajectory epochs [s]")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(kEpochRange);
   c.app->add_option("--rate-window-s", a->rate_window_s,
                     "half window of the local cubic fit giving lambda' from the angles [s]")
       ->capture_default_str();

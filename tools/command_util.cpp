@@ -10,22 +10,27 @@
 #include <unistd.h>
 
 #include "core/model/errors.h"
+#include "core/io/column_mapping.h"
 #include "core/io/file_util.h"
 #include "core/io/run_io.h"
 #include "core/io/run_description_io.h"
 #include "tools/provenance.h"
 #include "tools/report/html_report.h"
+#include "solvers/static/mounting_search.h"
 
 namespace triadcal {
 
 LoadedRun LoadRunOrThrow(const std::string& run_yaml) {
   LoadedRun r;
   r.description = LoadRunDescription(run_yaml);
+  SetReadingsUnitName(ReadingsUnit(r.description));  // output units named for what was read
   RecordInput("run", run_yaml);
   RecordSensor(r.description.sensor_serial, r.description.sensor_model);
   RunWarnings warnings;
   r.data = LoadRunData(r.description, &warnings);
-  for (const std::string& w : warnings.lines) std::cerr << "triadcal: warning: " << w << "\n";
+  const std::string mounting = MountingWarning(r.description, r.data);
+  if (!mounting.empty()) warnings.lines.push_back(mounting);
+  for (const std::string& w : warnings.lines) std::cerr << "triadcal: warning: " << OneLine(w) << "\n";
   RecordInput("data", r.description.data_path);
   return r;
 }
@@ -138,6 +143,7 @@ void CheckOutputPath(const std::string& path) {
   if (!fs::is_directory(dir) || access(dir.c_str(), W_OK) != 0) {
     throw InputError(path + ": cannot write (folder missing or not writable)");
   }
+  NoteOutputFile(path);
 }
 
 void WriteJson(const nlohmann::json& j, const std::string& path) {

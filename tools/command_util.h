@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include "core/model/effects.h"
@@ -91,6 +92,11 @@ class StageProgress {
 // written as out_json) into report_html; nothing when report_html is empty.
 void WriteReportIfAsked(const std::string& report_html, const nlohmann::json& out,
                         const std::string& out_json);
+
+// Bounds of --epoch-s [s]: below 10 ms an epoch holds about one sample and the
+// problem grows past what a run needs (and past minutes of solving); above 10 s
+// the bench (periods of seconds) turns by more than one swing between epochs.
+inline const CLI::Range kEpochRange(0.01, 10.0);
 
 // Adds "provenance" (tools/provenance.h), refuses to replace an output of
 // other inputs (CheckOverwrite), serialises with 2-space indentation and

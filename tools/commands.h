@@ -30,5 +30,6 @@ Command AddExportCommand(CLI::App& app);  // calibration -> C99 code or matrices
 Command AddBatchCommand(CLI::App& app);  // a manifest of runs, filed by serial (cmd_batch.cpp)
 Command AddMergeCommand(CLI::App& app);  // shards of montecarlo/batch -> one output (cmd_merge.cpp)
 Command AddReportCommand(CLI::App& app);  // HTML report from OUT files (cmd_report.cpp)
+Command AddMountingCommand(CLI::App& app);  // mounting and zeros from the data (cmd_mounting.cpp)
 
 }  // namespace triadcal

@@ -111,7 +111,8 @@ void AddFitOptions(CLI::App* app, FitSettings* a) {
                   "schur (Schur complement on theta) or ceres (SuiteSparse QR)")
       ->capture_default_str();
   app->add_option("--epoch-s", a->epoch_s, "interval between trajectory epochs [s]")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(kEpochRange);
   app->add_option("--rate-window-s", a->rate_window_s,
                   "half window of the local cubic fit giving lambda' from the angles [s]")
       ->capture_default_str();

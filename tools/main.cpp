@@ -6,7 +6,9 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
+#include <glog/logging.h>
 
+#include "core/io/file_util.h"
 #include "core/model/errors.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
@@ -32,12 +34,18 @@ int main(int argc, char** argv) {
       triadcal::AddObservabilityCommand(app),
       triadcal::AddDesignCommand(app),
       triadcal::AddMonteCarloCommand(app),
+      triadcal::AddMountingCommand(app),
       triadcal::AddInfoCommand(app),
       triadcal::AddExportCommand(app),
       triadcal::AddBatchCommand(app),
       triadcal::AddMergeCommand(app),
       triadcal::AddReportCommand(app),
   };
+
+  // Library logs (Ceres through glog) never reach the user: below FATAL they
+  // are dropped; what matters comes back as an error or a warning line.
+  FLAGS_minloglevel = google::GLOG_FATAL;
+  FLAGS_logtostderr = false;
 
   bool quiet = false;
   for (const triadcal::Command& c : commands) {
@@ -48,9 +56,20 @@ int main(int argc, char** argv) {
   triadcal::SetCommandLine(argc, argv);
   try {
     app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
+  } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::string command;
+    for (const CLI::App* sub : app.get_subcommands()) command = sub->get_name();
+    std::cerr << "triadcal: error: " << triadcal::OneLine(e.what()) << " (see `triadcal "
+              << (command.empty() ? "" : command + " ") << "--help`)\n";
+    return 2;
   }
+  triadcal::EnableOutputGuard();  // an output never replaces an input
   try {
     for (const triadcal::Command& c : commands) {
       if (!c.app->parsed()) continue;
@@ -70,16 +89,17 @@ int main(int argc, char** argv) {
     const auto it = kFlags.find(e.option());
     if (triadcal::MpiRoot()) {
       std::cerr << "triadcal: error: "
-                << (it == kFlags.end() ? std::string(e.what()) : it->second + ": " + e.problem())
+                << triadcal::OneLine(it == kFlags.end() ? std::string(e.what())
+                                                        : it->second + ": " + e.problem())
                 << "\n";
     }
     return 2;
   } catch (const triadcal::InputError& e) {
     // Every rank reads the same input and fails the same way: rank 0 says so.
-    if (triadcal::MpiRoot()) std::cerr << "triadcal: error: " << e.what() << "\n";
+    if (triadcal::MpiRoot()) std::cerr << "triadcal: error: " << triadcal::OneLine(e.what()) << "\n";
     return 2;
   } catch (const std::exception& e) {
-    std::cerr << "triadcal: internal error: " << e.what() << "\n";
+    std::cerr << "triadcal: internal error: " << triadcal::OneLine(e.what()) << "\n";
     triadcal::MpiAbortIfShared(3);  // other ranks may wait for this one
     return 3;
   }

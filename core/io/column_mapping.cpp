@@ -37,7 +37,7 @@ ColumnSource ParseOneColumn(const ChannelInfo& ch, const YAML::Node& node, const
         "got " +
         DescribeNode(node));
   }
-  CheckKeys(node, at, {"source", "var", "unit", "scale", "offset", "value"});
+  CheckKeys(node, at, {"source", "var", "unit", "scale", "offset", "value", "counts_per_g"});
   int given = 0;
   for (const char* key : {"source", "var"}) {
     if (node[key]) {
@@ -63,6 +63,12 @@ ColumnSource ParseOneColumn(const ChannelInfo& ch, const YAML::Node& node, const
     if (c.scale == 0.0) at.Child("scale").Fail("must not be 0");
   }
   if (node["offset"]) c.offset = ReadNumber(node["offset"], at.Child("offset"));
+  if (node["counts_per_g"]) {
+    if (c.unit != "counts") at.Child("counts_per_g").Fail("only with unit: counts");
+    c.counts_per_g = ReadPositive(node["counts_per_g"], at.Child("counts_per_g"));
+  } else if (c.unit == "counts") {
+    at.Fail("readings in counts need their count scale: counts_per_g (e.g. 16384)");
+  }
   return c;
 }
 
@@ -115,7 +121,7 @@ std::vector<std::string> AllowedUnits(ChannelKind kind) {
     case ChannelKind::kRate:
       return {"deg/s", "rad/s"};
     case ChannelKind::kReading:
-      return {"mV", "V", "g", "mg"};
+      return {"mV", "V", "g", "mg", "m/s^2", "m/s\u00b2", "counts"};
     case ChannelKind::kTemperature:
       return {"C"};
   }
@@ -133,6 +139,10 @@ double OurUnitsPerSourceUnit(ChannelKind kind, const std::string& unit) {
       return u == "deg/s" ? 1.0 : u == "rad/s" ? 1.0 / kDegToRad : 0.0;
     case ChannelKind::kReading:
       // g and mg: 1 g = 1000 mV, i.e. a nominal scale of 1000 mV/g.
+      // m/s^2: at standard gravity, as accelerometer datasheets. counts stay counts
+      // (the triad's nominal scale is then counts_per_g, in counts/g).
+      if (u == "m/s^2" || u == "m/s\u00b2") return 1000.0 / kStandardGravity;
+      if (u == "counts") return 1.0;
       return u == "mV" ? 1.0 : u == "V" ? 1000.0 : u == "g" ? 1000.0 : u == "mg" ? 1.0 : 0.0;
     case ChannelKind::kTemperature:
       return u == "C" ? 1.0 : 0.0;
@@ -152,7 +162,7 @@ std::map<std::string, ColumnSource> ParseColumns(const YAML::Node& node, const Y
   names.push_back(kLabelChannel);
   CheckKeys(node, at, names);
   for (const auto& kv : node) {
-    const std::string name = kv.first.Scalar();
+    const std::string name = KeyOf(kv.first, at);
     if (name == kLabelChannel) {
       out[name] = ParseLabelColumn(kv.second, at.Child(name));
       continue;
@@ -174,7 +184,7 @@ std::map<std::string, Eigen::Vector3d> ParsePositions(const YAML::Node& node,
   }
   std::map<std::string, Eigen::Vector3d> out;
   for (const auto& kv : node) {
-    const std::string label = kv.first.Scalar();
+    const std::string label = KeyOf(kv.first, at);
     const YamlPlace p = at.Child(label);
     if (out.count(label)) p.Fail("given twice");
     Eigen::Vector3d v;
@@ -219,12 +229,12 @@ Eigen::Vector3d ImuToPlatform(const RunDescription& run, const Eigen::Vector3d& 
 
 void ParseMounting(const YAML::Node& node, const YamlPlace& at, RunDescription* run) {
   CheckKeys(node, at, {"axes"});
-  if (!node["axes"]) at.Fail("missing 'axes' (e.g. axes: [\"+y\", \"-z\", \"+x\"])");
+  if (!node["axes"]) at.Fail("missing 'axes' (e.g. axes: [\"+y\", \"-z\", \"-x\"])");
   const YamlPlace axes_at = at.Child("axes");
   const YAML::Node axes = node["axes"];
   if (!axes.IsSequence() || axes.size() != 3) {
     axes_at.Fail(
-        "expected a list of 3 signed IMU axes like [\"+y\", \"-z\", \"+x\"], got " +
+        "expected a list of 3 signed IMU axes like [\"+y\", \"-z\", \"-x\"], got " +
         (axes.IsSequence() ? std::to_string(axes.size()) + " entries" : DescribeNode(axes)));
   }
   bool used[3] = {false, false, false};
@@ -249,6 +259,15 @@ void ParseMounting(const YAML::Node& node, const YamlPlace& at, RunDescription* 
     run->axis_source[i] = src;
     run->axis_sign[i] = sign;
   }
+  if (MountingDeterminant(*run) < 0) {
+    RunDescription flipped = *run;
+    flipped.axis_sign[2] = -flipped.axis_sign[2];
+    const std::string axes = "[" + MountingAxisText(*run, 0) + ", " + MountingAxisText(*run, 1) +
+                             ", " + MountingAxisText(*run, 2) + "]";
+    axes_at.Fail(axes + " is a reflection (determinant -1), not a rotation: flip the sign of "
+                 "one axis (e.g. [" + MountingAxisText(flipped, 0) + ", " +
+                 MountingAxisText(flipped, 1) + ", " + MountingAxisText(flipped, 2) + "])");
+  }
 }
 
 ColumnSource SourceOf(const RunDescription& run, const std::string& name) {
@@ -258,6 +277,19 @@ ColumnSource SourceOf(const RunDescription& run, const std::string& name) {
   c.source = name;
   c.unit = DefaultUnit(FindChannel(name)->kind);
   return c;
+}
+
+std::string ReadingsUnit(const RunDescription& run) {
+  std::string unit;
+  for (const char* ch : {"wx", "wy", "wz"}) {
+    const std::string u = SourceOf(run, ch).unit;
+    const std::string named = u == "counts" ? "counts"
+                              : (u == "g" || u == "mg" || u == "m/s^2" || u == "m/s\u00b2") ? "mg"
+                                                                                          : "mV";
+    if (!unit.empty() && named != unit) return "mV";  // mixed: the parser refuses counts mixed
+    unit = named;
+  }
+  return unit;
 }
 
 int MountingDeterminant(const RunDescription& run) {
@@ -308,6 +340,9 @@ void EmitColumns(const std::map<std::string, ColumnSource>& columns, YAML::Emitt
     if (unit != DefaultUnit(ch.kind)) *out << YAML::Key << "unit" << YAML::Value << unit;
     if (c.scale != 1.0) *out << YAML::Key << "scale" << YAML::Value << FormatDouble(c.scale);
     if (c.offset != 0.0) *out << YAML::Key << "offset" << YAML::Value << FormatDouble(c.offset);
+    if (c.counts_per_g) {
+      *out << YAML::Key << "counts_per_g" << YAML::Value << FormatDouble(*c.counts_per_g);
+    }
     *out << YAML::EndMap;
   }
   *out << YAML::EndMap;

@@ -8,7 +8,7 @@
 //     wx: {var: acc_x, unit: g}            # `var` is a synonym of `source`
 //     label: part                          # optional text column: position label
 //   mounting:
-//     axes: ["+y", "-z", "+x"]  # platform x = +IMU y, platform y = -IMU z, z = +IMU x
+//     axes: ["+y", "-z", "-x"]  # platform x = +IMU y, platform y = -IMU z, z = -IMU x
 //   positions:                  # optional, with label: which IMU direction points up
 //     x_p: "+x"                 # (default: the Ferraris convention, see below)
 //     tilted: [0.7071, 0, 0.7071]
@@ -16,8 +16,10 @@
 // A channel value is  our = source * unit_factor * scale + offset, in our units
 // (t: s, angles: deg, rates: deg/s, readings: mV, temp_C: degC), then SI.
 // Source units: t s|ms; angles deg|rad; rates deg/s|rad/s; readings mV|V|g|mg;
-// temp_C C. Readings in g or mg become mV with 1 g = 1000 mV, so the triad's
-// nominal scale must then be 1000 mV/g (and the bias 0 mV).
+// temp_C C. Readings in g, mg or m/s^2 (at standard gravity) become mg, so the
+// triad's nominal scale is then 1000 per g (and the bias 0); readings in counts
+// ({unit: counts, counts_per_g: 16384}) stay counts, and the nominal scale is
+// counts_per_g. Output units are named for what was read (ReadingsUnit).
 // The readings channels wx, wy, wz are the IMU's own axes; the mounting turns
 // them into the platform frame (docs/method.md) after the mapping.
 #pragma once
@@ -75,6 +77,11 @@ Eigen::Vector3d ImuToPlatform(const RunDescription& run, const Eigen::Vector3d& 
 
 // Where channel `name` comes from: the `columns` entry or the contract name.
 ColumnSource SourceOf(const RunDescription& run, const std::string& name);
+
+// The unit the readings are in after the mapping, for naming the output units
+// (scale "UNIT/g", bias "UNIT"): "counts" when read in counts, "mg" when read
+// in g, mg or m/s^2 (1000 per g), "mV" otherwise (mV, V).
+std::string ReadingsUnit(const RunDescription& run);
 
 // +1 for a proper rotation, -1 for a reflection.
 int MountingDeterminant(const RunDescription& run);

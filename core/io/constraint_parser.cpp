@@ -66,7 +66,7 @@ std::optional<SuffixedValue> FindSuffixed(const YAML::Node& node, const YamlPlac
                                           const std::string& stem) {
   std::optional<SuffixedValue> found;
   for (const auto& kv : node) {
-    const std::string key = kv.first.Scalar();
+    const std::string key = KeyOf(kv.first, at);
     std::string suffix;
     if (key == stem) {
       suffix = "";

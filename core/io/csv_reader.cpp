@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "core/io/data_table.h"
+#include "core/io/file_util.h"
 #include "core/model/errors.h"
 
 namespace triadcal {
@@ -16,6 +17,7 @@ namespace triadcal {
 namespace {
 
 std::string ReadWholeFile(const std::string& path) {
+  NoteInputFile(path);
   std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!f) throw InputError(path + ": cannot read (no such file or not readable)");
   std::string data;
@@ -166,7 +168,18 @@ DataTable ReadTextTable(const std::string& path, const std::vector<std::string>&
       if (options.header.empty()) {  // this line is the header
         LineSplitter split(line_begin, line_end, comma);
         Field f;
-        while (split.Next(&f)) table.names.push_back(HeaderName(f));
+        while (split.Next(&f)) {
+          const std::string name = HeaderName(f);
+          const auto seen = std::find(table.names.begin(), table.names.end(), name);
+          if (seen != table.names.end() && !name.empty()) {
+            throw InputError(path + ":" + std::to_string(line_no) + ": column '" + name +
+                             "' appears twice (fields " +
+                             std::to_string(seen - table.names.begin() + 1) + " and " +
+                             std::to_string(table.names.size() + 1) +
+                             "); rename one, or name the columns with data_format.header");
+          }
+          table.names.push_back(name);
+        }
         assign_targets();
         continue;
       }
@@ -195,6 +208,9 @@ DataTable ReadTextTable(const std::string& path, const std::vector<std::string>&
       }
       target[idx]->push_back(v);
     }
+    if (idx == fields_needed) {  // strict rows: count the fields not read
+      while (split.Next(&f)) ++idx;
+    }
     if (idx < fields_needed) {
       std::size_t missing = idx;
       while (!target[missing] && !text_target[missing]) ++missing;
@@ -202,6 +218,14 @@ DataTable ReadTextTable(const std::string& path, const std::vector<std::string>&
                        " fields, but column '" + table.names[missing] + "' is field " +
                        std::to_string(missing + 1) +
                        (options.header.empty() ? " of the header" : " of data_format.header"));
+    }
+    if (idx != table.names.size()) {
+      throw InputError(path + ":" + std::to_string(line_no) + ": " + std::to_string(idx) +
+                       " fields, but the " +
+                       (options.header.empty() ? "header (line " + std::to_string(table.header_line) + ")"
+                                               : std::string("data_format.header")) +
+                       " has " + std::to_string(table.names.size()) +
+                       (comma && idx > table.names.size() ? " (a decimal comma?)" : ""));
     }
     table.line.push_back(line_no);
   }

@@ -8,13 +8,73 @@
 #include <sstream>
 #include <unistd.h>
 
+#include <vector>
+
 #include "core/model/errors.h"
 
 namespace triadcal {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+struct OutputGuard {
+  bool on = false;
+  std::vector<std::string> inputs, outputs;
+};
+
+OutputGuard& Guard() {
+  static OutputGuard guard;
+  return guard;
+}
+
+bool SameFile(const std::string& a, const std::string& b) {
+  std::error_code ec;
+  if (fs::exists(a, ec) && fs::exists(b, ec)) {
+    const bool same = fs::equivalent(a, b, ec);
+    if (!ec) return same;
+  }
+  const fs::path ca = fs::weakly_canonical(fs::absolute(a), ec);
+  const fs::path cb = fs::weakly_canonical(fs::absolute(b), ec);
+  return ca == cb;
+}
+
+}  // namespace
+
+void EnableOutputGuard() { Guard().on = true; }
+
+void NoteInputFile(const std::string& path) {
+  if (Guard().on) Guard().inputs.push_back(path);
+}
+
+void NoteOutputFile(const std::string& path) {
+  OutputGuard& g = Guard();
+  if (!g.on) return;
+  for (const std::string& out : g.outputs) {
+    if (SameFile(out, path)) {
+      throw InputError(path + ": given for two outputs (each output needs its own file)");
+    }
+  }
+  g.outputs.push_back(path);
+}
+
+void CheckOutputsAreNotInputs(const std::string& path) {
+  const OutputGuard& g = Guard();
+  if (!g.on) return;
+  std::vector<std::string> outs = g.outputs;
+  outs.push_back(path);
+  for (const std::string& out : outs) {
+    for (const std::string& in : g.inputs) {
+      if (SameFile(out, in)) {
+        throw InputError(out + ": is the input file '" + in +
+                         "' (an output never replaces an input; choose another name)");
+      }
+    }
+  }
+}
+
 void WriteFileAtomically(const std::string& path, const std::string& content) {
+  CheckOutputsAreNotInputs(path);
   const fs::path target(path);
   const fs::path tmp =
       target.parent_path() / (".tmp." + target.filename().string() + "." + std::to_string(getpid()));
@@ -38,6 +98,7 @@ void WriteFileAtomically(const std::string& path, const std::string& content) {
 }
 
 std::string ReadFile(const std::string& path) {
+  NoteInputFile(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot read (no such file or not readable)");
   std::ostringstream ss;

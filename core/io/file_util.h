@@ -10,6 +10,21 @@ namespace triadcal {
 // folder cannot be written.
 void WriteFileAtomically(const std::string& path, const std::string& content);
 
+// The output guard of the command line (off by default, so that tests may
+// rewrite what they read): once on, every file read is noted as an input and
+// every output is checked before anything is written, so an output never
+// replaces an input and two outputs never share a file.
+void EnableOutputGuard();
+// Notes a file read (readers call it; a no-op while the guard is off).
+void NoteInputFile(const std::string& path);
+// Notes an output before the work starts; throws InputError("PATH: given for
+// two outputs") when another output names the same file.
+void NoteOutputFile(const std::string& path);
+// Throws InputError("PATH: is the input file 'IN' ...") when an output noted so
+// far, or `path`, is one of the inputs noted so far. WriteFileAtomically calls
+// it before writing, so a command with several outputs writes none of them.
+void CheckOutputsAreNotInputs(const std::string& path);
+
 // Reads a whole file; throws InputError("PATH: cannot read ...").
 std::string ReadFile(const std::string& path);
 

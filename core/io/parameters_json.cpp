@@ -22,7 +22,17 @@ double EntryValue(const json& entry, const std::string& where, const std::string
     if (!entry.contains("value")) throw InputError(where + ": no \"value\"");
     v = &entry["value"];
     if (entry.contains("unit")) {
-      if (!entry["unit"].is_string() || entry["unit"].get<std::string>() != unit) {
+      // Readings-based units may name any readings unit: mV/g, mg/g, counts/g.
+      const auto same = [&](const std::string& u) {
+        if (u == unit) return true;
+        const std::size_t at = unit.find("mV");
+        if (at == std::string::npos) return false;
+        for (const char* r : {"mV", "mg", "counts"}) {
+          if (u == unit.substr(0, at) + r + unit.substr(at + 2)) return true;
+        }
+        return false;
+      };
+      if (!entry["unit"].is_string() || !same(entry["unit"].get<std::string>())) {
         throw InputError(where + ": unit " + entry["unit"].dump() + ", expected \"" + unit +
                          "\" (docs/file-formats.md)");
       }
@@ -51,7 +61,7 @@ ParametersFile ReadParametersJson(const std::string& path, const std::vector<std
   json root;
   try {
     root = json::parse(ReadFile(path));
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // syntax, or a number like 1e309
     throw InputError(path + ": not valid JSON (" + std::string(e.what()) + ")");
   }
   return ParametersFromJson(root, path, sections, expected_what);

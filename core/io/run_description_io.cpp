@@ -9,6 +9,7 @@
 #include "core/io/constraint_parser.h"
 #include "core/model/errors.h"
 #include "core/io/file_util.h"
+#include "core/io/plausibility.h"
 #include "core/io/yaml_fields.h"
 
 namespace triadcal {
@@ -65,11 +66,24 @@ void ParseTriad(const YAML::Node& node, const YamlPlace& at, RunDescription* run
 // Readings in g or mg become mV at 1000 mV/g: without a triad section saying
 // otherwise, the nominal triad is then 1000 mV/g with no bias.
 void DefaultTriadForGReadings(const YAML::Node& triad, RunDescription* run) {
-  for (const char* ch : {"wx", "wy", "wz"}) {
+  const char* channels[3] = {"wx", "wy", "wz"};
+  int in_g = 0, in_counts = 0;
+  for (const char* ch : channels) {
     const std::string unit = SourceOf(*run, ch).unit;
-    if (unit != "g" && unit != "mg") return;
+    in_g += unit == "g" || unit == "mg" || unit == "m/s^2" || unit == "m/s\u00b2";
+    in_counts += unit == "counts";
   }
-  if (!triad || !triad["scale_mV_per_g"]) run->scale_mV_per_g.setConstant(1000.0);
+  if (in_counts > 0 && in_counts < 3) {
+    throw InputError(run->yaml_path + ": columns: readings in counts and in other units cannot "
+                                      "be mixed (give all three in counts)");
+  }
+  if (in_g < 3 && in_counts < 3) return;
+  if (!triad || !triad["scale_mV_per_g"]) {
+    for (int i = 0; i < 3; ++i) {
+      const ColumnSource src = SourceOf(*run, channels[run->axis_source[i]]);
+      run->scale_mV_per_g[i] = in_counts == 3 ? *src.counts_per_g : 1000.0;
+    }
+  }
   if (!triad || !triad["bias_mV"]) run->bias_mV.setZero();
 }
 
@@ -86,7 +100,7 @@ void ParsePriors(const YAML::Node& node, const YamlPlace& at, RunDescription* ru
   for (const EffectSpec& e : EffectCatalogue()) all.push_back(e.id);
   const ParameterLayout every(all);
   for (const auto& kv : node) {
-    const std::string name = kv.first.as<std::string>();
+    const std::string name = KeyOf(kv.first, at);
     const YamlPlace p = at.Child(name);
     if (every.IndexOf(name) < 0) p.Fail("unknown parameter (see `triadcal params`)");
     run->prior_sigma[name] = ReadPositive(kv.second, p);
@@ -171,6 +185,7 @@ RunDescription ParseRunDescription(const YAML::Node& node, const std::string& ya
   if (node["positions"]) run.positions = ParsePositions(node["positions"], at.Child("positions"));
   if (node["sensor"]) ParseSensor(node["sensor"], at.Child("sensor"), &run);
   DefaultTriadForGReadings(node["triad"], &run);
+  CheckDescriptionPlausible(run, where);
   return run;
 }
 

@@ -119,7 +119,7 @@ columns:
   lambda2: {value: 0}
   wx: acc_x
   temp_C: T
-mounting: {axes: ["+y", "-z", "x"]}
+mounting: {axes: ["+y", "-z", "-x"]}
 )"));
   EXPECT_EQ(run.data_path, (dir_ / "run.csv").lexically_normal().string());
   EXPECT_DOUBLE_EQ(run.lever_arm0_m.x(), 0.138);
@@ -169,7 +169,7 @@ mounting: {axes: ["+y", "-z", "x"]}
   EXPECT_EQ(run.axis_source[2], 0);
   EXPECT_EQ(run.axis_sign[0], 1.0);
   EXPECT_EQ(run.axis_sign[1], -1.0);
-  EXPECT_EQ(run.axis_sign[2], 1.0);
+  EXPECT_EQ(run.axis_sign[2], -1.0);
 }
 
 TEST_F(RunDescriptionTest, EmptyConstraintListMeansNone) {
@@ -247,9 +247,10 @@ TEST_F(RunDescriptionTest, ErrorsNameTheKey) {
             f + ": mounting.axes[1]: expected +x, -x, +y, -y, +z or -z, got '+w'");
   EXPECT_EQ(ErrorOf("data: run.csv\nmounting: {axes: [\"+y\", \"+x\"]}\n"),
             f + ": mounting.axes: expected a list of 3 signed IMU axes like [\"+y\", \"-z\", "
-                "\"+x\"], got 2 entries");
+                "\"-x\"], got 2 entries");
   EXPECT_EQ(ErrorOf("data: run.csv\ncolumns: {wx: {source: a, unit: volts}}\n"),
-            f + ": columns.wx.unit: unknown unit 'volts' for wx (allowed: mV, V, g, mg)");
+            f + ": columns.wx.unit: unknown unit 'volts' for wx (allowed: mV, V, g, mg, m/s^2, "
+                "m/s\xC2\xB2, counts)");
   EXPECT_EQ(ErrorOf("data: run.csv\ncolumns: {w_x: a}\n"),
             f + ": columns.w_x: unknown key (allowed: t, lambda1, lambda2, wx, wy, wz, "
                 "lambda1_rate, lambda2_rate, temp_C, label)");

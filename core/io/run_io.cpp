@@ -12,6 +12,7 @@
 #include "core/io/data_table.h"
 #include "core/model/errors.h"
 #include "core/io/file_util.h"
+#include "core/io/plausibility.h"
 #include "core/io/run_validation.h"
 #include "core/model/units.h"
 
@@ -183,14 +184,29 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
     CheckSampleCount(table, keep.size(), "distinct time stamps");
   }
   Warn(warnings, GapWarning(t.values));
-  for (ChannelValues& l : lambda) UnwrapDegrees(&l.values);
 
   // Units of the readings and angles, judged against the nominal triad.
-  double scale_of_imu_axis[3], range_of_imu_axis[3];
+  double scale_of_imu_axis[3], range_of_imu_axis[3], bias_of_imu_axis[3];
   for (int i = 0; i < 3; ++i) {
     const int j = run.axis_source[i];
     scale_of_imu_axis[j] = run.scale_mV_per_g[i];
+    bias_of_imu_axis[j] = run.axis_sign[i] * run.bias_mV[i];
     range_of_imu_axis[j] = run.scale_mV_per_g[i] + std::abs(run.bias_mV[i]);
+  }
+  CheckSamplesPlausible(table, {&t, {&lambda[0], &lambda[1]}, {&w[0], &w[1], &w[2]},
+                                {&rate[0], &rate[1]}},
+                        scale_of_imu_axis, bias_of_imu_axis);
+  for (ChannelValues& l : lambda) UnwrapDegrees(&l.values);
+  CheckAngleRates(table, t, lambda);
+  {
+    const bool lambda_from_file[2] = {!SourceOf(run, "lambda1").constant,
+                                      !SourceOf(run, "lambda2").constant};
+    bool w_from_file[3];
+    for (int j = 0; j < 3; ++j) w_from_file[j] = !SourceOf(run, w[j].name).constant;
+    for (const std::string& line :
+         CheckConstantChannels(table, lambda, lambda_from_file, w, w_from_file)) {
+      Warn(warnings, line);
+    }
   }
   for (int j = 0; j < 3; ++j) {
     // Only readings taken as mV: a declared V, g or mg is the user's word.
@@ -203,6 +219,7 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
   // or by gravity only): there is nothing to judge the angle unit by.
   if (!SourceOf(run, "lambda1").constant || !SourceOf(run, "lambda2").constant) {
     CheckAnglesInDegrees(table, lambda, w, scale_of_imu_axis);
+    CheckAnglesNotRadiansWindowed(table, lambda, w, scale_of_imu_axis, run.noise_mV);
   }
   for (const ChannelValues& c : w) Warn(warnings, SaturationWarning(c));
 
@@ -218,11 +235,6 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
   }
   data.temp_C = std::move(temp.values);
   data.label = std::move(labels);
-  if (MountingDeterminant(run) < 0) {
-    Warn(warnings, std::string("mounting.axes [") + MountingAxisText(run, 0) + ", " +
-                       MountingAxisText(run, 1) + ", " + MountingAxisText(run, 2) +
-                       "] is a reflection (determinant -1), not a rotation: check the signs");
-  }
   return data;
 }
 

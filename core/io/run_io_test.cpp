@@ -153,10 +153,10 @@ TEST_F(RunIoTest, CommentsBlankLinesAndOtherColumnsAreIgnored) {
   WriteText("run.csv", text);
   RunWarnings warnings;
   const RunData data = LoadRunData(Describe("run.csv"), &warnings);
-  ASSERT_EQ(warnings.lines.size(), 1u);  // wx held at 1500 mV: looks clipped
+  ASSERT_EQ(warnings.lines.size(), 1u);  // wx held at 1500 mV: a dead channel?
   EXPECT_EQ(warnings.lines[0],
-            "column 'wx' may be saturated or clipped: 12 samples (100%) at its "
-            "maximum 1500 mV in runs of 3 or more");
+            "column 'wx': every sample is 1500 while the bench turns: a dead channel or a "
+            "damaged file");
   ASSERT_EQ(data.size(), 12u);
   EXPECT_FALSE(data.has_rates());
   ASSERT_TRUE(data.has_temp());
@@ -212,7 +212,7 @@ TEST_F(RunIoTest, CsvErrorsNameFileLineAndColumn) {
   const std::string f = Path("run.csv");
   {
     std::vector<std::string> lines = GoodCsv(20);
-    lines[0] = "t,lambda1,lambda2,wx,wy";
+    for (std::string& l : lines) l = l.substr(0, l.rfind(','));  // drop the last field
     lines.insert(lines.begin(), "# no wz");
     EXPECT_EQ(CsvError(lines), f + ":2: missing column 'wz' (header: t, lambda1, lambda2, wx, wy)");
   }
@@ -321,32 +321,33 @@ TEST_F(RunIoTest, WarningsCountDuplicatesGapsAndSaturation) {
   const RunData data = LoadRunData(Describe("run.csv"), &warnings);
   ASSERT_EQ(data.size(), 1994u);
   EXPECT_EQ(data.w_mV[0][101], 1500.0 + 0.1 * 101);  // the first of the repeated stamps kept
-  ASSERT_EQ(warnings.lines.size(), 3u);
+  ASSERT_EQ(warnings.lines.size(), 4u);
   EXPECT_EQ(warnings.lines[0],
             "3 samples with a repeated time stamp dropped (kept the first of "
             "each)");
+  EXPECT_EQ(warnings.lines[2],
+            "column 'lambda2' is constant (0 deg) in every sample: no motion about the inner "
+            "axis (a single-axis rig declares it with {value: ...})");
   EXPECT_EQ(warnings.lines[1],
             "2 gaps in time (intervals > 1.5x the median interval 0.01 s); "
             "the largest is 0.05 s, after t = 9.99 s");
-  EXPECT_EQ(warnings.lines[2],
+  EXPECT_EQ(warnings.lines[3],
             "column 'wx' may be saturated or clipped: 20 samples (1.003%) at "
             "its maximum 1700 mV in runs of 3 or more");
 }
 
-TEST_F(RunIoTest, ReflectionMountingIsAWarning) {
-  WriteText("run.csv", [] {
-    std::string s;
-    for (const std::string& l : GoodCsv(20)) s += l + "\n";
-    return s;
-  }());
-  RunDescription run = DescribeYaml("data: run.csv\nmounting: {axes: [\"+x\", \"+y\", \"-z\"]}\n");
-  RunWarnings warnings;
-  const RunData data = LoadRunData(run, &warnings);
-  ASSERT_EQ(warnings.lines.size(), 1u);
-  EXPECT_EQ(warnings.lines[0],
-            "mounting.axes [+x, +y, -z] is a reflection (determinant -1), not "
-            "a rotation: check the signs");
-  EXPECT_EQ(data.w_mV[2][0], -1600.0);
+TEST_F(RunIoTest, ReflectionMountingIsAnError) {
+  // A left-handed mounting would turn the triad's frame inside out (Kz of
+  // 84 695 mV/g was fitted to one): the mounting must be a rotation.
+  try {
+    DescribeYaml("data: run.csv\nmounting: {axes: [\"+x\", \"+y\", \"-z\"]}\n");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              Path("run.yaml") +
+                  ": mounting.axes: [+x, +y, -z] is a reflection (determinant -1), not a "
+                  "rotation: flip the sign of one axis (e.g. [+x, +y, +z])");
+  }
 }
 
 // Writes a MATLAB file (v5 or v7.3) with these variables (each 1 x n or n x 1).

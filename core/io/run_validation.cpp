@@ -144,6 +144,7 @@ std::optional<std::string> SaturationWarning(const ChannelValues& c) {
   const std::vector<double>& v = c.values;
   if (v.empty()) return std::nullopt;
   const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+  if (*hi == *lo) return std::nullopt;  // constant: CheckConstantChannels says so
   const double min_threshold = 0.001 * static_cast<double>(v.size());
   std::string out;
   for (const auto& [extreme, word] : {std::pair{*hi, "maximum"}, std::pair{*lo, "minimum"}}) {

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <set>
 
+#include "core/io/file_util.h"
 #include "core/model/errors.h"
 
 namespace triadcal {
@@ -27,6 +28,7 @@ YAML::Node LoadYamlFile(const std::string& path) {
   if (!std::filesystem::is_regular_file(path)) {
     throw InputError(path + ": cannot read (no such file or not readable)");
   }
+  NoteInputFile(path);
   try {
     return YAML::LoadFile(path);
   } catch (const YAML::ParserException& e) {
@@ -44,12 +46,19 @@ std::string DescribeNode(const YAML::Node& node) {
   return "'" + node.Scalar() + "'";
 }
 
+std::string KeyOf(const YAML::Node& key, const YamlPlace& at) {
+  if (!key.IsScalar()) {
+    at.Fail("expected a name as key, got " + DescribeNode(key) + " (a list or map is no key)");
+  }
+  return key.Scalar();
+}
+
 void CheckKeys(const YAML::Node& node, const YamlPlace& at,
                const std::vector<std::string>& allowed) {
   if (!node.IsMap()) at.Fail("expected a map, got " + DescribeNode(node));
   std::set<std::string> seen;
   for (const auto& kv : node) {
-    const std::string key = kv.first.Scalar();
+    const std::string key = KeyOf(kv.first, at);
     bool ok = false;
     for (const std::string& a : allowed) ok = ok || a == key;
     if (ok) {

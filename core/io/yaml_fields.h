@@ -39,6 +39,10 @@ double ReadNonNegative(const YAML::Node& node, const YamlPlace& at);  // >= 0
 std::string ReadString(const YAML::Node& node, const YamlPlace& at);
 Eigen::Vector3d ReadVector3(const YAML::Node& node, const YamlPlace& at);
 
+// The text of a map key; throws "at: expected a name as key, got a list" for a
+// list or map used as a key (YAML allows it, triadcal files never do).
+std::string KeyOf(const YAML::Node& key, const YamlPlace& at);
+
 // Short text of a node for messages: the scalar itself, or "a list", "a map".
 std::string DescribeNode(const YAML::Node& node);
 

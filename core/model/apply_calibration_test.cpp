@@ -92,6 +92,29 @@ Truth MakeTruth(const ParameterLayout& layout, const Eigen::VectorXd& theta, int
   return tr;
 }
 
+// Readings a bench could give: W turns with the recorded angles (its direction
+// moves by at most |d lambda1| + |d lambda2|) and its size goes from 1 to 2 g
+// slowly, so the run passes the angle-unit plausibility checks of run_io.
+Truth MakeBenchTruth(const ParameterLayout& layout, const Eigen::VectorXd& theta, int n) {
+  ModelConfig cfg;
+  cfg.layout = layout;
+  Truth tr;
+  for (int k = 0; k < n; ++k) {
+    const double t = 0.01 * k;
+    const double a = 0.1 + 0.05 * k, b = 0.2 + 0.03 * k;
+    const double size_g = 1.5 + 0.5 * std::sin(2.0 * kPi * k / n);
+    const Eigen::Vector3d W =
+        size_g * Eigen::Vector3d(std::cos(a) * std::cos(b), std::sin(a) * std::cos(b), std::sin(b));
+    const Eigen::Vector3d z = Readings_mV(cfg, theta.data(), W, SampleContext{t, 0.0});
+    tr.W.push_back(W);
+    tr.data.t_s.push_back(t);
+    tr.data.lambda_rad[0].push_back(a);
+    tr.data.lambda_rad[1].push_back(b);
+    for (int i = 0; i < 3; ++i) tr.data.w_mV[i].push_back(z[i]);
+  }
+  return tr;
+}
+
 double MaxError(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
   double m = 0.0;
   for (std::size_t k = 0; k < a.size(); ++k) m = std::max(m, (a[k] - b[k]).cwiseAbs().maxCoeff());
@@ -173,7 +196,7 @@ int RunCli(const std::string& args, const std::string& err) {
 }
 
 TEST_F(ApplyTest, RoundTripThroughTheFilesOfEveryCommand) {
-  const Truth tr = MakeTruth(CalibrationLayout(), CalibrationTheta(), 500);
+  const Truth tr = MakeBenchTruth(CalibrationLayout(), CalibrationTheta(), 500);
   WriteRunCsv(tr.data, Path("run.csv"), "readings of known specific forces");
   const std::string run = Write("run.yaml", "data: run.csv\nconstraints: []\n");
   const std::string err = Path("err.txt");

@@ -26,5 +26,8 @@ class OptionError : public InputError {
  private:
   std::string option_, problem_;
 };
+// The text of an error as one printable line: control characters (a newline,
+// a tab, an escape byte read from a file) become \n, \t or \xNN.
+std::string OneLine(const std::string& text);
 
 }  // namespace triadcal

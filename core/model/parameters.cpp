@@ -27,8 +27,26 @@ const std::vector<ParameterInfo>& BaseParameterInfo() {
 
 ParameterLayout::ParameterLayout() : ParameterLayout(std::vector<Effect>{}) {}
 
+namespace {
+std::string& ReadingsUnitNameRef() {
+  static std::string name = "mV";
+  return name;
+}
+}  // namespace
+
+void SetReadingsUnitName(const std::string& name) { ReadingsUnitNameRef() = name; }
+const std::string& ReadingsUnitName() { return ReadingsUnitNameRef(); }
+
+std::string InReadingsUnit(const std::string& unit) {
+  const std::string& name = ReadingsUnitNameRef();
+  const std::size_t at = unit.find("mV");
+  if (at == std::string::npos || name == "mV") return unit;
+  return unit.substr(0, at) + name + unit.substr(at + 2);
+}
+
 ParameterLayout::ParameterLayout(const std::vector<Effect>& effects) {
   info_ = BaseParameterInfo();
+  for (ParameterInfo& p : info_) p.unit = InReadingsUnit(p.unit);
   for (int i = 0; i < kNumEffects; ++i) offset_[i] = -1;
   for (Effect e : effects) {
     if (offset_[static_cast<int>(e)] >= 0) continue;  // listed twice
@@ -40,7 +58,7 @@ ParameterLayout::ParameterLayout(const std::vector<Effect>& effects) {
       zero_offset_terms_.push_back({offset_[static_cast<int>(e)], spec.zero_offset_signal});
     }
     for (const ParamSpec& p : spec.params) {
-      info_.push_back({spec.name + "." + p.name, p.unit, p.si_per_unit, e});
+      info_.push_back({spec.name + "." + p.name, InReadingsUnit(p.unit), p.si_per_unit, e});
     }
   }
   for (int i = 0; i < size(); ++i) index_[info_[i].name] = i;

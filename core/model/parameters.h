@@ -41,6 +41,14 @@ struct ParameterInfo {
 // Names and units of the 27 base parameters (docs/file-formats.md).
 const std::vector<ParameterInfo>& BaseParameterInfo();
 
+// The unit of the readings, for naming the parameter units of the layouts made
+// afterwards ("mV/g" becomes "counts/g" when the readings are counts, "mg/g"
+// when they were read in g): set once per command from the run's columns.
+void SetReadingsUnitName(const std::string& name);
+const std::string& ReadingsUnitName();
+// `unit` with its "mV" replaced by the readings unit.
+std::string InReadingsUnit(const std::string& unit);
+
 // Which effects are switched on and where their parameters sit in theta.
 class ParameterLayout {
  public:

@@ -43,7 +43,8 @@ struct Constraint {
 struct ColumnSource {
   std::string source;            // column or MAT variable name; empty when constant
   std::optional<double> constant;  // channel held at this value (file units)
-  std::string unit;              // unit of the source: deg|rad (angles), mV|V|g|mg (readings), s|ms
+  std::string unit;              // unit of the source: deg|rad (angles), mV|V|g|mg|m/s^2|counts (readings), s|ms
+  std::optional<double> counts_per_g;  // readings in counts: the nominal count scale (required)
   double scale = 1.0;            // applied after the unit conversion
   double offset = 0.0;           // added after scaling, in our units (deg, mV, s)
 };

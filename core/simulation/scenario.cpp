@@ -28,7 +28,7 @@ void CheckSection(const YAML::Node& n, const YamlPlace& at,
   CheckKeys(n, at, allowed);
   std::set<std::string> seen;
   for (const auto& kv : n) {
-    if (!seen.insert(kv.first.Scalar()).second) at.Child(kv.first.Scalar()).Fail("given twice");
+    if (!seen.insert(KeyOf(kv.first, at)).second) at.Child(kv.first.Scalar()).Fail("given twice");
   }
 }
 
@@ -80,6 +80,10 @@ void ParseProfile(const YAML::Node& n, const YamlPlace& at, HarmonicProfile* p) 
   if (n["duration_s"]) p->duration_s = ReadPositive(n["duration_s"], at.Child("duration_s"));
   if (n["rate_hz"]) p->rate_hz = ReadPositive(n["rate_hz"], at.Child("rate_hz"));
   const double samples = p->duration_s * p->rate_hz;
+  if (samples < 10.0) {  // every command needs 10 samples (core/io/run_validation.h)
+    at.Fail("duration_s * rate_hz = " + FormatDouble(samples) +
+            " samples; a run needs at least 10");
+  }
   if (samples > static_cast<double>(kMaxSimulatedSamples)) {
     char text[40];
     std::snprintf(text, sizeof(text), "%.15g", samples);
@@ -101,7 +105,7 @@ std::vector<InjectedEffect> ParseEffects(const YAML::Node& n, const YamlPlace& a
   if (!n.IsMap()) at.Fail("expected a map {effect: {param: value}}, got " + DescribeNode(n));
   std::set<std::string> seen;
   for (const auto& kv : n) {
-    const std::string name = kv.first.Scalar();
+    const std::string name = KeyOf(kv.first, at);
     if (!seen.insert(name).second) at.Child(name).Fail("given twice");
     InjectedEffect inj;
     try {
@@ -147,7 +151,7 @@ Eigen::VectorXd ParseTruth(const YAML::Node& n, const YamlPlace& at, const RunDe
   Eigen::VectorXd theta = NominalTheta(run, layout);
   if (!n.IsNull()) {
     for (const auto& kv : n) {
-      const std::string name = kv.first.Scalar();
+      const std::string name = KeyOf(kv.first, at);
       const int i = layout.IndexOf(name);
       theta[i] = ReadNumber(kv.second, at.Child(name)) * layout.info(i).si_per_unit;
     }
@@ -283,7 +287,7 @@ Scenario LoadScenario(const std::string& yaml_path) {
   if (!spread.IsNull()) {
     if (!spread.IsMap()) spread_at.Fail("expected a map {parameter: sigma in file units}");
     for (const auto& kv : spread) {
-      const std::string name = kv.first.as<std::string>();
+      const std::string name = KeyOf(kv.first, spread_at);
       const int i = s.truth_layout.IndexOf(name);
       if (i < 0) spread_at.Child(name).Fail("unknown parameter (docs/file-formats.md names)");
       s.truth_spread.push_back(

@@ -221,15 +221,16 @@ LinearisedProblem BuildCeresProblem(const StateSpaceModel& model, const BatchLin
   for (std::size_t e = 0; e < E; ++e) lp.problem->AddParameterBlock(&(*x)[6 * e], 6);
   lp.problem->AddParameterBlock(theta_free->data(), model.num_free());
   for (std::size_t e = 0; e + 1 < E; ++e) {
+    ceres::LossFunction* loss = MakeLoss(opt).release();  // may throw: before the cost
     lp.process[e] =
         new ProcessCost(&lin.process[e], &lin.theta_lin_free, &model, opt.exact_increments, e);
-    lp.problem->AddResidualBlock(lp.process[e], MakeLoss(opt).release(), &(*x)[6 * e],
-                                 &(*x)[6 * (e + 1)], theta_free->data());
+    lp.problem->AddResidualBlock(lp.process[e], loss, &(*x)[6 * e], &(*x)[6 * (e + 1)],
+                                 theta_free->data());
   }
   for (std::size_t e = 0; e < E; ++e) {
+    ceres::LossFunction* loss = MakeLoss(opt).release();
     lp.measurement[e] = new MeasurementCost(&model, e, lin.LR[e]);
-    lp.problem->AddResidualBlock(lp.measurement[e], MakeLoss(opt).release(), &(*x)[6 * e],
-                                 theta_free->data());
+    lp.problem->AddResidualBlock(lp.measurement[e], loss, &(*x)[6 * e], theta_free->data());
   }
   lp.problem->AddResidualBlock(new LinearThetaCost(A, b), nullptr, theta_free->data());
   // Scale factors stay within [1/5, 5] of their nominal values: beyond that the
@@ -327,7 +328,10 @@ void Relinearise(const RunProblem& p, const StateSpaceModel& model, const Eigen:
     ceres::Solver::Summary summary;
     ceres::Solve(so, st->lp.problem.get(), &summary);
     if (summary.termination_type == ceres::FAILURE) {
-      throw std::runtime_error("Ceres failed: " + summary.message);
+      throw std::runtime_error(
+          "Ceres failed: " + summary.message +
+          " (most likely cause in the input: a reading, angle or time far outside the "
+          "rest of the run, or a prior or constraint sigma that fixes a parameter)");
     }
     res->outer_iterations += 1;
     res->ceres_iterations += static_cast<int>(summary.iterations.size()) - 1;

@@ -1,0 +1,222 @@
+// Search of the IMU mounting and the angle-sensor zeros (mounting_search.h).
+#include "solvers/static/mounting_search.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+
+#include "core/model/bench_model.h"
+#include "core/model/units.h"
+
+namespace triadcal {
+
+namespace {
+
+// The 24 proper signed permutations of the axes.
+std::vector<std::pair<std::array<int, 3>, std::array<double, 3>>> ProperMountings() {
+  std::vector<std::pair<std::array<int, 3>, std::array<double, 3>>> out;
+  std::array<int, 3> p = {0, 1, 2};
+  do {
+    for (int s = 0; s < 8; ++s) {
+      const std::array<double, 3> sign = {s & 1 ? -1.0 : 1.0, s & 2 ? -1.0 : 1.0,
+                                          s & 4 ? -1.0 : 1.0};
+      int inversions = 0;
+      for (int i = 0; i < 3; ++i) {
+        for (int j = i + 1; j < 3; ++j) inversions += p[i] > p[j];
+      }
+      const double det = (inversions % 2 ? -1.0 : 1.0) * sign[0] * sign[1] * sign[2];
+      if (det > 0) out.push_back({p, sign});
+    }
+  } while (std::next_permutation(p.begin(), p.end()));
+  return out;
+}
+
+std::vector<std::size_t> Subsample(std::size_t n, std::size_t max_samples) {
+  std::vector<std::size_t> idx;
+  const std::size_t step = std::max<std::size_t>(1, n / std::max<std::size_t>(1, max_samples));
+  for (std::size_t k = 0; k < n; k += step) idx.push_back(k);
+  return idx;
+}
+
+// Gravity projection W (platform frame, in g) at each chosen sample.
+std::vector<Eigen::Vector3d> GravityProjection(const RunDescription& run, const RunData& data,
+                                               const std::vector<std::size_t>& idx, double z1,
+                                               double z2) {
+  ModelConfig cfg;
+  cfg.g_mps2 = run.g_mps2;
+  std::vector<double> theta(cfg.layout.size(), 0.0);
+  theta[kDthetaC] = z1;
+  theta[kDlambda2] = z2;
+  std::vector<Eigen::Vector3d> W;
+  W.reserve(idx.size());
+  for (std::size_t k : idx) {
+    BenchAngles<double> b;
+    b.axis[0].angle = data.lambda_rad[0][k];
+    b.axis[1].angle = data.lambda_rad[1][k];
+    const BenchMotion<double> m = ComputeBenchMotion(cfg, theta.data(), b);
+    W.push_back(SpecificForce_g(cfg, m.C_L2, Eigen::Vector3d::Zero().eval()));
+  }
+  return W;
+}
+
+// Per-axis fit w = b + K W_i; returns the misfit sum of squares in g^2, or a
+// large number when K <= 0 (a flipped axis).
+double FitAxis(const std::vector<double>& w, const std::vector<Eigen::Vector3d>& W, int i,
+               double* scale, double* bias) {
+  const double n = static_cast<double>(w.size());
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (std::size_t k = 0; k < w.size(); ++k) {
+    const double x = W[k][i];
+    sx += x;
+    sy += w[k];
+    sxx += x * x;
+    sxy += x * w[k];
+  }
+  const double var = sxx - sx * sx / n;
+  if (!(var > 1e-6 * n)) {  // this axis never sees gravity change: cannot tell
+    *scale = 0.0;
+    *bias = sy / n;
+    return 0.0;
+  }
+  const double K = (sxy - sx * sy / n) / var;
+  const double b = (sy - K * sx) / n;
+  *scale = K;
+  *bias = b;
+  if (!(K > 0.0)) return 1e30;
+  double ss = 0.0;
+  for (std::size_t k = 0; k < w.size(); ++k) {
+    const double e = (w[k] - b - K * W[k][i]) / K;
+    ss += e * e;
+  }
+  return ss;
+}
+
+MountingFit Fit(const std::vector<std::vector<double>>& imu, const std::vector<std::size_t>& idx,
+                const std::vector<Eigen::Vector3d>& W, const int (&source)[3],
+                const double (&sign)[3], double z1, double z2) {
+  MountingFit f;
+  double ss = 0.0;
+  std::vector<double> w(idx.size());
+  for (int i = 0; i < 3; ++i) {
+    f.axis_source[i] = source[i];
+    f.axis_sign[i] = sign[i];
+    for (std::size_t j = 0; j < idx.size(); ++j) w[j] = sign[i] * imu[source[i]][idx[j]];
+    ss += FitAxis(w, W, i, &f.scale[i], &f.bias[i]);
+  }
+  f.zero_rad[0] = z1;
+  f.zero_rad[1] = z2;
+  f.rms_g = std::sqrt(ss / (3.0 * static_cast<double>(std::max<std::size_t>(1, idx.size()))));
+  return f;
+}
+
+}  // namespace
+
+std::string MountingFit::AxesText() const {
+  std::string s = "[";
+  for (int i = 0; i < 3; ++i) {
+    s += std::string(i ? ", " : "") + "\"" + (axis_sign[i] < 0 ? "-" : "+") +
+         "xyz"[axis_source[i]] + "\"";
+  }
+  return s + "]";
+}
+
+std::vector<std::vector<double>> ImuReadings(const RunDescription& run, const RunData& data) {
+  std::vector<std::vector<double>> imu(3);
+  for (int i = 0; i < 3; ++i) {
+    imu[run.axis_source[i]] = data.w_mV[i];
+    if (run.axis_sign[i] < 0) {
+      for (double& v : imu[run.axis_source[i]]) v = -v;
+    }
+  }
+  return imu;
+}
+
+MountingFit FitMounting(const RunDescription& run, const RunData& data, const int (&source)[3],
+                        const double (&sign)[3], double z1_rad, double z2_rad,
+                        std::size_t max_samples) {
+  const std::vector<std::size_t> idx = Subsample(data.size(), max_samples);
+  const std::vector<std::vector<double>> imu = ImuReadings(run, data);
+  return Fit(imu, idx, GravityProjection(run, data, idx, z1_rad, z2_rad), source, sign, z1_rad,
+             z2_rad);
+}
+
+std::vector<MountingFit> SearchMountings(const RunDescription& run, const RunData& data,
+                                         double zero_range_rad, double zero_step_rad,
+                                         std::size_t max_samples) {
+  const std::vector<std::size_t> idx = Subsample(data.size(), max_samples);
+  const std::vector<std::vector<double>> imu = ImuReadings(run, data);
+  const auto mountings = ProperMountings();
+  std::vector<MountingFit> best(mountings.size());
+  for (auto& b : best) b.rms_g = 1e300;
+  auto try_zeros = [&](double z1, double z2) {
+    const std::vector<Eigen::Vector3d> W = GravityProjection(run, data, idx, z1, z2);
+    for (std::size_t m = 0; m < mountings.size(); ++m) {
+      const int src[3] = {mountings[m].first[0], mountings[m].first[1], mountings[m].first[2]};
+      const double sg[3] = {mountings[m].second[0], mountings[m].second[1], mountings[m].second[2]};
+      const MountingFit f = Fit(imu, idx, W, src, sg, z1, z2);
+      // Prefer the smaller zeros among fits equal to 0.1 %.
+      const bool better =
+          f.rms_g < best[m].rms_g * 0.999 ||
+          (f.rms_g <= best[m].rms_g * 1.001 &&
+           std::hypot(z1, z2) < std::hypot(best[m].zero_rad[0], best[m].zero_rad[1]));
+      if (better) best[m] = f;
+    }
+  };
+  const int steps = static_cast<int>(std::floor(zero_range_rad / zero_step_rad + 1e-9));
+  for (int a = -steps; a <= steps; ++a) {
+    for (int b = -steps; b <= steps; ++b) try_zeros(a * zero_step_rad, b * zero_step_rad);
+  }
+  // Refine each around its grid optimum: a finer grid, halving four times.
+  for (std::size_t m = 0; m < best.size(); ++m) {
+    double step = zero_step_rad / 2.0;
+    for (int round = 0; round < 4; ++round, step /= 2.0) {
+      const double c1 = best[m].zero_rad[0], c2 = best[m].zero_rad[1];
+      for (int a = -1; a <= 1; ++a) {
+        for (int b = -1; b <= 1; ++b) {
+          if (a == 0 && b == 0) continue;
+          const double z1 = c1 + a * step, z2 = c2 + b * step;
+          if (std::abs(z1) > zero_range_rad || std::abs(z2) > zero_range_rad) continue;
+          const MountingFit f =
+              Fit(imu, idx, GravityProjection(run, data, idx, z1, z2),
+                  {best[m].axis_source[0], best[m].axis_source[1], best[m].axis_source[2]},
+                  {best[m].axis_sign[0], best[m].axis_sign[1], best[m].axis_sign[2]}, z1, z2);
+          if (f.rms_g < best[m].rms_g) best[m] = f;
+        }
+      }
+    }
+  }
+  std::sort(best.begin(), best.end(),
+            [](const MountingFit& a, const MountingFit& b) { return a.rms_g < b.rms_g; });
+  return best;
+}
+
+std::string MountingWarning(const RunDescription& run, const RunData& data) {
+  if (data.size() < 10) return "";
+  // Only when both angles together sweep gravity through a wide range.
+  for (int i = 0; i < 2; ++i) {
+    const auto [lo, hi] = std::minmax_element(data.lambda_rad[i].begin(), data.lambda_rad[i].end());
+    if (*hi - *lo > 60.0 * kDegToRad) break;
+    if (i == 1) return "";
+  }
+  const double range = 5.0 * kDegToRad;
+  const std::vector<MountingFit> fits = SearchMountings(run, data, range, range / 2.0, 500);
+  MountingFit declared;
+  for (const MountingFit& f : fits) {
+    bool same = true;
+    for (int i = 0; i < 3; ++i) {
+      same = same && f.axis_source[i] == run.axis_source[i] && f.axis_sign[i] == run.axis_sign[i];
+    }
+    if (same) declared = f;
+  }
+  const MountingFit& best = fits.front();
+  if (!(declared.rms_g > 3.0 * best.rms_g && declared.rms_g > best.rms_g + 0.05)) return "";
+  char buf[256];
+  std::snprintf(buf, sizeof(buf),
+                "mounting.axes %s fits the data worse (gravity misfit %.3g g) than %s "
+                "(%.3g g): check the mounting (`triadcal mounting RUN.yaml` lists the fits)",
+                declared.AxesText().c_str(), declared.rms_g, best.AxesText().c_str(), best.rms_g);
+  return buf;
+}
+
+}  // namespace triadcal
