@@ -129,7 +129,6 @@ int RunDesign(const DesignArgs& a) {
   if (!a.report_html.empty()) CheckOutputPath(a.report_html);
   const auto t_start = std::chrono::steady_clock::now();
   CheckOutputPath(a.out_json);
-  CheckOutputPath(a.plot_svg.empty() ? DefaultSvgPath(a.out_json) : a.plot_svg);
   const Scenario s = LoadScenario(a.scenario);
   RecordInput("scenario", a.scenario);
   CheckOverwrite(a.out_json);  // before the long work

@@ -5,7 +5,9 @@
 // both problems.
 #include "solvers/estimation/state_space_model.h"
 
+#include <algorithm>
 #include <cmath>
+#include <set>
 
 #include <gtest/gtest.h>
 
@@ -101,6 +103,40 @@ TEST(StateSpaceModel, EstimatorsShareTheDefaultEpochs) {
   EXPECT_EQ(BatchOptions().epoch_s, kDefaultEpoch_s);
   EXPECT_EQ(FilterOptions().epoch_s, kDefaultEpoch_s);
   EXPECT_EQ(DesignOptions().epoch_s, kDefaultEpoch_s);
+}
+
+}  // namespace
+}  // namespace triadcal
+
+namespace triadcal {
+namespace {
+
+// Without the paper's constraint the common rotation about the inner axis is a
+// structural null: exactly one of its members is held (removed from the
+// problem), the others are estimated relative to it and say so; nothing that
+// the data determine is held.
+TEST(HoldDecision, HoldsTheStructuralNullOnlyAndNamesWhatIsRelative) {
+  Scenario s = testing_fixtures::PaperScenario(50.0, 60.0, 2.0, 15.0, 4);
+  s.run.constraints.clear();
+  const RunData data = Simulate(s);
+  const ParameterLayout layout;
+  const HoldDecision d =
+      ChooseHeldParameters(s.run, data, layout, HoldPolicy(), kDefaultEpoch_s, {});
+  ASSERT_EQ(d.held.size(), 1u);
+  const std::string& held = d.held[0];
+  const std::set<std::string> rotation = {"dlambda2", "gamma_y", "gamma_z"};
+  EXPECT_TRUE(rotation.count(held)) << held;
+  for (const std::string& name : rotation) {
+    if (name == held) continue;
+    ASSERT_TRUE(d.relative_to.count(name)) << name;
+    EXPECT_EQ(d.relative_to.at(name), std::vector<std::string>{held}) << name;
+  }
+  // With the constraint nothing is held.
+  Scenario c = testing_fixtures::PaperScenario(50.0, 60.0, 2.0, 15.0, 4);
+  const HoldDecision dc = ChooseHeldParameters(c.run, Simulate(c), layout, HoldPolicy(),
+                                               kDefaultEpoch_s, {});
+  EXPECT_TRUE(dc.held.empty());
+  EXPECT_TRUE(dc.relative_to.empty());
 }
 
 }  // namespace
