@@ -401,9 +401,9 @@ TEST_F(CliInputErrors, SimulateRefusesRunsTooShortToUse) {
               sc + ": profile: duration_s * rate_hz = 1 samples; a run needs at least 10", {"sim"});
 }
 
-TEST_F(CliInputErrors, DesignLeavesNoSvgWhenItsJsonFails) {
-  // OUT is a folder: the JSON cannot be written, and the SVG (OUT with .svg)
-  // must not be left behind either.
+TEST_F(CliInputErrors, DesignLeavesNothingWhenItsJsonFails) {
+  // OUT is a folder: the JSON cannot be written, and nothing else (the SVG of
+  // older versions, OUT with .svg) is left behind either.
   const std::string sc = WriteText("sc.yaml", "profile: {duration_s: 20, rate_hz: 20}\n");
   fs::create_directories(Path("out.json"));
   ExpectError("design " + sc + " -o " + Path("out.json") + " --durations 10,20",

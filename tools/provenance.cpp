@@ -140,7 +140,9 @@ json CurrentProvenance() {
 }
 
 void CheckOverwrite(const std::string& out_path) {
+  CheckOutputsAreNotInputs(out_path);  // the plainer error first
   std::error_code ec;
+  if (fs::is_directory(out_path, ec)) throw InputError(out_path + ": cannot write: Is a directory");
   if (ForceOverwrite() || !fs::exists(out_path, ec)) return;
   const json stored = StoredProvenance(out_path);
   if (stored.is_null()) {
