@@ -30,6 +30,7 @@
 #include "solvers/estimation/batch_solver.h"
 #include "tools/report/estimate_json.h"
 #include "tools/report/fit_report.h"
+#include "solvers/estimation/run_problem.h"
 
 namespace py = pybind11;
 
@@ -246,7 +247,7 @@ PYBIND11_MODULE(triadcal, m) {
       input_error(e.what());
     }
   });
-  m.def("fit", &triadcal::Fit, "run"_a, py::kw_only(), "effects"_a = "", "epoch_s"_a = 0.5,
+  m.def("fit", &triadcal::Fit, "run"_a, py::kw_only(), "effects"_a = "", "epoch_s"_a = triadcal::kDefaultEpoch_s,
         "rate_window_s"_a = 0.1, "init"_a = "rts", "robust"_a = "", "robust_scale"_a = 3.0,
         "linear_solver"_a = "sparse_normal_cholesky", "covariance"_a = "schur", "threads"_a = 0,
         "correlations"_a = false, "auto_hold"_a = true, "hold"_a = std::vector<std::string>{},

@@ -45,10 +45,6 @@ int RunDiagnose(const DiagnoseArgs& a) {
   opt.alpha = a.alpha;
   opt.max_effects = a.max_effects;
   opt.fit.epoch_s = a.epoch_s;
-  // The likelihood-ratio tests compare fits under one noise model: the noise
-  // is the declared one throughout (re-estimating it per candidate would let
-  // the noise absorb the very structure under test).
-  opt.fit.estimate_noise = false;
   opt.candidates = ParseEffectList(a.candidates, "--candidates");
   StageProgress progress("diagnose: ");
   opt.progress = [&](const std::string& s) { progress.Stage(s); };

@@ -99,7 +99,6 @@ nlohmann::json DiagnoseRun(const std::string& run_yaml, const LoadedRun& run, do
   DiagnoseOptions opt;
   opt.fit.epoch_s = epoch_s;
   opt.fit.threads = threads;
-  opt.fit.estimate_noise = false;  // the likelihood-ratio tests need one noise model
   const DiagnosisResult d = Diagnose(run.description, run.data, opt);
   return DiagnoseJson(run_yaml, opt.alpha, d, nullptr);
 }

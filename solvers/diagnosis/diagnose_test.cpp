@@ -98,6 +98,20 @@ TEST(Diagnose, CleanRunSelectsNothing) {
   EXPECT_NE(d.verdict.find("consistent with the declared noise"), std::string::npos);
 }
 
+// noise_mV: auto with a far-off start (0.2 mV for 2 mV): the noise is
+// estimated once from the base fit and then held, so the loop still finds the
+// latency and chi2/dof is about 1 after it.
+TEST(Diagnose, AutoNoiseIsEstimatedOnceThenHeld) {
+  Scenario s = WithEffect(3, Effect::kAngleLatency, {{"angle_latency.tau", 1.5}});
+  s.run.noise_auto = true;
+  s.run.noise_mV = 0.2;
+  const RunData data = Simulate(s);
+  const DiagnosisResult d = Diagnose(s.run, data, {});
+  ASSERT_EQ(d.selected.size(), 1u) << d.verdict;
+  EXPECT_EQ(d.selected[0], Effect::kAngleLatency);
+  EXPECT_NEAR(d.after.chi2_per_dof, 1.0, 0.15);
+}
+
 // With the culprit left out of the candidates, the loop must not claim a clean
 // model: it says structure remains and what it correlates with.
 TEST(Diagnose, SaysWhenNoCandidateExplainsTheResidual) {

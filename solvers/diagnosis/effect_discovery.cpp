@@ -61,8 +61,25 @@ std::vector<Effect> WithEffect(std::vector<Effect> v, Effect e) {
 
 }  // namespace
 
-DiagnosisResult Diagnose(const RunDescription& run, const RunData& data,
-                         const DiagnoseOptions& opt) {
+DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data,
+                         const DiagnoseOptions& options) {
+  // The likelihood-ratio tests compare fits under one noise model: the noise
+  // is the declared one throughout (re-estimating it per candidate would let
+  // the noise absorb the very structure under test). With noise_mV: auto it
+  // is estimated once, from the base model's fit, and then held.
+  DiagnoseOptions opt = options;
+  opt.fit.estimate_noise = false;
+  RunDescription run = declared_run;
+  if (run.noise_auto) {
+    if (opt.progress) opt.progress("estimating the reading noise (noise_mV: auto)");
+    BatchOptions noise_opt = options.fit;
+    noise_opt.estimate_noise = true;
+    noise_opt.fraction = nullptr;
+    const BatchResult base = SolveBatch(run, data, ParameterLayout(), noise_opt);
+    run.noise_channel_mV = base.noise_used_mV;
+    run.noise_mV = std::sqrt(base.noise_used_mV.squaredNorm() / 3.0);
+    run.noise_auto = false;
+  }
   auto say = [&](const std::string& s) {
     if (opt.progress) opt.progress(s);
   };

@@ -32,7 +32,8 @@
 namespace triadcal {
 
 struct DiagnoseOptions {
-  BatchOptions fit;            // for every fit (hold/free are managed here)
+  BatchOptions fit;            // for every fit (hold/free and the noise are managed here:
+                               // the declared noise throughout, estimate_noise off)
   double alpha = 0.01;         // family-wise false-selection rate per round
   int max_effects = 4;
   std::vector<Effect> candidates;  // empty: the whole catalogue (that the run can carry)

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <set>
 
 #include <gtest/gtest.h>
@@ -103,6 +104,26 @@ TEST(StateSpaceModel, EstimatorsShareTheDefaultEpochs) {
   EXPECT_EQ(BatchOptions().epoch_s, kDefaultEpoch_s);
   EXPECT_EQ(FilterOptions().epoch_s, kDefaultEpoch_s);
   EXPECT_EQ(DesignOptions().epoch_s, kDefaultEpoch_s);
+}
+
+// And every command that fits or analyses a run offers that default.
+TEST(StateSpaceModel, EveryCommandDefaultsToTheSameEpochs) {
+  char expected[64];
+  std::snprintf(expected, sizeof(expected), "=%g ", kDefaultEpoch_s);
+  for (const char* cmd :
+       {"fit", "filter", "compare", "diagnose", "observability", "design", "montecarlo"}) {
+    const std::string line = std::string(TRIADCAL_BIN) + " " + cmd + " --help";
+    FILE* p = popen(line.c_str(), "r");
+    ASSERT_NE(p, nullptr);
+    std::string help;
+    char buf[512];
+    while (std::fgets(buf, sizeof(buf), p)) help += buf;
+    pclose(p);
+    const std::size_t at = help.find("--epoch-s");
+    ASSERT_NE(at, std::string::npos) << cmd;
+    const std::string option = help.substr(at, help.find('\n', at) - at) + " ";
+    EXPECT_NE(option.find(expected), std::string::npos) << cmd << ": " << option;
+  }
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 
 #include "core/simulation/simulator.h"
 #include "solvers/analysis/design_study.h"
+#include "solvers/estimation/run_problem.h"
 
 namespace triadcal {
 
@@ -14,7 +15,7 @@ namespace triadcal {
 struct DesignReportSettings {
   std::string scenario_path;
   std::string effects;  // as given, "a,b"
-  double epoch_s = 0.2;
+  double epoch_s = kDefaultEpoch_s;
   int static_positions = 12;
 };
 

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "solvers/analysis/monte_carlo.h"
+#include "solvers/estimation/run_problem.h"
 
 namespace triadcal {
 
@@ -18,7 +19,7 @@ struct MonteCarloSettings {
   std::vector<std::string> estimators;
   int runs = 0;
   std::uint64_t first_seed = 1;
-  double epoch_s = 0.2, tolerance = 0.1, rate_hz = 0.0, duration_s = 0.0;
+  double epoch_s = kDefaultEpoch_s, tolerance = 0.1, rate_hz = 0.0, duration_s = 0.0;
   bool per_seed = false;
 };
 
