@@ -447,3 +447,30 @@ TEST(RunDescriptionPriors, ParsedValidatedAndRoundTripped) {
 
 }  // namespace
 }  // namespace triadcal
+
+namespace triadcal {
+namespace {
+
+// triad.noise_mV: one figure, one per channel, or auto; round-tripped.
+TEST_F(RunDescriptionTest, NoiseIsOneFigurePerChannelOrAuto) {
+  const std::string head = "data: run.csv\ntriad: {noise_mV: ";
+  RunDescription r = LoadRunDescription(WriteYaml(head + "[1, 2, 3]}\n"));
+  ASSERT_TRUE(r.noise_channel_mV.has_value());
+  EXPECT_EQ(r.ChannelNoise_mV(), Eigen::Vector3d(1, 2, 3));
+  EXPECT_FALSE(r.noise_auto);
+  EXPECT_NE(RunDescriptionToYaml(r, "run.csv").find("noise_mV: [1, 2, 3]"), std::string::npos)
+      << RunDescriptionToYaml(r, "run.csv");
+  r = LoadRunDescription(WriteYaml(head + "auto}\n"));
+  EXPECT_TRUE(r.noise_auto);
+  EXPECT_NE(RunDescriptionToYaml(r, "run.csv").find("noise_mV: auto"), std::string::npos);
+  r = LoadRunDescription(WriteYaml(head + "1.5}\n"));
+  EXPECT_EQ(r.ChannelNoise_mV(), Eigen::Vector3d::Constant(1.5));
+  const std::string f = Path();
+  EXPECT_EQ(ErrorOf(head + "[1, -2, 3]}\n"), f + ": triad.noise_mV[1]: must be > 0, got -2");
+  EXPECT_EQ(ErrorOf(head + "abc}\n"), f + ": triad.noise_mV: expected a number, got 'abc'");
+  EXPECT_EQ(ErrorOf(head + "[1, 2]}\n"),
+            f + ": triad.noise_mV: expected a list of 3 numbers, got 2");
+}
+
+}  // namespace
+}  // namespace triadcal
