@@ -58,7 +58,7 @@ bool ProcessCost::Evaluate(double const* const* p, double* residuals, double** j
   if (jacobians[0]) Store(L * StateSpaceModel::ProcessJacobianXa(*s), jacobians[0]);
   if (jacobians[1]) Store(L, jacobians[1]);
   if (want_theta) {
-    Eigen::MatrixXd J = -L * s->U;
+    Eigen::MatrixXd J = -L * StateSpaceModel::PredictThetaJacobian(*s, d);
     for (int j = 0; j < n_; ++j) {
       J.col(j) += dL[j] * r;  // zero unless theta_j is a scale factor
     }

@@ -283,7 +283,19 @@ struct SolveState {
   std::vector<double> x;  // 6 per epoch
   BatchLinearization lin;
   LinearisedProblem lp;
+  // Set once relinearising has been seen to converge only linearly (steps
+  // shrinking by less than kSlowRatio a pass): the rest of the solve then
+  // recomputes the increments in every evaluation.
+  bool exact = false;
 };
+
+// A pass whose step is more than this fraction of the previous one, from the
+// fourth pass on, means the linearised increments are the bottleneck: on a
+// weakly excited run the parameters slide along a flat direction by degrees
+// and the cross terms of the linearisation (state_space_model.h) make each
+// pass cover only part of the way.
+constexpr double kSlowRatio = 0.3;
+constexpr int kPassesBeforeExact = 3;
 
 // Relinearise and solve until the linearisation point stops moving.
 void Relinearise(const RunProblem& p, const StateSpaceModel& model, const Eigen::MatrixXd& A,
@@ -301,19 +313,23 @@ void Relinearise(const RunProblem& p, const StateSpaceModel& model, const Eigen:
   double cost_prev = std::numeric_limits<double>::infinity();
   int halvings = 0;
   res->converged = false;
+  BatchOptions o = opt;
   for (int outer = 0; outer < opt.max_outer_iterations + halvings; ++outer) {
-    say("relinearising pass " + std::to_string(outer + 1));
+    o.exact_increments = opt.exact_increments || st->exact;
+    say(o.exact_increments && !opt.exact_increments
+            ? "solving with exact increments (pass " + std::to_string(outer + 1) + ")"
+            : "relinearising pass " + std::to_string(outer + 1));
     const double pass_begin = 0.3 + 0.65 * (1.0 - std::pow(0.5, outer));
     const double pass_end = 0.3 + 0.65 * (1.0 - std::pow(0.5, outer + 1));
     if (opt.fraction) opt.fraction(pass_begin);
-    st->lin = Linearize(p, model.Expand(theta_free), !opt.exact_increments, threads);
-    st->lp = BuildCeresProblem(model, st->lin, A, b, opt, &x, &theta_free);
+    st->lin = Linearize(p, model.Expand(theta_free), !o.exact_increments, threads);
+    st->lp = BuildCeresProblem(model, st->lin, A, b, o, &x, &theta_free);
     ceres::Solver::Options so = SolverOptions(opt, threads, E, &x, &theta_free);
     // The true cost at this point (before solving), to judge the last step.
     double cost_here = 0.0;
     st->lp.problem->Evaluate(ceres::Problem::EvaluateOptions(), &cost_here, nullptr, nullptr,
                              nullptr);
-    if (cost_here > cost_prev * (1.0 + 1e-9) && halvings < 20 && !opt.exact_increments) {
+    if (cost_here > cost_prev * (1.0 + 1e-9) && halvings < 20 && !o.exact_increments) {
       ++halvings;
       theta_free = 0.5 * (theta_free + theta_prev);
       for (std::size_t i = 0; i < x.size(); ++i) x[i] = 0.5 * (x[i] + x_prev[i]);
@@ -347,11 +363,14 @@ void Relinearise(const RunProblem& p, const StateSpaceModel& model, const Eigen:
     const bool small = change < opt.outer_tolerance;
     const bool predicted_small = last_step > 0.0 && step < 1.0 &&
                                  (step / (last_step * last_step)) * step * step < 0.01;
+    const bool slow = outer >= kPassesBeforeExact && last_step > 0.0 &&
+                      step > kSlowRatio * last_step;
     last_step = step;
-    if (opt.exact_increments || small || predicted_small) {
+    if (o.exact_increments || small || predicted_small) {
       res->converged = summary.termination_type == ceres::CONVERGENCE || small || predicted_small;
       break;
     }
+    if (slow) st->exact = true;
   }
 }
 

@@ -52,12 +52,13 @@ Eigen::MatrixXd TransitionMatrix(const Interval& in, int n) {
   return F;
 }
 
-// x_b = f(x_a): the process model of state_space_model.h.
+// x_b = f(x_a): the process model of state_space_model.h, linear about the
+// pass's linearisation point (the iterated smoother's Gauss-Newton model).
 Eigen::VectorXd Propagate(const Interval& in, const Eigen::VectorXd& x, int n) {
   Eigen::VectorXd y = x;
   Eigen::VectorXd delta = Eigen::VectorXd::Zero(n);
   if (in.theta_lin_free.size() == n) delta = x.tail(n) - in.theta_lin_free;
-  y.head<6>() = StateSpaceModel::Predict(in.step, x.head<6>(), delta);
+  y.head<6>() = StateSpaceModel::PredictLinear(in.step, x.head<6>(), delta);
   return y;
 }
 

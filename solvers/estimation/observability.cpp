@@ -193,12 +193,35 @@ std::vector<WeakDirection> UnsupportedDirections(const ParameterLayout& layout,
                                                  const Eigen::MatrixXd& posterior_cov,
                                                  const Eigen::VectorXd& prior_sigma,
                                                  const ObservabilityThresholds& t) {
-  const Eigen::VectorXd sinv = prior_sigma.cwiseInverse();
-  const Eigen::MatrixXd Pn = Symmetric(sinv.asDiagonal() * posterior_cov * sinv.asDiagonal());
+  // Held parameters (zero posterior variance) are not estimated: they are
+  // left out, so that their infinite information cannot mix into the weak
+  // directions of the estimated ones.
+  std::vector<int> est;
+  for (int i = 0; i < posterior_cov.rows(); ++i) {
+    if (posterior_cov(i, i) > 0.0) est.push_back(i);
+  }
+  const int m = static_cast<int>(est.size());
+  const int n = static_cast<int>(prior_sigma.size());
+  Eigen::MatrixXd P(m, m);
+  Eigen::VectorXd sinv(m);
+  for (int a = 0; a < m; ++a) {
+    sinv[a] = 1.0 / prior_sigma[est[a]];
+    for (int b = 0; b < m; ++b) P(a, b) = posterior_cov(est[a], est[b]);
+  }
+  const Eigen::MatrixXd Pn = Symmetric(sinv.asDiagonal() * P * sinv.asDiagonal());
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Pn);
   const Eigen::VectorXd info = es.eigenvalues().cwiseMax(1e-300).cwiseInverse().array() - 1.0;
   const Eigen::MatrixXd In = es.eigenvectors() * info.asDiagonal() * es.eigenvectors().transpose();
-  const Eigen::MatrixXd I = sinv.asDiagonal() * In * sinv.asDiagonal();
+  const Eigen::MatrixXd Ie = sinv.asDiagonal() * In * sinv.asDiagonal();
+  // Back to all n parameters; a held one carries no information here and
+  // gets a direction of its own that ClassifyDirections would report, so it
+  // is given an information far above any threshold instead.
+  Eigen::MatrixXd I = Eigen::MatrixXd::Zero(n, n);
+  for (int a = 0; a < m; ++a)
+    for (int b = 0; b < m; ++b) I(est[a], est[b]) = Ie(a, b);
+  for (int i = 0; i < n; ++i) {
+    if (!(posterior_cov(i, i) > 0.0)) I(i, i) = 1e12 / (prior_sigma[i] * prior_sigma[i]);
+  }
   std::vector<Direction> dirs;
   ClassifyDirections(layout, I, prior_sigma, t, &dirs, nullptr);
   std::vector<WeakDirection> out;

@@ -57,6 +57,12 @@ ProcessStep StateSpaceModel::Process(std::size_t e, const Eigen::VectorXd& theta
     Eigen::MatrixXd U(6, theta.size());
     U << inc.ddv_dtheta, inc.dds_dtheta;
     s.U = FreeColumns(U);
+    for (std::size_t j = 0; j < p_.free.size(); ++j) {
+      const int i = p_.free[j];
+      if (i >= kKx && i <= kKz) s.scale_col[i - kKx] = static_cast<int>(j);
+      if (i >= kW0x && i <= kW0z) s.zero_col[i - kW0x] = static_cast<int>(j);
+    }
+    for (int i = 0; i < 3; ++i) s.scale_lin[i] = theta[kKx + i];
   }
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
   s.Q.block<3, 3>(0, 0) = p_.isotropic_var * inc.sum_alpha2 * I;
@@ -106,11 +112,49 @@ Mat6 StateSpaceModel::ProcessWhitening(const ProcessStep& s, const Eigen::Vector
   return L;
 }
 
-Vec6 StateSpaceModel::Predict(const ProcessStep& s, const Vec6& xa,
-                              const Eigen::VectorXd& dtheta_free) {
+Vec6 StateSpaceModel::PredictLinear(const ProcessStep& s, const Vec6& xa,
+                                    const Eigen::VectorXd& dtheta_free) {
   Vec6 x = s.F() * xa + s.u;
   if (s.U.size() > 0 && dtheta_free.size() > 0) x += s.U * dtheta_free;
   return x;
+}
+
+Vec6 StateSpaceModel::Predict(const ProcessStep& s, const Vec6& xa,
+                              const Eigen::VectorXd& dtheta_free) {
+  Vec6 x = PredictLinear(s, xa, dtheta_free);
+  if (s.U.size() == 0 || dtheta_free.size() == 0) return x;
+  for (int i = 0; i < 3; ++i) {
+    const int k = s.scale_col[i];
+    if (k < 0) continue;
+    const double K0 = s.scale_lin[i];
+    const double dK = dtheta_free[k];
+    const double f = K0 / (K0 + dK);
+    x += (f - 1.0 + dK / K0) * (-K0 * s.U.col(k));
+    const int z = s.zero_col[i];
+    if (z >= 0) x += (f - 1.0) * dtheta_free[z] * s.U.col(z);
+  }
+  return x;
+}
+
+Eigen::MatrixXd StateSpaceModel::PredictThetaJacobian(const ProcessStep& s,
+                                                      const Eigen::VectorXd& dtheta_free) {
+  Eigen::MatrixXd J = s.U;
+  if (s.U.size() == 0 || dtheta_free.size() == 0) return J;
+  for (int i = 0; i < 3; ++i) {
+    const int k = s.scale_col[i];
+    if (k < 0) continue;
+    const double K0 = s.scale_lin[i];
+    const double K = K0 + dtheta_free[k];
+    const double f = K0 / K;
+    const double df = -K0 / (K * K);  // d f / d K
+    J.col(k) += (df + 1.0 / K0) * (-K0 * s.U.col(k));
+    const int z = s.zero_col[i];
+    if (z >= 0) {
+      J.col(k) += df * dtheta_free[z] * s.U.col(z);
+      J.col(z) += (f - 1.0) * s.U.col(z);
+    }
+  }
+  return J;
 }
 
 Vec6 StateSpaceModel::ProcessResidual(const ProcessStep& s, const Vec6& xa, const Vec6& xb,

@@ -28,7 +28,24 @@
 // theta_lin (u_e sums thousands of samples, so it is evaluated once per
 // linearisation, as inertial preintegration does):
 //
-//   r_p = x_{e+1} - F_e x_e - u_e(theta_lin) - U_e (theta - theta_lin)
+//   r_p = x_{e+1} - F_e x_e - u_e(theta_lin) - U_e (theta - theta_lin) - c_e(theta)
+//
+// except for one exact part, c_e: channel i's share of u_e is proportional to
+// 1 / K_i (the readings enter as (u_i - W0_i) / K_i), and a first-order
+// expansion in K_i turns the noise of the readings into something a scale
+// step can cancel: (u - W0) (1 - dK / K_lin) / K_lin is zero at dK = K_lin.
+// On motion that hardly excites an axis (a vertical shaft: the scale factors
+// ride along a flat direction) the linearised cost then falls below the noise
+// as K grows and the scale factors ran to their bounds. c_e restores the
+// exact 1 / K_i dependence of channel i's share u_i = -K_lin,i dU/dK_i and of
+// its zero-offset term:
+//
+//   c_e = sum_i (f_i - 1 + dK_i / K_lin,i) u_i + (f_i - 1) U_W0i dW0_i,
+//   f_i = K_lin,i / K_i
+//
+// (second order in dK; what stays linearised are the cross terms of K_i with
+// the angles and the lever arm, which move the gravity and motion parts, not
+// the noise).
 //
 // Measurement, epoch e (B2 from the recorded angles alone):
 //
@@ -66,6 +83,10 @@ struct ProcessStep {
   // each channel's weight per unit variance (Q = Q_iso + sum_i s_i^2 W_i).
   Mat6 Q_iso = Mat6::Zero();
   std::array<Mat6, 3> channel_weight;
+  // The exact 1 / K_i part (c_e above): free-column index of K_i and W0_i
+  // (-1 when held or when U was not asked) and K_i at theta_lin.
+  std::array<int, 3> scale_col{{-1, -1, -1}}, zero_col{{-1, -1, -1}};
+  Eigen::Vector3d scale_lin = Eigen::Vector3d::Ones();
   Mat6 F() const;         // transition of x
 };
 
@@ -112,10 +133,20 @@ class StateSpaceModel {
   // The process prediction x_{e+1} = F_e x_e + u_e + U_e dtheta_free for the
   // step linearised at theta_lin, dtheta_free = theta - theta_lin.
   static Vec6 Predict(const ProcessStep& s, const Vec6& xa, const Eigen::VectorXd& dtheta_free);
+  // The purely linear prediction F x_a + u + U dtheta (without c_e): the
+  // iterated filter's model about its linearisation point, whose RTS pass is
+  // then the Gauss-Newton step of the batch problem (c_e and its derivative
+  // vanish at dtheta = 0, where the two meet).
+  static Vec6 PredictLinear(const ProcessStep& s, const Vec6& xa,
+                            const Eigen::VectorXd& dtheta_free);
+  // d Predict / d theta_free at dtheta_free: U_e plus the derivative of c_e
+  // (U_e itself at dtheta_free = 0).
+  static Eigen::MatrixXd PredictThetaJacobian(const ProcessStep& s,
+                                              const Eigen::VectorXd& dtheta_free);
   // r_p = x_{e+1} - Predict(x_e).
   static Vec6 ProcessResidual(const ProcessStep& s, const Vec6& xa, const Vec6& xb,
                               const Eigen::VectorXd& dtheta_free);
-  // d r_p / d x_a = -F_e, d r_p / d x_b = I, d r_p / d theta = -U_e.
+  // d r_p / d x_a = -F_e, d r_p / d x_b = I, d r_p / d theta = -PredictThetaJacobian.
   static Mat6 ProcessJacobianXa(const ProcessStep& s) { return -s.F(); }
   static Vec6 MeasurementResidual(const MeasurementStep& m, const Vec6& x) { return x - m.h; }
 
