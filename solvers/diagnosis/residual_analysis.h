@@ -34,6 +34,7 @@ struct ChannelReport {
   double rms = 0.0;
   double mean = 0.0;
   WhitenessTest whiteness;
+  bool tested = false;  // enters the whiteness decision (the whitened channels)
   std::vector<SpectralPeak> peaks;                            // strongest first
   std::vector<std::pair<std::string, double>> correlations;   // |r| largest first
   std::vector<double> series;  // the channel per interval (ResidualReport::t_s), for plots

@@ -32,13 +32,20 @@ double Autocorrelation(const std::vector<double>& x, int lag) {
   return den > 0.0 ? num / den : 0.0;
 }
 
-WhitenessTest LjungBox(const std::vector<double>& x, int lags) {
+WhitenessTest LjungBox(const std::vector<double>& x, int lags,
+                       const std::vector<double>* expected_rho) {
   WhitenessTest t;
   const double N = static_cast<double>(x.size());
   t.lags = std::max(1, std::min(lags, static_cast<int>(x.size()) / 4));
   for (int k = 1; k <= t.lags; ++k) {
-    const double r = Autocorrelation(x, k);
-    if (k == 1) t.rho1 = r;
+    double r = Autocorrelation(x, k);
+    const double expected =
+        expected_rho && static_cast<int>(expected_rho->size()) >= k ? (*expected_rho)[k - 1] : 0.0;
+    r -= expected;
+    if (k == 1) {
+      t.rho1 = r;
+      t.rho1_expected = expected;
+    }
     t.q += r * r / (N - k);
   }
   t.q *= N * (N + 2.0);

@@ -17,9 +17,16 @@ struct WhitenessTest {
   int lags = 0;
   double q = 0.0;
   double p_value = 1.0;
-  double rho1 = 0.0;  // lag-1 autocorrelation
+  double rho1 = 0.0;           // lag-1 autocorrelation (its excess over expected_rho when given)
+  double rho1_expected = 0.0;  // what the model leaves at lag 1 (subtracted from rho1)
 };
-WhitenessTest LjungBox(const std::vector<double>& x, int lags);
+// expected_rho (lags 1..), when given, is the autocorrelation the series has
+// under the model even when the model holds (a least-squares fit's residuals
+// are r = (I - H) w, so rho_k = -sum_t H(t, t+k) / sum_t (1 - H(t, t)) for
+// smooth regressors, e.g. -0.05 at lag 1 for 9 parameters over 180 epochs):
+// the test is on the excess, and rho1 is the excess at lag 1.
+WhitenessTest LjungBox(const std::vector<double>& x, int lags,
+                       const std::vector<double>* expected_rho = nullptr);
 
 // Pearson correlation of two equally long series.
 double Correlation(const std::vector<double>& a, const std::vector<double>& b);

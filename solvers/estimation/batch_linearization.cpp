@@ -60,4 +60,26 @@ Eigen::MatrixXd ExpandCovariance(const RunProblem& p, const Eigen::MatrixXd& cov
   return cov;
 }
 
+std::array<std::vector<double>, 6> ExpectedProcessAutocorrelation(
+    const std::vector<Eigen::MatrixXd>& C, const Eigen::MatrixXd& cov_free, int lags) {
+  std::array<std::vector<double>, 6> rho;
+  const std::size_t T = C.size();
+  if (T == 0 || cov_free.rows() == 0) return rho;
+  for (int c = 0; c < 6; ++c) {
+    std::vector<Eigen::VectorXd> a(T);  // cov j_t
+    double trace_rest = 0.0;
+    for (std::size_t t = 0; t < T; ++t) {
+      a[t] = cov_free * C[t].row(c).transpose();
+      trace_rest += 1.0 - C[t].row(c).dot(a[t]);
+    }
+    rho[c].assign(lags, 0.0);
+    for (int k = 1; k <= lags && static_cast<std::size_t>(k) < T; ++k) {
+      double h = 0.0;
+      for (std::size_t t = 0; t + k < T; ++t) h += C[t + k].row(c).dot(a[t]);
+      rho[c][k - 1] = -h / trace_rest;
+    }
+  }
+  return rho;
+}
+
 }  // namespace triadcal

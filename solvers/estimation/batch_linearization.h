@@ -7,6 +7,7 @@
 // run, recorded or simulated.
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include <Eigen/Core>
@@ -48,5 +49,15 @@ Eigen::MatrixXd ThetaCovariance(const RunProblem& p, const BatchLinearization& l
 // The free-parameter covariance placed in an n x n matrix (zero rows and
 // columns for the held parameters).
 Eigen::MatrixXd ExpandCovariance(const RunProblem& p, const Eigen::MatrixXd& cov_free);
+
+// The autocorrelation at lags 1..lags that the whitened process residuals
+// (6 channels) have at a least-squares solution even when the model holds:
+// r = (I - H) w with H(t, u) = j_t^T cov j_u, j_t the whitened residual's
+// derivative by the free parameters (C[t], 6 x n_free) and cov their
+// covariance; rho_k = -sum_t H(t, t+k) / sum_t (1 - H(t, t)). Smooth
+// regressors make it negative at short lags, about -(parameters a channel
+// carries) / (epochs); the whiteness tests subtract it.
+std::array<std::vector<double>, 6> ExpectedProcessAutocorrelation(
+    const std::vector<Eigen::MatrixXd>& C, const Eigen::MatrixXd& cov_free, int lags);
 
 }  // namespace triadcal

@@ -399,8 +399,17 @@ void CollectResiduals(const RunProblem& p, const RunData& data, const BatchLinea
       const Vec6 rp = lp.process[e - 1]->Raw(&x[6 * (e - 1)], &x[6 * e], theta_free.data());
       res->process_residual[e] = rp;
       pss += rp.cwiseAbs2();
-      res->process_whitened[e] = lin.LQ[e - 1] * rp;
-      pw += res->process_whitened[e].squaredNorm();
+    }
+  }
+  // Whitened as a sequence: neighbouring intervals share their epoch's sample.
+  {
+    const StateSpaceModel model(p);
+    const std::vector<Vec6> raw(res->process_residual.begin() + 1, res->process_residual.end());
+    const std::vector<Vec6> white =
+        model.WhitenProcessSequence(lin.process, raw, model.Expand(lin.theta_lin_free));
+    for (std::size_t e = 1; e < E; ++e) {
+      res->process_whitened[e] = white[e - 1];
+      pw += white[e - 1].squaredNorm();
     }
   }
   res->residuals.measurement_rms = (mss / E).cwiseSqrt();
@@ -417,7 +426,8 @@ void CollectResiduals(const RunProblem& p, const RunData& data, const BatchLinea
 Eigen::MatrixXd FreeCovariance(const RunProblem& p, const BatchLinearization& lin,
                                const LinearisedProblem& lp, const Eigen::VectorXd& theta,
                                Eigen::VectorXd* theta_free, const std::vector<double>* x,
-                               const Eigen::MatrixXd& A, const BatchOptions& opt, int threads) {
+                               const Eigen::MatrixXd& A, const BatchOptions& opt, int threads,
+                               std::vector<Eigen::MatrixXd>* process_jacobians) {
   const int nf = static_cast<int>(theta_free->size());
   const bool use_ceres = opt.covariance_method == "ceres" || !opt.robust_loss.empty();
   if (!use_ceres && opt.covariance_method != "schur") {
@@ -438,7 +448,9 @@ Eigen::MatrixXd FreeCovariance(const RunProblem& p, const BatchLinearization& li
       cost->Evaluate(params, r.data(), jac);
       C[e] = J;
     });
-    return ThetaCovariance(p, lin, theta, A, threads, &C);
+    Eigen::MatrixXd cov = ThetaCovariance(p, lin, theta, A, threads, &C);
+    if (process_jacobians) *process_jacobians = std::move(C);
+    return cov;
   }
   // Ceres's sparse QR on the whole Jacobian (applies the robust loss's
   // weights). The priors keep the Jacobian full rank.
@@ -557,8 +569,11 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
     say("covariance");
     if (opt.fraction) opt.fraction(0.95);
     const auto t_cov = std::chrono::steady_clock::now();
-    res.estimate.cov = ExpandCovariance(
-        p, FreeCovariance(p, st.lin, st.lp, theta, &st.theta_free, &st.x, A, opt, threads));
+    std::vector<Eigen::MatrixXd> C;
+    const Eigen::MatrixXd cov_free =
+        FreeCovariance(p, st.lin, st.lp, theta, &st.theta_free, &st.x, A, opt, threads, &C);
+    res.estimate.cov = ExpandCovariance(p, cov_free);
+    res.process_whitened_expected_acf = ExpectedProcessAutocorrelation(C, cov_free, 20);
     res.covariance_seconds = Seconds(t_cov);
   }
   if (opt.fraction) opt.fraction(1.0);

@@ -38,6 +38,7 @@
 // separability.h instead of failing the factorisation.
 #pragma once
 
+#include <array>
 #include <functional>
 #include <map>
 #include <string>
@@ -151,6 +152,11 @@ struct BatchResult {
   std::vector<std::size_t> epoch_samples;  // sample index of each epoch
   std::vector<Eigen::Matrix<double, 6, 1>> measurement_residual, process_residual;
   std::vector<Eigen::Matrix<double, 6, 1>> measurement_whitened, process_whitened;
+  // The autocorrelation (lags 1..20) that process_whitened has at this
+  // solution when the model holds (ExpectedProcessAutocorrelation); empty
+  // without the covariance or with a robust loss. The whiteness tests
+  // subtract it.
+  std::array<std::vector<double>, 6> process_whitened_expected_acf;
   double init_seconds = 0.0, solve_seconds = 0.0, covariance_seconds = 0.0;
   int epochs = 0;
 };

@@ -66,6 +66,13 @@ IntervalIncrement IntegrateInterval(const ModelConfig& cfg, const Eigen::VectorX
     const BenchAngles<double> b =
         BenchAnglesFromRecorded<double>(cfg, theta.data(), s.recorded[k0 + j]);
     const Eigen::Matrix3d C_L2 = ComputeBenchMotion<double>(cfg, theta.data(), b).C_L2;
+    if (j == 0 || j == m) {
+      (j == 0 ? inc.first_weight : inc.last_weight) << alpha[j], beta[j];
+      for (int i = 0; i < 3; ++i) {
+        Eigen::Matrix<double, 6, 1>& w = (j == 0 ? inc.first_channel : inc.last_channel)[i];
+        w << alpha[j] * C_L2.col(i), beta[j] * C_L2.col(i);
+      }
+    }
     for (int i = 0; i < 3; ++i) {
       const Eigen::Matrix3d cc = C_L2.col(i) * C_L2.col(i).transpose();
       Eigen::Matrix<double, 6, 6>& w = inc.channel_weight[i];

@@ -39,6 +39,13 @@ struct IntervalIncrement {
   // acceleration noise, which acts along the triad axis c_i = C_L2 e_i of each
   // sample: sum_j [a_j^2, a_j b_j; a_j b_j, b_j^2] (x) c_ij c_ij^T.
   std::array<Eigen::Matrix<double, 6, 6>, 3> channel_weight;
+  // The first and the last sample's share of that noise, per channel
+  // ((alpha, beta) (x) c_i) and for the isotropic part ((alpha, beta)): the
+  // sample at an epoch ends one interval and starts the next, so neighbouring
+  // intervals share its noise (cov(w_e, w_{e+1}) = sum_i s_i^2 last_i first_i^T
+  // + s_iso^2 (last first^T) (x) I3; StateSpaceModel::ProcessCrossCovariance).
+  std::array<Eigen::Matrix<double, 6, 1>, 3> first_channel, last_channel;
+  Eigen::Vector2d first_weight = Eigen::Vector2d::Zero(), last_weight = Eigen::Vector2d::Zero();
 };
 
 // Per-sample data the increments need, prepared once per run.

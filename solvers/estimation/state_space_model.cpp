@@ -69,6 +69,10 @@ ProcessStep StateSpaceModel::Process(std::size_t e, const Eigen::VectorXd& theta
   s.Q.block<3, 3>(0, 3) = s.Q.block<3, 3>(3, 0) = p_.isotropic_var * inc.sum_alpha_beta * I;
   s.Q.block<3, 3>(3, 3) = p_.isotropic_var * inc.sum_beta2 * I;
   s.Q_iso = s.Q;
+  s.first_channel = inc.first_channel;
+  s.last_channel = inc.last_channel;
+  s.first_weight = inc.first_weight;
+  s.last_weight = inc.last_weight;
   const Eigen::Vector3d var = ChannelVariance(theta);
   for (int i = 0; i < 3; ++i) {
     s.channel_weight[i] = inc.channel_weight[i];
@@ -110,6 +114,46 @@ Mat6 StateSpaceModel::ProcessWhitening(const ProcessStep& s, const Eigen::Vector
     (*dL)[j] = (Lp - Lm) / (2.0 * h) * (-2.0 * var[i] / theta[kKx + i]);
   }
   return L;
+}
+
+Mat6 StateSpaceModel::ProcessCrossCovariance(const ProcessStep& a, const ProcessStep& b,
+                                             const Eigen::VectorXd& theta) const {
+  const Eigen::Vector3d var = ChannelVariance(theta);
+  Mat6 C = Mat6::Zero();
+  for (int i = 0; i < 3; ++i) C += var[i] * a.last_channel[i] * b.first_channel[i].transpose();
+  const Eigen::Matrix2d w = a.last_weight * b.first_weight.transpose();
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+  C.block<3, 3>(0, 0) += p_.isotropic_var * w(0, 0) * I;
+  C.block<3, 3>(0, 3) += p_.isotropic_var * w(0, 1) * I;
+  C.block<3, 3>(3, 0) += p_.isotropic_var * w(1, 0) * I;
+  C.block<3, 3>(3, 3) += p_.isotropic_var * w(1, 1) * I;
+  return C;
+}
+
+std::vector<Vec6> StateSpaceModel::WhitenProcessSequence(const std::vector<ProcessStep>& steps,
+                                                         const std::vector<Vec6>& residuals,
+                                                         const Eigen::VectorXd& theta) const {
+  const Eigen::Vector3d var = ChannelVariance(theta);
+  std::vector<Vec6> out(residuals.size(), Vec6::Zero());
+  Mat6 S_prev = Mat6::Zero();
+  Vec6 nu_prev = Vec6::Zero();
+  for (std::size_t e = 0; e < residuals.size(); ++e) {
+    Mat6 Q = steps[e].Q_iso;
+    for (int i = 0; i < 3; ++i) Q += var[i] * steps[e].channel_weight[i];
+    Mat6 S = Q;
+    Vec6 nu = residuals[e];
+    if (e > 0) {
+      const Mat6 C = ProcessCrossCovariance(steps[e - 1], steps[e], theta);
+      const Eigen::LDLT<Mat6> ldlt(S_prev);
+      const Mat6 Gt = ldlt.solve(C);  // S_prev^-1 C = G^T
+      S -= Gt.transpose() * C;
+      nu -= Gt.transpose() * nu_prev;
+    }
+    out[e] = WhiteningOf(S) * nu;
+    S_prev = S;
+    nu_prev = nu;
+  }
+  return out;
 }
 
 Vec6 StateSpaceModel::PredictLinear(const ProcessStep& s, const Vec6& xa,

@@ -86,6 +86,9 @@ struct ProcessStep {
   // The exact 1 / K_i part (c_e above): free-column index of K_i and W0_i
   // (-1 when held or when U was not asked) and K_i at theta_lin.
   std::array<int, 3> scale_col{{-1, -1, -1}}, zero_col{{-1, -1, -1}};
+  // The shares of the first and last sample in the noise (inertial_increments.h).
+  std::array<Vec6, 3> first_channel, last_channel;
+  Eigen::Vector2d first_weight = Eigen::Vector2d::Zero(), last_weight = Eigen::Vector2d::Zero();
   Eigen::Vector3d scale_lin = Eigen::Vector3d::Ones();
   Mat6 F() const;         // transition of x
 };
@@ -129,6 +132,24 @@ class StateSpaceModel {
   // excites an axis.
   Mat6 ProcessWhitening(const ProcessStep& s, const Eigen::VectorXd& theta,
                         std::vector<Mat6>* dL_dtheta_free) const;
+
+  // cov(w_e, w_{e+1}) of consecutive steps at theta: the sample at their
+  // common epoch ends one and starts the other (trapezoid), so their noises
+  // are correlated, about +1/(4N) for V and -3/(4N) for S given V with N
+  // samples an interval. The estimators treat the w_e as independent (a
+  // loss of at most a few per cent of efficiency at N >= 10); the whiteness
+  // tests must not (WhitenProcessSequence).
+  Mat6 ProcessCrossCovariance(const ProcessStep& a, const ProcessStep& b,
+                              const Eigen::VectorXd& theta) const;
+  // The innovations of a sequence of process residuals r_e (of steps e = 0..,
+  // consecutive) under their block-tridiagonal covariance (Q_e on the
+  // diagonal, ProcessCrossCovariance beside it), each whitened: white with
+  // unit variance when the model holds. Block LDL^T: S_0 = Q_0, nu_0 = r_0,
+  // G_e = C_{e-1}^T S_{e-1}^-1, S_e = Q_e - G_e C_{e-1}, nu_e = r_e - G_e nu_{e-1},
+  // out_e = chol(S_e)^-1 nu_e.
+  std::vector<Vec6> WhitenProcessSequence(const std::vector<ProcessStep>& steps,
+                                          const std::vector<Vec6>& residuals,
+                                          const Eigen::VectorXd& theta) const;
 
   // The process prediction x_{e+1} = F_e x_e + u_e + U_e dtheta_free for the
   // step linearised at theta_lin, dtheta_free = theta - theta_lin.

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <random>
 #include <set>
 
 #include <gtest/gtest.h>
@@ -200,6 +201,64 @@ TEST(StateSpaceModel, PredictKeepsTheExactInverseScaleOfEachChannel) {
       EXPECT_LT((J.col(j) - num).norm(), 1e-6 * (1.0 + num.norm())) << layout.info(p.free[j]).name;
     }
   }
+}
+
+// Neighbouring intervals share the sample at their common epoch, so their
+// process noises are correlated (about -3/(4N) for S given V, N samples an
+// interval). Reading noise alone, integrated by the model over many draws:
+// whitening each interval on its own leaves a clearly negative lag-1
+// correlation in the S components; WhitenProcessSequence (with
+// ProcessCrossCovariance) leaves none, and unit variance.
+TEST(StateSpaceModel, SequenceWhiteningRemovesTheSharedSampleCorrelation) {
+  Scenario s = PaperScenario(50.0, 4.0, 0.0, 0.0, 5);  // noise-free run
+  const ParameterLayout layout;
+  RunData data = Simulate(s);  // the problem reads it through a pointer
+  const RunData clean = data;
+  s.run.noise_mV = 2.0;
+  s.run.angle_noise_rad = 0.0;
+  const RunProblem p = BuildRunProblem(s.run, data, layout, 0.2, AngleDerivativeOptions());
+  const StateSpaceModel model(p);
+  const Eigen::VectorXd& theta = s.truth;
+  const std::size_t first = 3, steps = 8;  // intervals of 10 samples
+  std::vector<ProcessStep> st;
+  for (std::size_t e = first; e < first + steps; ++e) st.push_back(model.Process(e, theta, false));
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> n01(0.0, 1.0);
+  const int draws = 2000;
+  Mat6 lag_seq = Mat6::Zero(), lag_each = Mat6::Zero(), var_seq = Mat6::Zero();
+  int pairs = 0, singles = 0;
+  for (int d = 0; d < draws; ++d) {
+    for (int c = 0; c < 3; ++c) {
+      for (std::size_t k = 0; k < data.t_s.size(); ++k) {
+        data.w_mV[c][k] = clean.w_mV[c][k] + 2.0 * n01(rng);
+      }
+    }
+    std::vector<Vec6> r, each;
+    for (std::size_t j = 0; j < steps; ++j) {
+      const ProcessStep noisy = model.Process(first + j, theta, false);
+      r.push_back(noisy.u - st[j].u);
+      each.push_back(WhiteningOf(st[j].Q) * r.back());
+    }
+    const std::vector<Vec6> seq = model.WhitenProcessSequence(st, r, theta);
+    for (std::size_t j = 1; j < steps; ++j) {
+      lag_seq += seq[j] * seq[j - 1].transpose();
+      lag_each += each[j] * each[j - 1].transpose();
+      ++pairs;
+    }
+    for (std::size_t j = 0; j < steps; ++j) {
+      var_seq += seq[j] * seq[j].transpose();
+      ++singles;
+    }
+  }
+  lag_seq /= pairs;
+  lag_each /= pairs;
+  var_seq /= singles;
+  // Sampling error of each entry: 1/sqrt(14000) = 0.008 (pairs overlap).
+  for (int c = 0; c < 6; ++c) {
+    EXPECT_NEAR(var_seq(c, c), 1.0, 0.05) << c;
+    for (int k = 0; k < 6; ++k) EXPECT_NEAR(lag_seq(c, k), 0.0, 0.035) << c << "," << k;
+  }
+  for (int c = 3; c < 6; ++c) EXPECT_LT(lag_each(c, c), -0.05) << c;  // -3/(4N) = -0.075
 }
 
 }  // namespace

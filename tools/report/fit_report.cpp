@@ -34,7 +34,8 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
     for (int c = 0; c < 6; ++c) {
       std::vector<double> x;
       for (std::size_t e = 1; e < E; ++e) x.push_back(r.process_whitened[e][c]);
-      p_min = std::min(p_min, LjungBox(x, lags).p_value);
+      const std::vector<double>& expected = r.process_whitened_expected_acf[c];
+      p_min = std::min(p_min, LjungBox(x, lags, expected.empty() ? nullptr : &expected).p_value);
     }
     rep.whiteness_p_value = std::min(1.0, 6.0 * p_min);
     rep.residual_white = rep.whiteness_p_value >= 0.01;
