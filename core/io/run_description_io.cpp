@@ -2,6 +2,8 @@
 // constraints, and the column mapping and mounting for foreign data files.
 #include "core/io/run_description_io.h"
 
+#include <cstdio>
+
 #include <cmath>
 #include <cstdlib>
 
@@ -163,7 +165,7 @@ RunDescription ParseRunDescription(const YAML::Node& node, const std::string& ya
   if (!node.IsDefined() || node.IsNull()) return run;
   CheckKeys(node, at,
             {"data", "bench", "triad", "constraints", "columns", "mounting", "priors",
-             "data_format", "positions", "sensor"});
+             "data_format", "positions", "sensor", "time_range_s"});
   if (node["data"]) {
     const std::string data = ReadString(node["data"], at.Child("data"));
     if (data.empty()) at.Child("data").Fail("empty file name");
@@ -184,6 +186,22 @@ RunDescription ParseRunDescription(const YAML::Node& node, const std::string& ya
   if (node["data_format"]) ParseDataFormat(node["data_format"], at.Child("data_format"), &run);
   if (node["positions"]) run.positions = ParsePositions(node["positions"], at.Child("positions"));
   if (node["sensor"]) ParseSensor(node["sensor"], at.Child("sensor"), &run);
+  if (node["time_range_s"]) {
+    // time_range_s: [from, to]: only the samples with from <= t <= to (in the
+    // time column's seconds), e.g. to fit the halves of a run separately.
+    const YamlPlace p = at.Child("time_range_s");
+    const YAML::Node& r = node["time_range_s"];
+    if (!r.IsSequence() || r.size() != 2) {
+      p.Fail("expected [from, to] in seconds, got " + DescribeNode(r));
+    }
+    run.time_range_s = {ReadNumber(r[0], p.Index(0)), ReadNumber(r[1], p.Index(1))};
+    if (!(run.time_range_s->first < run.time_range_s->second)) {
+      char got[96];
+      std::snprintf(got, sizeof(got), "[%g, %g]", run.time_range_s->first,
+                    run.time_range_s->second);
+      p.Fail(std::string("from must be before to, got ") + got);
+    }
+  }
   DefaultTriadForGReadings(node["triad"], &run);
   CheckDescriptionPlausible(run, where);
   return run;

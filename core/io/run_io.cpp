@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cctype>
 #include <charconv>
+#include <cstdio>
 #include <filesystem>
 
 #include "core/io/column_mapping.h"
@@ -182,6 +183,22 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
     KeepRows(keep, &labels);
     Warn(warnings, DuplicateWarning(table.rows - keep.size()));
     CheckSampleCount(table, keep.size(), "distinct time stamps");
+  }
+  if (run.time_range_s) {
+    const auto [from, to] = *run.time_range_s;
+    std::vector<std::size_t> in;
+    for (std::size_t k = 0; k < t.values.size(); ++k) {
+      if (t.values[k] >= from && t.values[k] <= to) in.push_back(k);
+    }
+    if (in.size() < 2) {
+      char span[160];
+      std::snprintf(span, sizeof(span), "[%g, %g] s holds %zu sample(s); the run spans %g to %g s",
+                    from, to, in.size(), t.values.front(), t.values.back());
+      throw InputError(run.yaml_path + ": time_range_s: " + span);
+    }
+    for (ChannelValues* c : all) KeepRows(in, c);
+    KeepRows(in, &labels);
+    CheckSampleCount(table, in.size(), "samples in time_range_s");
   }
   Warn(warnings, GapWarning(t.values));
 

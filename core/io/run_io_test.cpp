@@ -140,6 +140,28 @@ TEST_F(RunIoTest, CsvRoundTripIsExact) {
   EXPECT_EQ(small.find("t,lambda1,lambda2,wx,wy,wz\n" + row0), 0u) << small;
 }
 
+// time_range_s keeps the samples with from <= t <= to; a range without
+// samples, or backwards, is an error naming the key.
+TEST_F(RunIoTest, TimeRangeKeepsPartOfTheRun) {
+  const RunData run = MakeRun(3000, false, false);  // t = 0 .. 29.99 s
+  WriteRunCsv(run, Path("run.csv"), "");
+  RunWarnings w;
+  const RunData part =
+      LoadRunData(DescribeYaml("data: run.csv\ntime_range_s: [10, 20]\n"), &w);
+  ASSERT_EQ(part.size(), 1001u);
+  EXPECT_NEAR(part.t_s.front(), 10.0, 1e-9);
+  EXPECT_NEAR(part.t_s.back(), 20.0, 1e-9);
+  EXPECT_EQ(ErrorOf(DescribeYaml("data: run.csv\ntime_range_s: [40, 50]\n")),
+            Path("run.yaml") + ": time_range_s: [40, 50] s holds 0 sample(s); the run spans 0 to 29.99 s");
+  try {
+    DescribeYaml("data: run.csv\ntime_range_s: [20, 10]\n");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              Path("run.yaml") + ": time_range_s: from must be before to, got [20, 10]");
+  }
+}
+
 TEST_F(RunIoTest, CommentsBlankLinesAndOtherColumnsAreIgnored) {
   std::string text = "# recorded 2016-03-01\n  # indented comment\n\n";
   text += "note, wz ,t,lambda1,extra,lambda2,wx,wy,temp_C\r\n";

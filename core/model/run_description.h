@@ -22,6 +22,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -100,6 +101,8 @@ struct RunDescription {
   // sensor (optional): which unit was calibrated, copied into the provenance
   // of every output: {serial: "SN 0042", model: "ADXL325"}; empty when absent.
   std::string sensor_serial;
+  // time_range_s: [from, to]: only the samples with from <= t <= to [s].
+  std::optional<std::pair<double, double>> time_range_s;
   std::string sensor_model;
 };
 
