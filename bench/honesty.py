@@ -1,0 +1,307 @@
+#!/usr/bin/env python3
+"""The figures of the honesty issue (#11), measured: is sigma honest on short,
+slow, mis-declared, unconstrained, weakly excited and real runs?
+
+usage: bench/honesty.py [--only a,b] [--seeds N] [--diagnose-seeds N]
+                        [--bias-seeds N] [--workdir DIR]
+
+Sections (all by default):
+  short     paper profile, 2 mV: a 20-s run at 50 Hz and a 90-s run at 20 Hz,
+            `montecarlo --estimators batch` over N seeds (20): parameters held in
+            some run although their CRB is finite, sigma / CRB per parameter, RMS
+            of (estimate - truth) / sigma per group.
+  noise     50 Hz, 90 s, true noise 2 mV, declared 0.2 mV (10x too small) and
+            6 mV (3x too large): mean sigma / CRB of the TRUE noise (the CRB from
+            the correctly declared Monte Carlo), and the warning of one fit.
+  unconstrained  the paper run without its pseudo-measurement: are gamma_y,
+            gamma_z, dlambda2 reported estimable on their own, is the direction in
+            "unobservable"?
+  diagnose  N clean seeds (100) of the 50-Hz run through `diagnose`: share with
+            "structure" (its stated alpha: 1e-3 per whitened channel, 6
+            channels), mean lag-1 autocorrelation of the whitened process
+            residuals per channel, as tested (excess over what the fit itself
+            leaves) and raw.
+  bias      scale-factor bias: mean (estimate - truth) / CRB of Kx, Ky, Kz over
+            N seeds (400) of bench/scenarios/paper-mc.yaml at 2 mV and at 6 mV
+            (standard error of each mean: 1/sqrt(N)).
+  vertical  bench/scenarios/vertical-shaft.yaml, 5 seeds: converged,
+            (K - nominal) / sigma, sigma / prior sigma, what the output names.
+  real      the real roll runs (needs the shared data folder; skipped without
+            it): each run fitted whole and in halves (time_range_s) with the
+            noise estimated (noise_mV: auto); the halves' estimates compared,
+            chi2 = (a - b)^2 / (sigma_a^2 + sigma_b^2) per parameter determined by
+            both, median over parameters; then the three speeds compared.
+"""
+import argparse
+import json
+import math
+import os
+import re
+import statistics
+import subprocess
+import sys
+import tempfile
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+BIN = os.environ.get("TRIADCAL", os.path.join(ROOT, "build", "tools", "triadcal"))
+BASE = os.path.join(HERE, "scenarios", "paper-mc.yaml")
+GROUPS = {
+    "scale": ["Kx", "Ky", "Kz"],
+    "zero offset": ["W0x", "W0y", "W0z"],
+    "non-orthogonality": ["alpha_x", "alpha_y", "beta_x", "beta_z", "gamma_y", "gamma_z"],
+    "K_ij": ["Kxx", "Kxy", "Kxz", "Kyx", "Kyy", "Kyz", "Kzx", "Kzy", "Kzz"],
+    "bench": ["dpsi", "dtheta_c", "dlambda2"],
+    "lever arm": ["dx2", "dy2", "dz2"],
+}
+
+
+def run(cmd, check=True):
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    if check and p.returncode != 0:
+        sys.exit(f"honesty: {' '.join(cmd)} exited {p.returncode}: {p.stderr.strip()[-400:]}")
+    return p
+
+
+def scenario(work, name, rate_hz=50, duration_s=90, noise_mV=2.0, declared=None,
+             constraints=True, base=BASE):
+    s = open(base).read()
+    s = re.sub(r"rate_hz: \d+.*", f"rate_hz: {rate_hz}", s)
+    s = re.sub(r"duration_s: \d+.*", f"duration_s: {duration_s}", s)
+    s = re.sub(r"accel_mV: [0-9.]+", f"accel_mV: {noise_mV}", s)
+    if declared is not None:
+        s = s.replace("    # noise_mV: taken from noise.accel_mV", f"    noise_mV: {declared}")
+    if not constraints:
+        s = re.sub(r"  constraints:\n(    #.*\n)*    - \{expr.*\n", "  constraints: []\n", s)
+        s = s.replace("truth_spread:\n  dlambda2: 0.5   # arcmin = 30\"\n", "")
+    path = os.path.join(work, name + ".yaml")
+    open(path, "w").write(s)
+    return path
+
+
+def montecarlo(work, scen, seeds, name):
+    out = os.path.join(work, name + ".json")
+    run([BIN, "montecarlo", scen, "-n", str(seeds), "--estimators", "batch", "-o", out, "-q",
+         "--force"])
+    return json.load(open(out))
+
+
+def short(work, a):
+    print("\n## short and slow runs (2 mV)\n")
+    for label, rate, dur in (("20-s run at 50 Hz", 50, 20), ("90-s run at 20 Hz", 20, 90)):
+        m = montecarlo(work, scenario(work, f"short{rate}_{dur}", rate, dur), a.seeds, f"mc{rate}_{dur}")
+        held = [n for n, p in m["parameters"].items()
+                if p["batch"]["held_runs"] > 0 and math.isfinite(p["crb"]) and p["crb"] > 0]
+        ratios = {n: p["batch"]["mean_sigma"] / p["crb"] for n, p in m["parameters"].items()
+                  if p["crb"] > 0 and p["batch"]["held_runs"] == 0}
+        lo = min(ratios, key=ratios.get)
+        hi = max(ratios, key=ratios.get)
+        print(f"{label}, {a.seeds} seeds: held with a finite CRB: {held or 'none'}; "
+              f"sigma/CRB {ratios[lo]:.3f} ({lo}) .. {ratios[hi]:.3f} ({hi})")
+        for g, names in GROUPS.items():
+            z2 = [m["parameters"][n]["batch"]["rms_normalised_error"] ** 2 for n in names
+                  if m["parameters"][n]["batch"]["held_runs"] == 0]
+            if z2:
+                print(f"  RMS z {g:18s} {math.sqrt(sum(z2) / len(z2)):.3f}")
+
+
+def noise(work, a):
+    print("\n## declared noise wrong (true 2 mV, 50 Hz, 90 s)\n")
+    ref = montecarlo(work, scenario(work, "noise_ref"), a.seeds, "noise_ref")
+    crb = {n: p["crb"] for n, p in ref["parameters"].items()}
+    for declared in (0.2, 6.0):
+        scen = scenario(work, f"noise_{declared}", declared=declared)
+        m = montecarlo(work, scen, a.seeds, f"noise_{declared}")
+        r = {n: p["batch"]["mean_sigma"] / crb[n] for n, p in m["parameters"].items()
+             if crb[n] > 0 and p["batch"]["held_runs"] == 0}
+        lo, hi = min(r, key=r.get), max(r, key=r.get)
+        rms = math.sqrt(statistics.mean(p["batch"]["rms_normalised_error"] ** 2
+                                        for p in m["parameters"].values()
+                                        if p["batch"]["held_runs"] == 0))
+        d = os.path.join(work, f"noise_run_{declared}")
+        run([BIN, "simulate", scen, "-o", d, "-q", "--seed", "1", "--force"])
+        p = run([BIN, "fit", os.path.join(d, "run.yaml"), "-o", os.path.join(d, "fit.json"),
+                 "-q", "--force"])
+        warning = next((l for l in p.stderr.splitlines() if "noise_mV" in l), "(no warning)")
+        print(f"declared {declared} mV, {a.seeds} seeds: sigma / CRB(true noise) "
+              f"{r[lo]:.3f} ({lo}) .. {r[hi]:.3f} ({hi}); pooled RMS z {rms:.3f}")
+        print(f"  {warning.strip()}")
+
+
+def unconstrained(work, a):
+    print("\n## without the pseudo-measurement dpsi - dlambda2\n")
+    scen = scenario(work, "uncon", constraints=False)
+    d = os.path.join(work, "uncon_run")
+    run([BIN, "simulate", scen, "-o", d, "-q", "--seed", "1", "--force"])
+    run([BIN, "fit", os.path.join(d, "run.yaml"), "-o", os.path.join(d, "fit.json"), "-q",
+         "--force"])
+    f = json.load(open(os.path.join(d, "fit.json")))
+    for n in ("gamma_y", "gamma_z", "dlambda2"):
+        p = f["parameters"][n]
+        print(f"{n:9s} estimable {p['estimable']}, sigma {p['sigma']}, "
+              f"relative_to {p.get('relative_to', '-')}")
+    dirs = [d["description"] for d in f["unobservable"]]
+    print(f"unobservable: {dirs}")
+
+
+def diagnose(work, a):
+    print(f"\n## diagnose on {a.diagnose_seeds} clean seeds (50 Hz, 90 s, 2 mV)\n")
+    scen = scenario(work, "clean50")
+    excess, raw = {}, {}
+    structure = 0
+    selected = 0
+    procs = []
+
+    def finish(seed, d, p):
+        nonlocal structure, selected
+        if p.wait() != 0:
+            sys.exit(f"honesty: diagnose of seed {seed} failed")
+        j = json.load(open(os.path.join(d, "d.json")))
+        r = j["after"]["residual"]
+        structure += bool(r["structure"])
+        selected += bool(j["selected"])
+        for c in r["channels"]:
+            if c.get("in_whiteness_test"):
+                excess.setdefault(c["channel"], []).append(c["lag1_autocorrelation"])
+                raw.setdefault(c["channel"], []).append(
+                    c["lag1_autocorrelation"] + c.get("lag1_expected_under_model", 0.0))
+
+    for seed in range(1, a.diagnose_seeds + 1):
+        d = os.path.join(work, f"clean_{seed}")
+        run([BIN, "simulate", scen, "-o", d, "-q", "--seed", str(seed), "--force"])
+        procs.append((seed, d, subprocess.Popen(
+            [BIN, "diagnose", os.path.join(d, "run.yaml"), "-o", os.path.join(d, "d.json"), "-q",
+             "--force", "--threads", "1"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)))
+        if len(procs) >= 2:
+            finish(*procs.pop(0))
+    for p in procs:
+        finish(*p)
+    n = a.diagnose_seeds
+    print(f"structure reported: {structure} of {n} ({100.0 * structure / n:.1f} %; stated alpha "
+          f"1e-3 per channel, 6 channels: 0.6 %); an effect selected: {selected} of {n}")
+    se = 1.0 / math.sqrt(n * 180)
+    print(f"mean lag-1 autocorrelation per whitened channel (standard error ~{se:.3f}):")
+    for ch in excess:
+        print(f"  {ch:22s} tested (excess) {statistics.mean(excess[ch]):+.3f}   "
+              f"raw {statistics.mean(raw[ch]):+.3f}")
+
+
+def bias(work, a):
+    print(f"\n## scale-factor bias, {a.bias_seeds} seeds of paper-mc (100 Hz, 90 s)\n")
+    for mv in (2.0, 6.0):
+        m = montecarlo(work, scenario(work, f"bias{mv}", rate_hz=100, noise_mV=mv),
+                       a.bias_seeds, f"bias{mv}")
+        row = ", ".join(f"{k} {m['parameters'][k]['batch']['bias_over_crb']:+.3f}"
+                        for k in ("Kx", "Ky", "Kz"))
+        worst = max(m["parameters"].items(), key=lambda kv: abs(kv[1]["batch"]["bias_over_crb"]))
+        print(f"{mv} mV: mean z {row} (standard error {1 / math.sqrt(a.bias_seeds):.3f}); "
+              f"largest of all: {worst[0]} {worst[1]['batch']['bias_over_crb']:+.3f}")
+
+
+def vertical(work, a):
+    print("\n## vertical shaft (bench/scenarios/vertical-shaft.yaml)\n")
+    scen = os.path.join(HERE, "scenarios", "vertical-shaft.yaml")
+    for seed in range(1, 6):
+        d = os.path.join(work, f"vs_{seed}")
+        run([BIN, "simulate", scen, "-o", d, "-q", "--seed", str(seed), "--force"])
+        run([BIN, "fit", os.path.join(d, "run.yaml"), "-o", os.path.join(d, "fit.json"), "-q",
+             "--force"], check=False)
+        f = json.load(open(os.path.join(d, "fit.json")))
+        ks = []
+        for k in ("Kx", "Ky", "Kz"):
+            p = f["parameters"][k]
+            ks.append(f"{k} {(p['value'] - 174.0) / p['sigma']:+.2f} sigma (sigma {p['sigma']:.1f})")
+        print(f"seed {seed}: converged {f['converged']}, chi2/dof {f['chi2_per_dof']:.3f}; "
+              f"from nominal: {', '.join(ks)}; not estimable: "
+              f"{[n for n in f['not_estimable'] if n[0] in 'KW' and len(n) <= 3]}")
+
+
+def shared_folder():
+    for c in (os.environ.get("TRIADCAL_SHARED", ""), os.path.join(ROOT, "..", "shared")):
+        if c and os.path.isdir(os.path.join(c, "data", "real", "single-axis-encoder")):
+            return c
+    return None
+
+
+def real(work, a):
+    print("\n## real roll runs: halves and speeds, noise estimated\n")
+    if not shared_folder():
+        print("skipped: the shared data folder is not here (set TRIADCAL_SHARED)")
+        return
+    ex = os.path.join(ROOT, "examples", "single-axis-roll")
+    whole = {}
+    for speed in ("slow", "medium", "fast"):
+        text = open(os.path.join(ex, speed + ".yaml")).read()
+        text = re.sub(r"noise_mV: \d+", "noise_mV: auto", text)
+        fits = []
+        for label, rng in (("whole", None), ("first half", 0), ("second half", 1)):
+            t = text
+            if rng is not None:
+                span = whole[speed]["span"]
+                mid = 0.5 * (span[0] + span[1])
+                lo, hi = (span[0], mid) if rng == 0 else (mid, span[1])
+                t += f"\ntime_range_s: [{lo}, {hi}]\n"
+            y = os.path.join(ex, f".honesty_{speed}_{label.replace(' ', '_')}.yaml")
+            open(y, "w").write(t)
+            out = os.path.join(work, f"real_{speed}_{label.replace(' ', '_')}.json")
+            try:
+                run([BIN, "fit", y, "-o", out, "-q", "--force", "--residuals",
+                     out.replace(".json", ".csv")])
+            finally:
+                os.remove(y)
+            f = json.load(open(out))
+            if rng is None:
+                ts = [float(l.split(",")[0]) for l in open(out.replace(".json", ".csv"))
+                      if l[0].isdigit()]
+                f["span"] = (ts[0], ts[-1])
+                whole[speed] = f
+            fits.append(f)
+        a_, b_ = fits[1]["parameters"], fits[2]["parameters"]
+        chi = {n: (a_[n]["value"] - b_[n]["value"]) ** 2 / (a_[n]["sigma"] ** 2 + b_[n]["sigma"] ** 2)
+               for n in a_ if a_[n]["estimable"] and b_[n]["estimable"] and a_[n]["sigma"]
+               and b_[n]["sigma"]}
+        worst = sorted(chi.items(), key=lambda kv: -kv[1])[:3]
+        print(f"{speed}: noise estimated {[round(x, 1) for x in whole[speed]['noise']['used_mV']]} mV; "
+              f"halves agree at median chi2/dof {statistics.median(chi.values()):.2f} over "
+              f"{len(chi)} parameters (largest: "
+              + ", ".join(f"{n} {c:.1f}" for n, c in worst) + ")")
+    names = [n for n in whole["slow"]["parameters"]
+             if all(whole[s]["parameters"][n]["estimable"] and whole[s]["parameters"][n]["sigma"]
+                    for s in whole)]
+    rows = []
+    for n in names:
+        ps = [whole[s]["parameters"][n] for s in ("slow", "medium", "fast")]
+        w = [1 / p["sigma"] ** 2 for p in ps]
+        mean = sum(wi * p["value"] for wi, p in zip(w, ps)) / sum(w)
+        rows.append((sum(((p["value"] - mean) / p["sigma"]) ** 2 for p in ps) / 2, n, ps))
+    rows.sort(reverse=True)
+    print(f"three speeds (whole runs): median chi2/dof {statistics.median(r[0] for r in rows):.2f} "
+          f"over {len(rows)} parameters; beyond their sigma (chi2/dof > 4):")
+    for c, n, ps in rows:
+        if c > 4:
+            print(f"  {n:9s} chi2/dof {c:8.1f}: " + ", ".join(
+                f"{p['value']:.5g} +- {p['sigma']:.2g}" for p in ps) + f" {ps[0]['unit']}")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--only", default="short,noise,unconstrained,diagnose,bias,vertical,real")
+    ap.add_argument("--seeds", type=int, default=20)
+    ap.add_argument("--diagnose-seeds", type=int, default=100)
+    ap.add_argument("--bias-seeds", type=int, default=400)
+    ap.add_argument("--workdir", default="")
+    a = ap.parse_args()
+    work = a.workdir or tempfile.mkdtemp(prefix="triadcal_honesty_")
+    os.makedirs(work, exist_ok=True)
+    sections = {"short": short, "noise": noise, "unconstrained": unconstrained,
+                "diagnose": diagnose, "bias": bias, "vertical": vertical, "real": real}
+    for name in a.only.split(","):
+        if name not in sections:
+            sys.exit(f"honesty: --only: unknown section '{name}' ({', '.join(sections)})")
+        sections[name](work, a)
+        sys.stdout.flush()
+    print(f"\n(work files in {work})")
+
+
+if __name__ == "__main__":
+    main()
