@@ -21,7 +21,9 @@ BatchResult FitLayout(const RunDescription& run, const RunData& data,
   o.init_theta = start;
   o.holding.hold = hold;
   o.holding.free = free;
-  o.holding.auto_hold = true;  // decides only the new effect's parameters: the rest are hold/free
+  // Every parameter is named in hold or free: the score analysis decided
+  // which of the new effect's parameters the run supports.
+  o.holding.auto_hold = false;
   o.compute_covariance = covariance;
   return SolveBatch(run, data, layout, o);
 }
@@ -146,10 +148,25 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
     last_threshold = threshold;
     std::vector<CandidateTest> tests;
     std::vector<BatchResult> refits;  // parallel to tests (empty when not refit)
-    int to_refit = 0;
+    // Refitted: score p-value within refit_factor of the threshold, and close
+    // to the best candidate: its statistic minus its dof (the excess over
+    // what noise gives) within 2 ln(refit_factor) of the best one's (for equal
+    // dof: p-values within refit_factor; differences, not p-values, because
+    // p underflows for a strong effect). One far behind the best cannot be
+    // selected this round; it is scored again at the next round's fit.
+    double best_excess = -std::numeric_limits<double>::infinity();
     for (const CandidateInformation& c : info.candidates) {
-      if (!c.supported.empty() && c.p_value < opt.refit_factor * threshold) ++to_refit;
+      if (!c.supported.empty()) {
+        best_excess = std::max(best_excess, c.statistic - static_cast<double>(c.supported.size()));
+      }
     }
+    auto refit_it = [&](const CandidateInformation& c) {
+      return !c.supported.empty() && c.p_value < opt.refit_factor * threshold &&
+             c.statistic - static_cast<double>(c.supported.size()) >=
+                 best_excess - 2.0 * std::log(opt.refit_factor);
+    };
+    int to_refit = 0;
+    for (const CandidateInformation& c : info.candidates) to_refit += refit_it(c) ? 1 : 0;
     const double fit_share = (round_end - round_begin) / (to_refit + 1.0);
     int refit_count = 0;
     for (const CandidateInformation& c : info.candidates) {
@@ -170,9 +187,9 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
         refits.emplace_back();
         continue;
       }
-      if (!(c.p_value < opt.refit_factor * threshold)) {
+      if (!refit_it(c)) {
         t.note = "score test only: p above " + FormatNumber(opt.refit_factor) +
-                 " x the threshold, not refitted";
+                 " x the threshold or far behind the best candidate, not refitted";
         tests.push_back(t);
         refits.emplace_back();
         continue;
@@ -183,8 +200,19 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
       span_end = span_begin + fit_share;
       ++refit_count;
       const ParameterLayout aug(WithEffect(current, e));
-      BatchResult r = FitLayout(run, data, aug, Embed(layout, fit.estimate.theta, aug), held,
-                                FreeNames(layout, held), fit_opt, true);
+      // Started at the Gauss-Newton step from the current fit (effect_information.h).
+      Eigen::VectorXd start = Embed(layout, fit.estimate.theta, aug);
+      for (std::size_t j = 0; j < info.base_names.size(); ++j) {
+        start[aug.IndexOf(info.base_names[j])] += c.step_base[j];
+      }
+      for (std::size_t q = 0; q < c.supported.size(); ++q) {
+        start[aug.offset(e) + c.supported[q]] += c.step_effect[q];
+      }
+      std::vector<std::string> hold = held, free = FreeNames(layout, held);
+      const EffectSpec& spec = GetEffectSpec(e);
+      for (int q : c.unsupported) hold.push_back(spec.name + "." + spec.params[q].name);
+      for (int q : c.supported) free.push_back(spec.name + "." + spec.params[q].name);
+      BatchResult r = FitLayout(run, data, aug, start, hold, free, fit_opt, true);
       const int k = static_cast<int>(GetEffectSpec(e).params.size());
       int held_new = 0;
       for (const std::string& h : r.held) {

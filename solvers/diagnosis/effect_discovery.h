@@ -5,8 +5,11 @@
 // Screening (issue 12): every candidate is first scored from the current
 // fit's linearisation alone (effect_information.h: the score test, which needs
 // no refit). Only candidates whose score p-value is below refit_factor times
-// the round's threshold are refitted for the likelihood ratio below; the
-// others keep their score statistic and p-value (they cannot be selected).
+// the round's threshold, and whose score is close to the best one's
+// (statistic - dof within 2 ln(refit_factor) of the best), are refitted for
+// the likelihood ratio below, started at the score's Gauss-Newton step and
+// with the effect parameters the score analysis found supported; the others
+// keep their score statistic and p-value (they cannot be selected this round).
 //
 // Test of an effect E: the likelihood ratio of the fit with E added against the
 // current model,
@@ -44,7 +47,8 @@ struct DiagnoseOptions {
   double alpha = 0.01;         // family-wise false-selection rate per round
   int max_effects = 4;
   // Refit (likelihood ratio) the candidates whose score p-value is below
-  // refit_factor x the round's threshold; infinity refits every candidate.
+  // refit_factor x the round's threshold and close to the best (see above);
+  // infinity refits every candidate.
   double refit_factor = 10.0;
   double power = 0.8;          // of the minimal detectable effects (could_hide)
   std::vector<Effect> candidates;  // empty: the whole catalogue (that the run can carry)

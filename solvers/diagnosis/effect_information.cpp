@@ -52,6 +52,53 @@ std::vector<int> Supported(Eigen::MatrixXd S, double min_info) {
   return kept;
 }
 
+// The thinning that brings a run to about rate_hz (as the hold decision's).
+std::size_t ThinningFactor(const RunData& data, int rate_hz) {
+  const double span = data.t_s.back() - data.t_s.front();
+  const double rate = (data.size() - 1) / std::max(span, 1e-9);
+  return std::max<std::size_t>(
+      1, static_cast<std::size_t>(std::floor(rate / std::max(1, rate_hz))));
+}
+
+// Every m-th sample and every sample in `keep` (sorted): the epochs chosen on
+// the result are then the same samples (ChooseEpochs takes the first sample
+// far enough from the last epoch, and no sample before an epoch qualifies).
+RunData ThinKeeping(const RunData& d, std::size_t m, const std::vector<std::size_t>& keep) {
+  if (m <= 1) return RunData();
+  std::vector<std::size_t> idx;
+  std::size_t q = 0;
+  for (std::size_t k = 0; k < d.size(); ++k) {
+    const bool kept = q < keep.size() && keep[q] == k;
+    if (kept) ++q;
+    if (kept || k % m == 0) idx.push_back(k);
+  }
+  RunData out;
+  auto pick = [&](const std::vector<double>& v) {
+    std::vector<double> o;
+    if (v.empty()) return o;
+    o.reserve(idx.size());
+    for (std::size_t k : idx) o.push_back(v[k]);
+    return o;
+  };
+  out.t_s = pick(d.t_s);
+  for (int i = 0; i < 2; ++i) {
+    out.lambda_rad[i] = pick(d.lambda_rad[i]);
+    out.rate_rad_s[i] = pick(d.rate_rad_s[i]);
+  }
+  for (int i = 0; i < 3; ++i) out.w_mV[i] = pick(d.w_mV[i]);
+  out.temp_C = pick(d.temp_C);
+  return out;
+}
+
+bool SameEpochTimes(const RunData& a, const std::vector<std::size_t>& ea, const RunData& b,
+                    const std::vector<std::size_t>& eb) {
+  if (ea.size() != eb.size()) return false;
+  for (std::size_t e = 0; e < ea.size(); ++e) {
+    if (a.t_s[ea[e]] != b.t_s[eb[e]]) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 EffectInformation AnalyseCandidates(const RunDescription& run, const RunData& data,
@@ -63,21 +110,48 @@ EffectInformation AnalyseCandidates(const RunDescription& run, const RunData& da
   std::vector<Effect> all = current;
   all.insert(all.end(), candidates.begin(), candidates.end());
   const ParameterLayout full(all);
-  RunProblem p = BuildRunProblem(run, data, full, options.epoch_s, options.derivatives);
-  if (fit.noise_used_mV.minCoeff() > 0.0) p.noise_mV = fit.noise_used_mV;
+  // Two problems: the current model on every sample, for the whitening of
+  // each residual (it sums the noise of every sample); and the model with all
+  // candidates on the samples thinned to about init_decimation_hz (keeping
+  // every epoch), for the Jacobians. The Jacobians are sums over the samples
+  // of smooth functions of time (increments), so the thinned sum is their
+  // value to the quadrature error, at a tenth of the autodiff cost on a 1 kHz
+  // run; when the thinned epochs do not fall on the same samples the full
+  // data are used.
+  RunProblem pc = BuildRunProblem(run, data, cur, options.epoch_s, options.derivatives);
+  if (fit.noise_used_mV.minCoeff() > 0.0) pc.noise_mV = fit.noise_used_mV;
+  std::vector<int> held_cur;
+  for (const std::string& h : fit.held) held_cur.push_back(cur.IndexOf(h));
+  std::sort(held_cur.begin(), held_cur.end());
+  pc.Hold(held_cur);
+  const std::size_t E = pc.epochs.size();
+  if (fit.process_residual.size() != E || fit.measurement_residual.size() != E) {
+    throw std::logic_error("AnalyseCandidates: the fit's epochs are not the run problem's");
+  }
+  const std::size_t m = ThinningFactor(data, options.init_decimation_hz);
+  RunData thin = ThinKeeping(data, m, pc.epochs);
+  RunProblem p = BuildRunProblem(run, m > 1 ? thin : data, full, options.epoch_s,
+                                 options.derivatives);
+  if (m > 1 && !SameEpochTimes(data, pc.epochs, thin, p.epochs)) {
+    p = BuildRunProblem(run, data, full, options.epoch_s, options.derivatives);
+  }
+  p.noise_mV = pc.noise_mV;
   std::vector<int> held;
   for (const std::string& h : fit.held) held.push_back(full.IndexOf(h));
   std::sort(held.begin(), held.end());
   p.Hold(held);
-  const std::size_t E = p.epochs.size();
-  if (fit.process_residual.size() != E || fit.measurement_residual.size() != E) {
-    throw std::logic_error("AnalyseCandidates: the fit's epochs are not the run problem's");
-  }
   Eigen::VectorXd theta = Eigen::VectorXd::Zero(full.size());
   for (int i = 0; i < cur.size(); ++i) theta[full.IndexOf(cur.info(i).name)] = fit.estimate.theta[i];
-  const StateSpaceModel model(p);
+  const StateSpaceModel model(p), model_cur(pc);
   const BatchLinearization lin = Linearize(p, theta, true, threads);
+  const BatchLinearization lin_cur = Linearize(pc, fit.estimate.theta, false, threads);
   const int nf = model.num_free();
+  // Free column of each of the current model's free parameters in the full problem.
+  std::vector<int> col_of_cur(pc.free.size());
+  for (std::size_t j = 0; j < pc.free.size(); ++j) {
+    const int i = full.IndexOf(cur.info(pc.free[j]).name);
+    col_of_cur[j] = static_cast<int>(std::find(p.free.begin(), p.free.end(), i) - p.free.begin());
+  }
 
   // Whitened Jacobian blocks and residuals at the fit (the process costs'
   // own Jacobian by theta, with the derivative of their whitening).
@@ -86,20 +160,20 @@ EffectInformation AnalyseCandidates(const RunDescription& run, const RunData& da
   std::vector<Eigen::VectorXd> grad(E, Eigen::VectorXd::Zero(nf));
   ParallelFor(E, threads, [&](std::size_t e) {
     if (e + 1 < E) {
-      const ProcessStep& s = lin.process[e];
+      const ProcessStep& s = lin_cur.process[e];
       std::vector<Mat6> dL;
-      const Mat6 L = model.ProcessWhitening(s, theta, &dL);
+      const Mat6 L = model_cur.ProcessWhitening(s, fit.estimate.theta, &dL);
       const Vec6 r = fit.process_residual[e + 1];
       pb[e].A = L * StateSpaceModel::ProcessJacobianXa(s);
       pb[e].B = L;
-      pb[e].C = -L * s.U;
-      for (int j = 0; j < nf; ++j) pb[e].C.col(j) += dL[j] * r;
+      pb[e].C = -L * lin.process[e].U;
+      for (std::size_t j = 0; j < dL.size(); ++j) pb[e].C.col(col_of_cur[j]) += dL[j] * r;
       grad[e] += pb[e].C.transpose() * (L * r);
     }
-    const MeasurementStep m = model.Measurement(e, theta, true, false);
-    mb[e].M = lin.LR[e];
-    mb[e].N = -lin.LR[e] * m.H;
-    grad[e] += mb[e].N.transpose() * (lin.LR[e] * fit.measurement_residual[e]);
+    const MeasurementStep me = model.Measurement(e, theta, true, false);
+    mb[e].M = lin_cur.LR[e];
+    mb[e].N = -lin_cur.LR[e] * me.H;
+    grad[e] += mb[e].N.transpose() * (lin_cur.LR[e] * fit.measurement_residual[e]);
   });
   Eigen::MatrixXd A;
   Eigen::VectorXd b;
@@ -158,6 +232,13 @@ EffectInformation AnalyseCandidates(const RunDescription& run, const RunData& da
       c.N = Rows(N_all, c.supported, c.supported);
       const Eigen::VectorXd ge = Entries(g, sc);
       c.score = std::max(0.0, ge.dot(with_prior.ldlt().solve(ge)));
+      // Newton step on (theta_b, theta_e): the block solve with the base
+      // gradient (~0) included.
+      std::vector<int> bs = base;
+      bs.insert(bs.end(), sc.begin(), sc.end());
+      const Eigen::VectorXd step = -Rows(I, bs, bs).ldlt().solve(Entries(g, bs));
+      c.step_base = step.head(base.size());
+      c.step_effect = step.tail(k);
       const double chi2_aug =
           (2.0 * fit.final_cost - c.score) / std::max(1, fit.degrees_of_freedom - k);
       c.statistic = c.score / std::max(1.0, chi2_aug);

@@ -65,6 +65,10 @@ struct CandidateInformation {
   // Conditional data information N over the supported params (SI), and the
   // base-parameter coupling B = I_bb^-1 I_be (free base rows x supported).
   Eigen::MatrixXd N, B;
+  // The Gauss-Newton step from the current fit to the fit with the effect
+  // added (base free parameters, then the supported ones; SI), a start for
+  // its refit.
+  Eigen::VectorXd step_base, step_effect;
 };
 
 struct EffectInformation {
