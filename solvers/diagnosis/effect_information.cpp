@@ -2,7 +2,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -56,8 +55,8 @@ std::vector<int> Supported(Eigen::MatrixXd S, double min_info) {
 std::size_t ThinningFactor(const RunData& data, int rate_hz) {
   const double span = data.t_s.back() - data.t_s.front();
   const double rate = (data.size() - 1) / std::max(span, 1e-9);
-  return std::max<std::size_t>(
-      1, static_cast<std::size_t>(std::floor(rate / std::max(1, rate_hz))));
+  return std::max<std::size_t>(1,
+                               static_cast<std::size_t>(std::floor(rate / std::max(1, rate_hz))));
 }
 
 // Every m-th sample and every sample in `keep` (sorted): the epochs chosen on
@@ -130,8 +129,8 @@ EffectInformation AnalyseCandidates(const RunDescription& run, const RunData& da
   }
   const std::size_t m = ThinningFactor(data, options.init_decimation_hz);
   RunData thin = ThinKeeping(data, m, pc.epochs);
-  RunProblem p = BuildRunProblem(run, m > 1 ? thin : data, full, options.epoch_s,
-                                 options.derivatives);
+  RunProblem p =
+      BuildRunProblem(run, m > 1 ? thin : data, full, options.epoch_s, options.derivatives);
   if (m > 1 && !SameEpochTimes(data, pc.epochs, thin, p.epochs)) {
     p = BuildRunProblem(run, data, full, options.epoch_s, options.derivatives);
   }
@@ -141,7 +140,8 @@ EffectInformation AnalyseCandidates(const RunDescription& run, const RunData& da
   std::sort(held.begin(), held.end());
   p.Hold(held);
   Eigen::VectorXd theta = Eigen::VectorXd::Zero(full.size());
-  for (int i = 0; i < cur.size(); ++i) theta[full.IndexOf(cur.info(i).name)] = fit.estimate.theta[i];
+  for (int i = 0; i < cur.size(); ++i)
+    theta[full.IndexOf(cur.info(i).name)] = fit.estimate.theta[i];
   const StateSpaceModel model(p), model_cur(pc);
   const BatchLinearization lin = Linearize(p, theta, true, threads);
   const BatchLinearization lin_cur = Linearize(pc, fit.estimate.theta, false, threads);
@@ -282,8 +282,8 @@ HideCase MinimalDetectable(const EffectInformation& info, const CandidateInforma
   const Eigen::MatrixXd Ninv = c.N.ldlt().solve(Eigen::MatrixXd::Identity(k, k));
   for (int j = 0; j < c.B.rows(); ++j) {
     const Eigen::VectorXd bj = c.B.row(j).transpose();
-    const double shift = std::sqrt(std::max(0.0, h.lambda0 * bj.dot(Ninv * bj))) /
-                         info.base_sigma[j];
+    const double shift =
+        std::sqrt(std::max(0.0, h.lambda0 * bj.dot(Ninv * bj))) / info.base_sigma[j];
     if (shift > h.max_shift_sigma) {
       h.max_shift_sigma = shift;
       h.parameter = info.base_names[j];

@@ -42,10 +42,9 @@
 // lambda0 is multiplied by it.
 #pragma once
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/model/effects.h"
 #include "core/model/run_data.h"

@@ -3,13 +3,14 @@
 // of a refit, the minimal detectable effect against the noncentrality an
 // effect of that size really produces, and the could-hide list as a property
 // of the profile.
-#include <cmath>
-#include <limits>
+#include "solvers/diagnosis/effect_information.h"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
+
 #include "solvers/diagnosis/effect_discovery.h"
-#include "solvers/diagnosis/effect_information.h"
 #include "solvers/diagnosis/statistics.h"
 #include "tests/sim_fixtures.h"
 
@@ -24,7 +25,8 @@ TEST(ReliabilityStatistics, NoncentralChiSquare) {
   auto phi = [](double x) { return 0.5 * std::erfc(-x / std::sqrt(2.0)); };
   for (double lambda : {0.5, 4.0, 17.0, 60.0}) {
     for (double c : {1.0, 6.6, 20.0}) {
-      const double want = phi(std::sqrt(lambda) - std::sqrt(c)) + phi(-std::sqrt(lambda) - std::sqrt(c));
+      const double want =
+          phi(std::sqrt(lambda) - std::sqrt(c)) + phi(-std::sqrt(lambda) - std::sqrt(c));
       EXPECT_NEAR(NoncentralChiSquareSurvival(c, 1, lambda), want, 1e-9) << lambda << " " << c;
     }
   }
@@ -129,8 +131,8 @@ TEST(Reliability, MinimalDetectableEffectGivesItsNoncentrality) {
     const DiagnosisResult d = Diagnose(s.run, Simulate(s), opt);
     const CandidateTest& t = Find(d, e);
     ASSERT_TRUE(t.refit);
-    EXPECT_NEAR(t.lr / h.lambda0, 1.0, 0.1) << GetEffectSpec(e).name << " " << t.lr << " vs "
-                                            << h.lambda0;
+    EXPECT_NEAR(t.lr / h.lambda0, 1.0, 0.1)
+        << GetEffectSpec(e).name << " " << t.lr << " vs " << h.lambda0;
     EXPECT_NEAR(t.score / h.lambda0, 1.0, 0.1) << GetEffectSpec(e).name;
     // External reliability: the declared model's shifts, in its sigma.
     double worst = 0.0;
