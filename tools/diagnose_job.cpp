@@ -65,7 +65,10 @@ nlohmann::json DiagnoseJson(const std::string& run_yaml, double alpha, const Dia
                        {"p_value", t.p_value},
                        {"threshold", t.threshold},
                        {"selected", t.selected},
-                       {"note", t.note}});
+                       {"note", t.note},
+                       {"score", t.score},
+                       {"score_p_value", t.score_p_value},
+                       {"refit", t.refit}});
   }
   out["ranking"] = ranking;
   nlohmann::json tests = nlohmann::json::array();
@@ -76,7 +79,10 @@ nlohmann::json DiagnoseJson(const std::string& run_yaml, double alpha, const Dia
                      {"dof", t.dof},
                      {"p_value", t.p_value},
                      {"threshold", t.threshold},
-                     {"selected", t.selected}});
+                     {"selected", t.selected},
+                     {"score", t.score},
+                     {"score_p_value", t.score_p_value},
+                     {"refit", t.refit}});
   }
   out["tests"] = tests;
   out["selected"] = nlohmann::json::array();
@@ -88,6 +94,33 @@ nlohmann::json DiagnoseJson(const std::string& run_yaml, double alpha, const Dia
   out["before"] = StateJson(d.before_layout, d.before, d.before_residuals, tp);
   out["after"] = StateJson(d.after_layout, d.after, d.after_residuals, tp);
   out["parameters"] = out["after"]["parameters"];
+  out["score_rule"] =
+      "every candidate is scored from the current fit (score test); refitted for the "
+      "likelihood ratio only when its score p-value < refit_factor x threshold";
+  nlohmann::json hide = nlohmann::json::array();
+  for (const HideCase& h : d.could_hide) {
+    nlohmann::json j = {{"effect", GetEffectSpec(h.effect).name},
+                        {"unit", h.unit},
+                        {"alpha", h.alpha},
+                        {"power", h.power},
+                        {"undetectable", h.undetectable}};
+    if (h.direction.empty()) {
+      j["minimal_detectable"] = nullptr;
+      j["max_shift_sigma"] = nullptr;
+      j["parameter"] = nullptr;
+      j["note"] = "this run's motion cannot detect it";
+    } else {
+      nlohmann::json comp = nlohmann::json::object();
+      for (const auto& [name, value] : h.direction) comp[name] = value;
+      j["minimal_detectable"] = h.minimal_detectable;
+      j["components"] = comp;
+      j["noncentrality"] = h.lambda0;
+      j["max_shift_sigma"] = h.max_shift_sigma;
+      j["parameter"] = h.parameter;
+    }
+    hide.push_back(j);
+  }
+  out["could_hide"] = hide;
   out["unexplained_structure"] = d.unexplained;
   out["notes"] = d.notes;
   out["verdict"] = d.verdict;

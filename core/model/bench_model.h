@@ -62,11 +62,13 @@ struct SampleContext {
 // ---------------------------------------------------------------------------
 // Angle stage: recorded angles <-> bench angles.
 //
-//   recorded(t) = E(bench(t - tau)),  E(l)_i = l_i + s_i sin(l_i) + c_i cos(l_i)
+//   recorded(t) = (1 + k) E(bench(t - tau)),  E(l)_i = l_i + s_i sin(l_i) + c_i cos(l_i)
 //
+// (k_i: angle_scale, the recorder's counts-to-angle factor off by 1 + k_i.)
 // The simulator evaluates the profile at t - tau and applies EncoderReading.
 // The estimators invert the chain: undo the latency with a second-order Taylor
-// step, bench(t) = recorded(t + tau), then invert E by fixed-point iteration.
+// step, bench(t) = recorded(t + tau), divide by 1 + k, then invert E by
+// fixed-point iteration. (The time shift commutes with the static maps.)
 // ---------------------------------------------------------------------------
 
 template <typename T>
@@ -94,18 +96,34 @@ void EncoderError(const ModelConfig& cfg, const T* theta, int i, const T& l, T* 
   *dde = -*e;
 }
 
-// Bench angles -> what the angle sensors report (encoder error only).
-//   r = l + e(l),  r' = l'(1 + e'),  r'' = l''(1 + e') + l'^2 e''
+// 1 + k_i of angle sensor i (angle_scale), 1 without the effect.
+template <typename T>
+T AngleScaleFactor(const ModelConfig& cfg, const T* theta, int i) {
+  const int o = cfg.layout.offset(Effect::kAngleScale);
+  return o < 0 ? T(1.0) : T(1.0) + theta[o + i];
+}
+
+// Bench angles -> what the angle sensors report (encoder error and scale).
+//   r = (1 + k)(l + e(l)),  r' = (1 + k) l'(1 + e'),  r'' = (1 + k)(l''(1 + e') + l'^2 e'')
 template <typename T>
 BenchAngles<T> EncoderReading(const ModelConfig& cfg, const T* theta, const BenchAngles<T>& b) {
   BenchAngles<T> r = b;
-  if (!cfg.layout.has(Effect::kEncoderHarmonic)) return r;
-  for (int i = 0; i < 2; ++i) {
-    T e, de, dde;
-    EncoderError(cfg, theta, i, b.axis[i].angle, &e, &de, &dde);
-    r.axis[i].angle = b.axis[i].angle + e;
-    r.axis[i].rate = b.axis[i].rate * (T(1.0) + de);
-    r.axis[i].accel = b.axis[i].accel * (T(1.0) + de) + b.axis[i].rate * b.axis[i].rate * dde;
+  if (cfg.layout.has(Effect::kEncoderHarmonic)) {
+    for (int i = 0; i < 2; ++i) {
+      T e, de, dde;
+      EncoderError(cfg, theta, i, b.axis[i].angle, &e, &de, &dde);
+      r.axis[i].angle = b.axis[i].angle + e;
+      r.axis[i].rate = b.axis[i].rate * (T(1.0) + de);
+      r.axis[i].accel = b.axis[i].accel * (T(1.0) + de) + b.axis[i].rate * b.axis[i].rate * dde;
+    }
+  }
+  if (cfg.layout.has(Effect::kAngleScale)) {
+    for (int i = 0; i < 2; ++i) {
+      const T f = AngleScaleFactor(cfg, theta, i);
+      r.axis[i].angle = f * r.axis[i].angle;
+      r.axis[i].rate = f * r.axis[i].rate;
+      r.axis[i].accel = f * r.axis[i].accel;
+    }
   }
   return r;
 }
@@ -124,6 +142,14 @@ BenchAngles<T> BenchAnglesFromRecorded(const ModelConfig& cfg, const T* theta,
       b.axis[i].angle = T(r.angle) + tau * r.rate + T(0.5) * tau * tau * r.accel;
       b.axis[i].rate = T(r.rate) + tau * r.accel;
       b.axis[i].accel = T(r.accel);
+    }
+  }
+  if (cfg.layout.has(Effect::kAngleScale)) {
+    for (int i = 0; i < 2; ++i) {
+      const T f = AngleScaleFactor(cfg, theta, i);
+      b.axis[i].angle = b.axis[i].angle / f;
+      b.axis[i].rate = b.axis[i].rate / f;
+      b.axis[i].accel = b.axis[i].accel / f;
     }
   }
   if (cfg.layout.has(Effect::kEncoderHarmonic)) {

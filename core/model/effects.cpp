@@ -126,6 +126,20 @@ const std::vector<EffectSpec>& EffectCatalogue() {
           "damaged sensor";
       c.push_back(e);
     }
+    {
+      EffectSpec e{Effect::kAngleScale,
+                   "angle_scale",
+                   "recorded angles scaled by 1 + k_i (counts-to-angle factor of each angle sensor)",
+                   EffectStage::kAngle,
+                   {{"l1_scale", "ppm", 1e-6, 2000.0, -10000.0, 10000.0, 500.0},
+                    {"l2_scale", "ppm", 1e-6, 2000.0, -10000.0, 10000.0, 500.0}}};
+      e.plausible_reason =
+          "an encoder's counts-to-angle factor is exact or off by a wrong count per turn "
+          "(0.1-0.3 %, e.g. 4000 for 4096 counts); beyond 1 % the angles would visibly miss "
+          "the bench's stops";
+      e.needs.rates_at_every_sample = true;
+      c.push_back(e);
+    }
     return c;
   }();
   return catalogue;

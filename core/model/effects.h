@@ -26,6 +26,8 @@
 //   angle_latency      lambda_rec(t) = lambda(t - tau)                 tau [ms]
 //   encoder_harmonic   lambda_rec_i = lambda_i + s_i sin(lambda_i) + c_i cos(lambda_i)
 //                                                                       [arcmin]
+//   angle_scale        lambda_rec_i = (1 + k_i) lambda_i (the recorder's counts-to-
+//                      angle factor off by k_i; applied after the harmonic)   [ppm]
 // geometry stage
 //   axis_nonintersection      the inner axis passes at d along z1 from the
 //                             outer axis: S = C_L1 (d e_z + C_12 R)     d [mm]
@@ -55,8 +57,9 @@ enum class Effect {
   kThermalDrift,
   kThermalDriftTemp,
   kScaleAsymmetry,
+  kAngleScale,
 };
-constexpr int kNumEffects = 8;
+constexpr int kNumEffects = 9;
 
 // Where in the measurement chain an effect acts (see the diagram above).
 enum class EffectStage { kAngle, kGeometry, kSensor };

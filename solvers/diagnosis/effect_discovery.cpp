@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "solvers/diagnosis/statistics.h"
@@ -20,7 +21,9 @@ BatchResult FitLayout(const RunDescription& run, const RunData& data,
   o.init_theta = start;
   o.holding.hold = hold;
   o.holding.free = free;
-  o.holding.auto_hold = true;  // decides only the new effect's parameters: the rest are hold/free
+  // Every parameter is named in hold or free: the score analysis decided
+  // which of the new effect's parameters the run supports.
+  o.holding.auto_hold = false;
   o.compute_covariance = covariance;
   return SolveBatch(run, data, layout, o);
 }
@@ -52,6 +55,14 @@ std::string SameZeroOffsetSignal(ZeroOffsetSignal signal) {
     if (e.zero_offset_signal == signal) return e.name;
   }
   return "";
+}
+
+// Three significant digits.
+std::string FormatNumber(double x) {
+  std::ostringstream o;
+  o.precision(3);
+  o << x;
+  return o.str();
 }
 
 std::vector<Effect> WithEffect(std::vector<Effect> v, Effect e) {
@@ -124,25 +135,90 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
   ParameterLayout layout = res.before_layout;
   BatchResult fit = res.before;
   std::vector<std::string> held = fit.held;
+  EffectInformation info;          // the score analysis at the current fit
+  bool info_current = false;       // computed at `fit` for the remaining candidates
+  double last_threshold = opt.alpha / std::max<std::size_t>(1, candidates.size());
   for (int round = 1; round <= opt.max_effects && !candidates.empty(); ++round) {
+    say("round " + std::to_string(round) + ": score tests of " +
+        std::to_string(candidates.size()) + " candidates");
+    info = AnalyseCandidates(run, data, current, fit, candidates, fit_opt);
+    info_current = true;
+    if (round == 1) res.base_gradient_sigma = info.base_gradient_sigma;
+    const double threshold = opt.alpha / static_cast<double>(candidates.size());
+    last_threshold = threshold;
     std::vector<CandidateTest> tests;
-    const double fit_share = (round_end - round_begin) / (candidates.size() + 1.0);
-    for (Effect e : candidates) {
-      say("round " + std::to_string(round) + ": testing " + GetEffectSpec(e).name + " (" +
-          std::to_string(tests.size() + 1) + "/" + std::to_string(candidates.size()) + ")");
-      span_begin = round_begin + fit_share * tests.size();
-      span_end = span_begin + fit_share;
-      const ParameterLayout aug(WithEffect(current, e));
+    std::vector<BatchResult> refits;  // parallel to tests (empty when not refit)
+    // Refitted: score p-value within refit_factor of the threshold, and close
+    // to the best candidate: its statistic minus its dof (the excess over
+    // what noise gives) within 2 ln(refit_factor) of the best one's (for equal
+    // dof: p-values within refit_factor; differences, not p-values, because
+    // p underflows for a strong effect). One far behind the best cannot be
+    // selected this round; it is scored again at the next round's fit.
+    double best_excess = -std::numeric_limits<double>::infinity();
+    for (const CandidateInformation& c : info.candidates) {
+      if (!c.supported.empty()) {
+        best_excess = std::max(best_excess, c.statistic - static_cast<double>(c.supported.size()));
+      }
+    }
+    auto refit_it = [&](const CandidateInformation& c) {
+      return !c.supported.empty() && c.p_value < opt.refit_factor * threshold &&
+             c.statistic - static_cast<double>(c.supported.size()) >=
+                 best_excess - 2.0 * std::log(opt.refit_factor);
+    };
+    int to_refit = 0;
+    for (const CandidateInformation& c : info.candidates) to_refit += refit_it(c) ? 1 : 0;
+    const double fit_share = (round_end - round_begin) / (to_refit + 1.0);
+    int refit_count = 0;
+    for (const CandidateInformation& c : info.candidates) {
+      const Effect e = c.effect;
       CandidateTest t;
       t.effect = e;
       t.round = round;
-      const BatchResult r = FitLayout(run, data, aug, Embed(layout, fit.estimate.theta, aug), held,
-                                      FreeNames(layout, held), fit_opt, false);
+      t.dof = static_cast<int>(c.supported.size());
+      t.score = c.statistic;
+      t.score_p_value = c.p_value;
+      t.statistic = c.statistic;
+      t.p_value = c.p_value;
+      t.lr = std::numeric_limits<double>::quiet_NaN();
+      if (t.dof == 0) {
+        t.p_value = 1.0;
+        t.note = "not supported by this run's motion";
+        tests.push_back(t);
+        refits.emplace_back();
+        continue;
+      }
+      if (!refit_it(c)) {
+        t.note = "score test only: p above " + FormatNumber(opt.refit_factor) +
+                 " x the threshold or far behind the best candidate, not refitted";
+        tests.push_back(t);
+        refits.emplace_back();
+        continue;
+      }
+      say("round " + std::to_string(round) + ": refitting with " + GetEffectSpec(e).name + " (" +
+          std::to_string(refit_count + 1) + "/" + std::to_string(to_refit) + ")");
+      span_begin = round_begin + fit_share * refit_count;
+      span_end = span_begin + fit_share;
+      ++refit_count;
+      const ParameterLayout aug(WithEffect(current, e));
+      // Started at the Gauss-Newton step from the current fit (effect_information.h).
+      Eigen::VectorXd start = Embed(layout, fit.estimate.theta, aug);
+      for (std::size_t j = 0; j < info.base_names.size(); ++j) {
+        start[aug.IndexOf(info.base_names[j])] += c.step_base[j];
+      }
+      for (std::size_t q = 0; q < c.supported.size(); ++q) {
+        start[aug.offset(e) + c.supported[q]] += c.step_effect[q];
+      }
+      std::vector<std::string> hold = held, free = FreeNames(layout, held);
+      const EffectSpec& spec = GetEffectSpec(e);
+      for (int q : c.unsupported) hold.push_back(spec.name + "." + spec.params[q].name);
+      for (int q : c.supported) free.push_back(spec.name + "." + spec.params[q].name);
+      BatchResult r = FitLayout(run, data, aug, start, hold, free, fit_opt, true);
       const int k = static_cast<int>(GetEffectSpec(e).params.size());
       int held_new = 0;
       for (const std::string& h : r.held) {
         if (aug.IndexOf(h) >= aug.offset(e) && aug.IndexOf(h) < aug.offset(e) + k) ++held_new;
       }
+      t.refit = true;
       t.dof = k - held_new;
       t.lr = 2.0 * (fit.final_cost - r.final_cost);
       t.statistic = std::max(0.0, t.lr) / std::max(1.0, r.chi2_per_dof);
@@ -153,31 +229,50 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
         t.p_value = ChiSquareSurvival(t.statistic, t.dof);
       }
       tests.push_back(t);
+      refits.push_back(std::move(r));
     }
-    std::sort(tests.begin(), tests.end(), [](const CandidateTest& a, const CandidateTest& b) {
-      return a.p_value < b.p_value || (a.p_value == b.p_value && a.statistic > b.statistic);
+    std::vector<int> order(tests.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+    std::sort(order.begin(), order.end(), [&](int a, int b) {
+      const CandidateTest& x = tests[a];
+      const CandidateTest& y = tests[b];
+      return x.p_value < y.p_value || (x.p_value == y.p_value && x.statistic > y.statistic);
     });
-    const double threshold = opt.alpha / static_cast<double>(tests.size());
-    for (CandidateTest& t : tests) t.threshold = threshold;
-    const bool pass = tests.front().p_value < threshold;
-    if (pass) tests.front().selected = true;
-    if (round == 1) res.ranking = tests;
-    res.tests.insert(res.tests.end(), tests.begin(), tests.end());
+    std::vector<CandidateTest> sorted;
+    for (int i : order) sorted.push_back(tests[i]);
+    for (CandidateTest& t : sorted) t.threshold = threshold;
+    const bool pass = sorted.front().refit && sorted.front().p_value < threshold;
+    if (pass) sorted.front().selected = true;
+    if (round == 1) res.ranking = sorted;
+    res.tests.insert(res.tests.end(), sorted.begin(), sorted.end());
     if (!pass) break;
-    const Effect chosen = tests.front().effect;
+    const Effect chosen = sorted.front().effect;
     res.selected.push_back(chosen);
     current.push_back(chosen);
     const ParameterLayout next(current);
-    say("refitting with " + GetEffectSpec(chosen).name);
-    span_begin = round_end - fit_share;
-    span_end = round_end;
-    fit = FitLayout(run, data, next, Embed(layout, fit.estimate.theta, next), held,
-                    FreeNames(layout, held), fit_opt, true);
+    // The selected candidate's refit (with its covariance) is the new fit.
+    fit = std::move(refits[order.front()]);
+    info_current = false;
     round_begin = round_end;
     round_end += 0.6 * (0.95 - round_end);
     layout = next;
     held = fit.held;
     candidates.erase(std::find(candidates.begin(), candidates.end(), chosen));
+  }
+  // Could hide: every candidate not selected, at the final fit.
+  if (!candidates.empty()) {
+    if (!info_current) {
+      say("score analysis at the final fit");
+      info = AnalyseCandidates(run, data, current, fit, candidates, fit_opt);
+      last_threshold = opt.alpha / static_cast<double>(candidates.size());
+    }
+    for (const CandidateInformation& c : info.candidates) {
+      res.could_hide.push_back(MinimalDetectable(info, c, last_threshold, opt.power));
+    }
+    std::stable_sort(res.could_hide.begin(), res.could_hide.end(),
+                     [](const HideCase& a, const HideCase& b) {
+                       return a.max_shift_sigma > b.max_shift_sigma;
+                     });
   }
   say("analysing the residual");
   if (opt.fraction) opt.fraction(0.95);
@@ -200,6 +295,29 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
   } else {
     v << "; the residual is consistent with the declared noise (white, chi2/dof "
       << std::round(1000 * res.after.chi2_per_dof) / 1000 << ")";
+  }
+  // What could hide: never a clean verdict without it.
+  std::vector<std::string> hiding, unseen;
+  for (const HideCase& h : res.could_hide) {
+    if (h.direction.empty()) {
+      unseen.push_back(GetEffectSpec(h.effect).name);
+    } else if (h.max_shift_sigma > 1.0) {
+      hiding.push_back(GetEffectSpec(h.effect).name + " up to " +
+                       FormatNumber(h.minimal_detectable) + " " + h.unit + " would go undetected "
+                       "and move " + h.parameter + " by up to " +
+                       FormatNumber(h.max_shift_sigma) + " sigma");
+    }
+  }
+  if (!hiding.empty()) {
+    v << "; BUT effects could hide: ";
+    for (std::size_t i = 0; i < hiding.size(); ++i) v << (i ? "; " : "") << hiding[i];
+  } else if (!res.could_hide.empty()) {
+    v << "; no catalogue effect small enough to escape detection would move a parameter by "
+         "more than 1 sigma";
+  }
+  if (!unseen.empty()) {
+    v << "; this run's motion cannot detect";
+    for (const std::string& u : unseen) v << " " << u;
   }
   res.verdict = v.str();
   return res;

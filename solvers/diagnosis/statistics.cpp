@@ -15,6 +15,42 @@ double ChiSquareSurvival(double x, double k) {
   return Eigen::numext::igammac(0.5 * k, 0.5 * x);
 }
 
+double ChiSquareUpperQuantile(double p, double k) {
+  // Bisection on the survival function (monotone in x); 200 halvings reach
+  // double precision from any bracket below.
+  double lo = 0.0, hi = k + 10.0;
+  while (ChiSquareSurvival(hi, k) > p) hi *= 2.0;
+  for (int i = 0; i < 200 && hi - lo > 1e-12 * hi; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (ChiSquareSurvival(mid, k) > p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+double NoncentralChiSquareSurvival(double x, double k, double lambda) {
+  // Poisson mixture of central chi-squares: sum_j Pois(j; lambda/2) Q(x; k + 2j).
+  if (lambda <= 0.0) return ChiSquareSurvival(x, k);
+  const double m = 0.5 * lambda;
+  const int j_max = static_cast<int>(m + 12.0 * std::sqrt(m) + 40.0);
+  double sum = 0.0;
+  for (int j = 0; j <= j_max; ++j) {
+    const double log_pois = -m + j * std::log(m) - std::lgamma(j + 1.0);
+    sum += std::exp(log_pois) * ChiSquareSurvival(x, k + 2.0 * j);
+  }
+  return std::min(1.0, sum);
+}
+
+double NoncentralityForPower(double alpha, double k, double power) {
+  const double crit = ChiSquareUpperQuantile(alpha, k);
+  double lo = 0.0, hi = 1.0;
+  while (NoncentralChiSquareSurvival(crit, k, hi) < power) hi *= 2.0;
+  for (int i = 0; i < 100 && hi - lo > 1e-9 * hi; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (NoncentralChiSquareSurvival(crit, k, mid) < power ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
 namespace {
 std::vector<double> Centered(const std::vector<double>& x) {
   const double mean = std::accumulate(x.begin(), x.end(), 0.0) / std::max<std::size_t>(1, x.size());

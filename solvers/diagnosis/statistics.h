@@ -9,6 +9,18 @@ namespace triadcal {
 // P(X > x) for X ~ chi-square with k degrees of freedom.
 double ChiSquareSurvival(double x, double k);
 
+// x with P(X > x) = p for X ~ chi-square with k degrees of freedom.
+double ChiSquareUpperQuantile(double p, double k);
+
+// P(X > x) for X ~ noncentral chi-square, k degrees of freedom, noncentrality
+// lambda (the distribution of a test statistic when the tested effect is there).
+double NoncentralChiSquareSurvival(double x, double k, double lambda);
+
+// The noncentrality lambda0 at which a chi-square test with k degrees of
+// freedom at level alpha detects with the given power (Baarda's lambda0:
+// 17.08 for alpha 0.001, power 0.8, k 1).
+double NoncentralityForPower(double alpha, double k, double power);
+
 // Sample autocorrelation at lag (mean removed).
 double Autocorrelation(const std::vector<double>& x, int lag);
 

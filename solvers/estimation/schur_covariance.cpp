@@ -4,12 +4,11 @@
 
 namespace triadcal {
 
-Eigen::MatrixXd ThetaCovarianceBySchur(const std::vector<ProcessBlock>& process,
-                                       const std::vector<MeasurementBlock>& measurement,
-                                       const Eigen::MatrixXd& theta_rows) {
+Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process,
+                                        const std::vector<MeasurementBlock>& measurement,
+                                        const Eigen::MatrixXd& theta_rows) {
   using Mat6 = Eigen::Matrix<double, 6, 6>;
   const std::size_t E = measurement.size();
-  const int n = static_cast<int>(theta_rows.cols());
   Eigen::MatrixXd Htt = theta_rows.transpose() * theta_rows;
   for (const MeasurementBlock& m : measurement) Htt.noalias() += m.N.transpose() * m.N;
   for (const ProcessBlock& p : process) Htt.noalias() += p.C.transpose() * p.C;
@@ -42,7 +41,14 @@ Eigen::MatrixXd ThetaCovarianceBySchur(const std::vector<ProcessBlock>& process,
     S = Sn - U.transpose() * SiU;
     G = Gn - U.transpose() * SiG;
   }
-  const Eigen::LDLT<Eigen::MatrixXd> ldlt(0.5 * (Htt + Htt.transpose()));
+  return 0.5 * (Htt + Htt.transpose());
+}
+
+Eigen::MatrixXd ThetaCovarianceBySchur(const std::vector<ProcessBlock>& process,
+                                       const std::vector<MeasurementBlock>& measurement,
+                                       const Eigen::MatrixXd& theta_rows) {
+  const int n = static_cast<int>(theta_rows.cols());
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(ThetaInformationBySchur(process, measurement, theta_rows));
   return ldlt.solve(Eigen::MatrixXd::Identity(n, n));
 }
 

@@ -35,4 +35,11 @@ Eigen::MatrixXd ThetaCovarianceBySchur(const std::vector<ProcessBlock>& process,
                                        const std::vector<MeasurementBlock>& measurement,
                                        const Eigen::MatrixXd& theta_rows);
 
+// The information of theta with the states eliminated, H_tt - H_tx H_xx^-1 H_xt
+// (its inverse is the covariance above; effect_discovery's score tests and
+// reliability analysis use the information itself).
+Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process,
+                                        const std::vector<MeasurementBlock>& measurement,
+                                        const Eigen::MatrixXd& theta_rows);
+
 }  // namespace triadcal

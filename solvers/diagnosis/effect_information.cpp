@@ -1,0 +1,295 @@
+#include "solvers/diagnosis/effect_information.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "solvers/diagnosis/statistics.h"
+#include "solvers/estimation/batch_linearization.h"
+#include "solvers/estimation/parallel.h"
+#include "solvers/estimation/schur_covariance.h"
+#include "solvers/estimation/state_space_model.h"
+
+namespace triadcal {
+namespace {
+
+Eigen::MatrixXd Rows(const Eigen::MatrixXd& m, const std::vector<int>& r,
+                     const std::vector<int>& c) {
+  Eigen::MatrixXd out(r.size(), c.size());
+  for (std::size_t i = 0; i < r.size(); ++i)
+    for (std::size_t j = 0; j < c.size(); ++j) out(i, j) = m(r[i], c[j]);
+  return out;
+}
+
+Eigen::VectorXd Entries(const Eigen::VectorXd& v, const std::vector<int>& r) {
+  Eigen::VectorXd out(r.size());
+  for (std::size_t i = 0; i < r.size(); ++i) out[i] = v[r[i]];
+  return out;
+}
+
+// Pivoted Cholesky of an information matrix in prior units: the indices kept,
+// most informative first, while what is left of each is at least min_info
+// (batch_solver.cpp's SupportedParameters, for one effect given the base).
+std::vector<int> Supported(Eigen::MatrixXd S, double min_info) {
+  std::vector<int> kept;
+  std::vector<bool> used(S.rows(), false);
+  for (;;) {
+    int best = -1;
+    for (int j = 0; j < S.rows(); ++j) {
+      if (!used[j] && S(j, j) >= min_info && (best < 0 || S(j, j) > S(best, best))) best = j;
+    }
+    if (best < 0) break;
+    used[best] = true;
+    kept.push_back(best);
+    const Eigen::VectorXd col = S.col(best) / std::sqrt(S(best, best));
+    S -= col * col.transpose();
+  }
+  std::sort(kept.begin(), kept.end());
+  return kept;
+}
+
+// The thinning that brings a run to about rate_hz (as the hold decision's).
+std::size_t ThinningFactor(const RunData& data, int rate_hz) {
+  const double span = data.t_s.back() - data.t_s.front();
+  const double rate = (data.size() - 1) / std::max(span, 1e-9);
+  return std::max<std::size_t>(1,
+                               static_cast<std::size_t>(std::floor(rate / std::max(1, rate_hz))));
+}
+
+// Every m-th sample and every sample in `keep` (sorted): the epochs chosen on
+// the result are then the same samples (ChooseEpochs takes the first sample
+// far enough from the last epoch, and no sample before an epoch qualifies).
+RunData ThinKeeping(const RunData& d, std::size_t m, const std::vector<std::size_t>& keep) {
+  if (m <= 1) return RunData();
+  std::vector<std::size_t> idx;
+  std::size_t q = 0;
+  for (std::size_t k = 0; k < d.size(); ++k) {
+    const bool kept = q < keep.size() && keep[q] == k;
+    if (kept) ++q;
+    if (kept || k % m == 0) idx.push_back(k);
+  }
+  RunData out;
+  auto pick = [&](const std::vector<double>& v) {
+    std::vector<double> o;
+    if (v.empty()) return o;
+    o.reserve(idx.size());
+    for (std::size_t k : idx) o.push_back(v[k]);
+    return o;
+  };
+  out.t_s = pick(d.t_s);
+  for (int i = 0; i < 2; ++i) {
+    out.lambda_rad[i] = pick(d.lambda_rad[i]);
+    out.rate_rad_s[i] = pick(d.rate_rad_s[i]);
+  }
+  for (int i = 0; i < 3; ++i) out.w_mV[i] = pick(d.w_mV[i]);
+  out.temp_C = pick(d.temp_C);
+  return out;
+}
+
+bool SameEpochTimes(const RunData& a, const std::vector<std::size_t>& ea, const RunData& b,
+                    const std::vector<std::size_t>& eb) {
+  if (ea.size() != eb.size()) return false;
+  for (std::size_t e = 0; e < ea.size(); ++e) {
+    if (a.t_s[ea[e]] != b.t_s[eb[e]]) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+EffectInformation AnalyseCandidates(const RunDescription& run, const RunData& data,
+                                    const std::vector<Effect>& current, const BatchResult& fit,
+                                    const std::vector<Effect>& candidates,
+                                    const BatchOptions& options) {
+  const int threads = options.threads > 0 ? options.threads : DefaultThreads();
+  const ParameterLayout cur(current);
+  std::vector<Effect> all = current;
+  all.insert(all.end(), candidates.begin(), candidates.end());
+  const ParameterLayout full(all);
+  // Two problems: the current model on every sample, for the whitening of
+  // each residual (it sums the noise of every sample); and the model with all
+  // candidates on the samples thinned to about init_decimation_hz (keeping
+  // every epoch), for the Jacobians. The Jacobians are sums over the samples
+  // of smooth functions of time (increments), so the thinned sum is their
+  // value to the quadrature error, at a tenth of the autodiff cost on a 1 kHz
+  // run; when the thinned epochs do not fall on the same samples the full
+  // data are used.
+  RunProblem pc = BuildRunProblem(run, data, cur, options.epoch_s, options.derivatives);
+  if (fit.noise_used_mV.minCoeff() > 0.0) pc.noise_mV = fit.noise_used_mV;
+  std::vector<int> held_cur;
+  for (const std::string& h : fit.held) held_cur.push_back(cur.IndexOf(h));
+  std::sort(held_cur.begin(), held_cur.end());
+  pc.Hold(held_cur);
+  const std::size_t E = pc.epochs.size();
+  if (fit.process_residual.size() != E || fit.measurement_residual.size() != E) {
+    throw std::logic_error("AnalyseCandidates: the fit's epochs are not the run problem's");
+  }
+  const std::size_t m = ThinningFactor(data, options.init_decimation_hz);
+  RunData thin = ThinKeeping(data, m, pc.epochs);
+  RunProblem p =
+      BuildRunProblem(run, m > 1 ? thin : data, full, options.epoch_s, options.derivatives);
+  if (m > 1 && !SameEpochTimes(data, pc.epochs, thin, p.epochs)) {
+    p = BuildRunProblem(run, data, full, options.epoch_s, options.derivatives);
+  }
+  p.noise_mV = pc.noise_mV;
+  std::vector<int> held;
+  for (const std::string& h : fit.held) held.push_back(full.IndexOf(h));
+  std::sort(held.begin(), held.end());
+  p.Hold(held);
+  Eigen::VectorXd theta = Eigen::VectorXd::Zero(full.size());
+  for (int i = 0; i < cur.size(); ++i)
+    theta[full.IndexOf(cur.info(i).name)] = fit.estimate.theta[i];
+  const StateSpaceModel model(p), model_cur(pc);
+  const BatchLinearization lin = Linearize(p, theta, true, threads);
+  const BatchLinearization lin_cur = Linearize(pc, fit.estimate.theta, false, threads);
+  const int nf = model.num_free();
+  // Free column of each of the current model's free parameters in the full problem.
+  std::vector<int> col_of_cur(pc.free.size());
+  for (std::size_t j = 0; j < pc.free.size(); ++j) {
+    const int i = full.IndexOf(cur.info(pc.free[j]).name);
+    col_of_cur[j] = static_cast<int>(std::find(p.free.begin(), p.free.end(), i) - p.free.begin());
+  }
+
+  // Whitened Jacobian blocks and residuals at the fit (the process costs'
+  // own Jacobian by theta, with the derivative of their whitening).
+  std::vector<ProcessBlock> pb(E - 1);
+  std::vector<MeasurementBlock> mb(E);
+  std::vector<Eigen::VectorXd> grad(E, Eigen::VectorXd::Zero(nf));
+  ParallelFor(E, threads, [&](std::size_t e) {
+    if (e + 1 < E) {
+      const ProcessStep& s = lin_cur.process[e];
+      std::vector<Mat6> dL;
+      const Mat6 L = model_cur.ProcessWhitening(s, fit.estimate.theta, &dL);
+      const Vec6 r = fit.process_residual[e + 1];
+      pb[e].A = L * StateSpaceModel::ProcessJacobianXa(s);
+      pb[e].B = L;
+      pb[e].C = -L * lin.process[e].U;
+      for (std::size_t j = 0; j < dL.size(); ++j) pb[e].C.col(col_of_cur[j]) += dL[j] * r;
+      grad[e] += pb[e].C.transpose() * (L * r);
+    }
+    const MeasurementStep me = model.Measurement(e, theta, true, false);
+    mb[e].M = lin_cur.LR[e];
+    mb[e].N = -lin_cur.LR[e] * me.H;
+    grad[e] += mb[e].N.transpose() * (lin_cur.LR[e] * fit.measurement_residual[e]);
+  });
+  Eigen::MatrixXd A;
+  Eigen::VectorXd b;
+  model.ThetaRows(true, &A, &b);
+  Eigen::VectorXd g = A.transpose() * (A * model.Free(theta) - b);
+  for (const Eigen::VectorXd& ge : grad) g += ge;
+  const Eigen::MatrixXd I = ThetaInformationBySchur(pb, mb, A);
+
+  // Free indices: base (the current layout's free parameters) and each candidate's.
+  std::vector<int> free_of(full.size(), -1);
+  for (int j = 0; j < nf; ++j) free_of[p.free[j]] = j;
+  EffectInformation out;
+  out.chi2_per_dof = fit.chi2_per_dof;
+  std::vector<int> base;
+  for (int i = 0; i < cur.size(); ++i) {
+    const int j = free_of[full.IndexOf(cur.info(i).name)];
+    if (j < 0) continue;
+    base.push_back(j);
+    out.base_names.push_back(cur.info(i).name);
+  }
+  const Eigen::MatrixXd Ibb = Rows(I, base, base);
+  const Eigen::LDLT<Eigen::MatrixXd> bb(Ibb);
+  const Eigen::MatrixXd Cbb = bb.solve(Eigen::MatrixXd::Identity(base.size(), base.size()));
+  out.base_sigma = Cbb.diagonal().cwiseSqrt();
+  const Eigen::VectorXd gb = Entries(g, base);
+  out.base_gradient_sigma = std::sqrt(std::max(0.0, gb.dot(Cbb * gb)));
+
+  for (Effect e : candidates) {
+    CandidateInformation c;
+    c.effect = e;
+    const int k_all = static_cast<int>(GetEffectSpec(e).params.size());
+    std::vector<int> cols(k_all);
+    Eigen::VectorXd prior_sigma(k_all);
+    for (int q = 0; q < k_all; ++q) {
+      cols[q] = free_of[full.offset(e) + q];
+      prior_sigma[q] = p.prior.sigma[full.offset(e) + q];
+    }
+    // Conditional data information (the prior's 1/sigma^2 removed) in prior units.
+    const Eigen::MatrixXd Ibe_all = Rows(I, base, cols);
+    Eigen::MatrixXd N_all = Rows(I, cols, cols) - Ibe_all.transpose() * bb.solve(Ibe_all);
+    N_all.diagonal() -= prior_sigma.cwiseInverse().cwiseAbs2();
+    const Eigen::MatrixXd Np = prior_sigma.asDiagonal() * N_all * prior_sigma.asDiagonal();
+    c.supported = Supported(Np, options.holding.min_information_effects);
+    for (int q = 0; q < k_all; ++q) {
+      if (std::find(c.supported.begin(), c.supported.end(), q) == c.supported.end()) {
+        c.unsupported.push_back(q);
+      }
+    }
+    const int k = static_cast<int>(c.supported.size());
+    if (k > 0) {
+      std::vector<int> sc;
+      for (int q : c.supported) sc.push_back(cols[q]);
+      const Eigen::MatrixXd Ibe = Rows(I, base, sc);
+      c.B = bb.solve(Ibe);
+      const Eigen::MatrixXd with_prior = Rows(I, sc, sc) - Ibe.transpose() * c.B;
+      c.N = Rows(N_all, c.supported, c.supported);
+      const Eigen::VectorXd ge = Entries(g, sc);
+      c.score = std::max(0.0, ge.dot(with_prior.ldlt().solve(ge)));
+      // Newton step on (theta_b, theta_e): the block solve with the base
+      // gradient (~0) included.
+      std::vector<int> bs = base;
+      bs.insert(bs.end(), sc.begin(), sc.end());
+      const Eigen::VectorXd step = -Rows(I, bs, bs).ldlt().solve(Entries(g, bs));
+      c.step_base = step.head(base.size());
+      c.step_effect = step.tail(k);
+      const double chi2_aug =
+          (2.0 * fit.final_cost - c.score) / std::max(1, fit.degrees_of_freedom - k);
+      c.statistic = c.score / std::max(1.0, chi2_aug);
+      c.p_value = ChiSquareSurvival(c.statistic, k);
+    }
+    out.candidates.push_back(c);
+  }
+  return out;
+}
+
+HideCase MinimalDetectable(const EffectInformation& info, const CandidateInformation& c,
+                           double alpha, double power) {
+  const EffectSpec& spec = GetEffectSpec(c.effect);
+  HideCase h;
+  h.effect = c.effect;
+  h.alpha = alpha;
+  h.power = power;
+  h.unit = spec.params.front().unit;
+  for (int q : c.unsupported) h.undetectable.push_back(spec.params[q].name);
+  const int k = static_cast<int>(c.supported.size());
+  if (k == 0) {
+    h.minimal_detectable = std::numeric_limits<double>::infinity();
+    return h;
+  }
+  h.lambda0 = NoncentralityForPower(alpha, k, power) * std::max(1.0, info.chi2_per_dof);
+  // N in file units: theta_SI = v_file * si_per_unit.
+  Eigen::VectorXd to_si(k);
+  for (int q = 0; q < k; ++q) to_si[q] = spec.params[c.supported[q]].si_per_unit;
+  const Eigen::MatrixXd Nf = to_si.asDiagonal() * c.N * to_si.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (Nf + Nf.transpose()));
+  const double mu = std::max(es.eigenvalues()[0], 1e-300);
+  h.minimal_detectable = std::sqrt(h.lambda0 / mu);
+  Eigen::VectorXd v = es.eigenvectors().col(0);
+  Eigen::Index largest = 0;
+  v.cwiseAbs().maxCoeff(&largest);
+  if (v[largest] < 0.0) v = -v;
+  for (int q = 0; q < k; ++q) {
+    h.direction.emplace_back(spec.params[c.supported[q]].name, h.minimal_detectable * v[q]);
+  }
+  // Largest shift over the undetected effects, parameter by parameter.
+  const Eigen::MatrixXd Ninv = c.N.ldlt().solve(Eigen::MatrixXd::Identity(k, k));
+  for (int j = 0; j < c.B.rows(); ++j) {
+    const Eigen::VectorXd bj = c.B.row(j).transpose();
+    const double shift =
+        std::sqrt(std::max(0.0, h.lambda0 * bj.dot(Ninv * bj))) / info.base_sigma[j];
+    if (shift > h.max_shift_sigma) {
+      h.max_shift_sigma = shift;
+      h.parameter = info.base_names[j];
+    }
+  }
+  return h;
+}
+
+}  // namespace triadcal
