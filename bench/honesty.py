@@ -245,8 +245,11 @@ def real(work, a):
             open(y, "w").write(t)
             out = os.path.join(work, f"real_{speed}_{label.replace(' ', '_')}.json")
             try:
-                run([BIN, "fit", y, "-o", out, "-q", "--force", "--residuals",
-                     out.replace(".json", ".csv")])
+                p = run([BIN, "fit", y, "-o", out, "-q", "--force", "--residuals",
+                         out.replace(".json", ".csv")], check=False)
+                if p.returncode not in (0, 4):  # 4: written, but not converged
+                    sys.exit(f"honesty: fit of {speed} {label} exited {p.returncode}: "
+                             f"{p.stderr.strip()[-300:]}")
             finally:
                 os.remove(y)
             f = json.load(open(out))
@@ -261,6 +264,9 @@ def real(work, a):
                for n in a_ if a_[n]["estimable"] and b_[n]["estimable"] and a_[n]["sigma"]
                and b_[n]["sigma"]}
         worst = sorted(chi.items(), key=lambda kv: -kv[1])[:3]
+        conv = ", ".join(f"{l} {'converged' if f['converged'] else 'NOT converged'}"
+                         for l, f in zip(("whole", "first half", "second half"), fits))
+        print(f"{speed}: {conv}")
         print(f"{speed}: noise estimated {[round(x, 1) for x in whole[speed]['noise']['used_mV']]} mV; "
               f"halves agree at median chi2/dof {statistics.median(chi.values()):.2f} over "
               f"{len(chi)} parameters (largest: "

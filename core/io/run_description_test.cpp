@@ -222,7 +222,7 @@ TEST_F(RunDescriptionTest, ErrorsNameTheKey) {
   const std::string f = Path();
   EXPECT_EQ(ErrorOf("data: run.csv\ntrid: {}\n"),
             f + ": trid: unknown key (allowed: data, bench, triad, constraints, columns, "
-                "mounting, priors, data_format, positions, sensor)");
+                "mounting, priors, data_format, positions, sensor, time_range_s)");
   EXPECT_EQ(ErrorOf("data: run.csv\ntriad: {scale_mV_per_g: [174, 174]}\n"),
             f + ": triad.scale_mV_per_g: expected a list of 3 numbers, got 2");
   EXPECT_EQ(ErrorOf("data: run.csv\ntriad: {scale_mV_per_g: [174, x, 174]}\n"),
