@@ -171,7 +171,7 @@ def diagnose(work, a):
         run([BIN, "simulate", scen, "-o", d, "-q", "--seed", str(seed), "--force"])
         procs.append((seed, d, subprocess.Popen(
             [BIN, "diagnose", os.path.join(d, "run.yaml"), "-o", os.path.join(d, "d.json"), "-q",
-             "--force", "--threads", "1"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)))
+             "--force"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)))
         if len(procs) >= 2:
             finish(*procs.pop(0))
     for p in procs:
