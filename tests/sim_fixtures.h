@@ -39,5 +39,17 @@ inline Scenario PaperScenario(double rate_hz, double duration_s, double noise_mV
   return s;
 }
 
+// The paper run (50 Hz, 90 s, 2 mV, 15") with one catalogue effect in its
+// truth, undeclared in run.yaml.
+inline Scenario WithEffect(std::uint64_t seed, Effect e, const NamedValues& values) {
+  Scenario s = PaperScenario(50.0, 90.0, 2.0, 15.0, seed);
+  s.truth_layout = ParameterLayout({e});
+  Eigen::VectorXd t = Eigen::VectorXd::Zero(s.truth_layout.size());
+  t.head(kNumBaseParams) = s.truth;
+  s.truth = t;
+  SetFromFileUnits(s.truth_layout, values, &s.truth);
+  return s;
+}
+
 }  // namespace testing_fixtures
 }  // namespace triadcal

@@ -16,6 +16,7 @@ namespace triadcal {
 namespace {
 
 using testing_fixtures::PaperScenario;
+using testing_fixtures::WithEffect;
 
 TEST(DiagnoseStatistics, ChiSquareTail) {
   EXPECT_NEAR(ChiSquareSurvival(3.841458820694124, 1), 0.05, 1e-9);
@@ -47,16 +48,6 @@ TEST(DiagnoseStatistics, PeriodogramFindsASine) {
   for (int i = 0; i < 400; ++i) y[i] = std::cos(0.3 * i);
   EXPECT_NEAR(Correlation(x, x), 1.0, 1e-12);
   EXPECT_LT(std::abs(Correlation(x, y)), 0.2);
-}
-
-Scenario WithEffect(std::uint64_t seed, Effect e, const NamedValues& values) {
-  Scenario s = PaperScenario(50.0, 90.0, 2.0, 15.0, seed);
-  s.truth_layout = ParameterLayout({e});
-  Eigen::VectorXd t = Eigen::VectorXd::Zero(s.truth_layout.size());
-  t.head(kNumBaseParams) = s.truth;
-  s.truth = t;
-  SetFromFileUnits(s.truth_layout, values, &s.truth);
-  return s;
 }
 
 double WorstErrorInSigma(const DiagnosisResult& d, const Scenario& s) {

@@ -71,22 +71,7 @@ RunData ThinKeeping(const RunData& d, std::size_t m, const std::vector<std::size
     if (kept) ++q;
     if (kept || k % m == 0) idx.push_back(k);
   }
-  RunData out;
-  auto pick = [&](const std::vector<double>& v) {
-    std::vector<double> o;
-    if (v.empty()) return o;
-    o.reserve(idx.size());
-    for (std::size_t k : idx) o.push_back(v[k]);
-    return o;
-  };
-  out.t_s = pick(d.t_s);
-  for (int i = 0; i < 2; ++i) {
-    out.lambda_rad[i] = pick(d.lambda_rad[i]);
-    out.rate_rad_s[i] = pick(d.rate_rad_s[i]);
-  }
-  for (int i = 0; i < 3; ++i) out.w_mV[i] = pick(d.w_mV[i]);
-  out.temp_C = pick(d.temp_C);
-  return out;
+  return SelectSamples(d, idx);
 }
 
 bool SameEpochTimes(const RunData& a, const std::vector<std::size_t>& ea, const RunData& b,

@@ -18,6 +18,7 @@ namespace triadcal {
 namespace {
 
 using testing_fixtures::PaperScenario;
+using testing_fixtures::WithEffect;
 
 TEST(ReliabilityStatistics, NoncentralChiSquare) {
   // k = 1: X = (Z + sqrt(lambda))^2, so P(X > c) = Phi(sqrt(lambda) - sqrt(c)) +
@@ -37,16 +38,6 @@ TEST(ReliabilityStatistics, NoncentralChiSquare) {
   EXPECT_NEAR(NoncentralityForPower(0.001, 1, 0.8), 17.075, 0.01);
   // More dimensions need more noncentrality for the same power.
   EXPECT_GT(NoncentralityForPower(0.001, 4, 0.8), NoncentralityForPower(0.001, 1, 0.8));
-}
-
-Scenario WithEffect(std::uint64_t seed, Effect e, const NamedValues& values) {
-  Scenario s = PaperScenario(50.0, 90.0, 2.0, 15.0, seed);
-  s.truth_layout = ParameterLayout({e});
-  Eigen::VectorXd t = Eigen::VectorXd::Zero(s.truth_layout.size());
-  t.head(kNumBaseParams) = s.truth;
-  s.truth = t;
-  SetFromFileUnits(s.truth_layout, values, &s.truth);
-  return s;
 }
 
 const CandidateTest& Find(const DiagnosisResult& d, Effect e) {

@@ -26,23 +26,30 @@ std::vector<std::size_t> ChooseEpochs(const RunData& data, double epoch_s) {
   return ep;
 }
 
-RunData Decimate(const RunData& d, std::size_t m) {
-  if (m <= 1) return d;
+RunData SelectSamples(const RunData& d, const std::vector<std::size_t>& idx) {
   RunData out;
-  auto thin = [m](const std::vector<double>& v) {
+  auto pick = [&idx](const std::vector<double>& v) {
     std::vector<double> o;
-    o.reserve(v.size() / m + 1);
-    for (std::size_t k = 0; k < v.size(); k += m) o.push_back(v[k]);
+    if (v.empty()) return o;
+    o.reserve(idx.size());
+    for (std::size_t k : idx) o.push_back(v[k]);
     return o;
   };
-  out.t_s = thin(d.t_s);
+  out.t_s = pick(d.t_s);
   for (int i = 0; i < 2; ++i) {
-    out.lambda_rad[i] = thin(d.lambda_rad[i]);
-    out.rate_rad_s[i] = thin(d.rate_rad_s[i]);
+    out.lambda_rad[i] = pick(d.lambda_rad[i]);
+    out.rate_rad_s[i] = pick(d.rate_rad_s[i]);
   }
-  for (int i = 0; i < 3; ++i) out.w_mV[i] = thin(d.w_mV[i]);
-  out.temp_C = thin(d.temp_C);
+  for (int i = 0; i < 3; ++i) out.w_mV[i] = pick(d.w_mV[i]);
+  out.temp_C = pick(d.temp_C);
   return out;
+}
+
+RunData Decimate(const RunData& d, std::size_t m) {
+  if (m <= 1) return d;
+  std::vector<std::size_t> idx;
+  for (std::size_t k = 0; k < d.size(); k += m) idx.push_back(k);
+  return SelectSamples(d, idx);
 }
 
 std::vector<ConstraintRow> ResolveConstraints(const RunDescription& run,

@@ -71,6 +71,9 @@ RunProblem BuildRunProblem(const RunDescription& run, const RunData& data,
 // sample at least epoch_s after the previous epoch, and the last sample.
 std::vector<std::size_t> ChooseEpochs(const RunData& data, double epoch_s);
 
+// The samples idx of d (labels are not carried).
+RunData SelectSamples(const RunData& d, const std::vector<std::size_t>& idx);
+
 // Every m-th sample of a run (m >= 1), for quick initialisers.
 RunData Decimate(const RunData& data, std::size_t m);
 
