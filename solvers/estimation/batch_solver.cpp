@@ -76,10 +76,8 @@ ceres::LinearSolverType SolverType(const std::string& name) {
                    "' (sparse_normal_cholesky, sparse_schur, dense_qr)");
 }
 
-// The parameters the data determine: pivoted Cholesky of the data information
-// in prior units (cov is the posterior with priors; the prior contributes the
-// identity there). Most informative first, primary parameters preferred among
-// near-equals; stops when what is left is below min_info.
+// cov is the posterior with priors; the prior contributes the identity to
+// its inverse in prior units.
 std::vector<int> SupportedParameters(const Eigen::MatrixXd& cov, const Eigen::VectorXd& prior_sigma,
                                      const Eigen::VectorXd& min_info) {
   const int n = static_cast<int>(cov.rows());
@@ -87,12 +85,25 @@ std::vector<int> SupportedParameters(const Eigen::MatrixXd& cov, const Eigen::Ve
       prior_sigma.cwiseInverse().asDiagonal() * cov * prior_sigma.cwiseInverse().asDiagonal();
   Eigen::MatrixXd S = Pn.ldlt().solve(Eigen::MatrixXd::Identity(n, n));
   S.diagonal().array() -= 1.0;
-  auto priority = [](int i) {
-    if (i <= kW0z) return 4.0;      // scale factors, zero offsets
-    if (i <= kGammaZ) return 2.0;   // misalignments
-    if (i >= kDx2 && i <= kDz2) return 2.0;
-    return 1.0;                     // K_ij, bench zeros, effects
-  };
+  Eigen::VectorXd priority(n);
+  for (int i = 0; i < n; ++i) priority[i] = HoldPriority(i);
+  return SupportedByInformation(S, min_info, priority);
+}
+
+}  // namespace
+
+double HoldPriority(int index) {
+  if (index <= kW0z) return 4.0;      // scale factors, zero offsets
+  if (index <= kGammaZ) return 2.0;   // misalignments
+  if (index >= kDx2 && index <= kDz2) return 2.0;
+  return 1.0;                         // K_ij, bench zeros, effects
+}
+
+std::vector<int> SupportedByInformation(const Eigen::MatrixXd& information,
+                                        const Eigen::VectorXd& min_info,
+                                        const Eigen::VectorXd& priority) {
+  const int n = static_cast<int>(information.rows());
+  Eigen::MatrixXd S = information;
   std::vector<int> kept;
   std::vector<bool> used(n, false);
   for (;;) {
@@ -100,7 +111,7 @@ std::vector<int> SupportedParameters(const Eigen::MatrixXd& cov, const Eigen::Ve
     double best_score = 0.0;
     for (int j = 0; j < n; ++j) {
       if (used[j] || S(j, j) < min_info[j]) continue;
-      const double score = S(j, j) * priority(j);
+      const double score = S(j, j) * priority[j];
       if (score > best_score) {
         best_score = score;
         best = j;
@@ -114,8 +125,6 @@ std::vector<int> SupportedParameters(const Eigen::MatrixXd& cov, const Eigen::Ve
   }
   return kept;
 }
-
-}  // namespace
 
 HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data,
                                   const ParameterLayout& layout, const HoldPolicy& o,

@@ -179,4 +179,18 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
                                   double epoch_s, const AngleDerivativeOptions& derivatives,
                                   int decimation_hz = 100, int threads = 0);
 
+// The rule behind HoldPolicy::auto_hold, for any parameter vector: a pivoted
+// Cholesky of the data information in prior units (information, n x n: each
+// parameter divided by its prior sigma), most informative first, priority
+// breaking near-ties in favour of the primary parameters; keeps every
+// parameter with at least min_info[j] left once the kept ones are known and
+// returns the kept indices. ChooseHeldParameters and the joint problem of
+// several runs (solvers/multirun/) decide with it.
+std::vector<int> SupportedByInformation(const Eigen::MatrixXd& information,
+                                        const Eigen::VectorXd& min_info,
+                                        const Eigen::VectorXd& priority);
+// The priority of base or effect parameter `index` of a layout: scale
+// factors and zero offsets 4, misalignments and lever arm 2, the rest 1.
+double HoldPriority(int index);
+
 }  // namespace triadcal

@@ -44,6 +44,89 @@ Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process
   return 0.5 * (Htt + Htt.transpose());
 }
 
+ReducedOverStates ReduceOverStates(const std::vector<ProcessBlock>& process,
+                                   const std::vector<MeasurementBlock>& measurement,
+                                   bool with_states) {
+  using Mat6 = Eigen::Matrix<double, 6, 6>;
+  using Vec6 = Eigen::Matrix<double, 6, 1>;
+  const std::size_t E = measurement.size();
+  const int n = static_cast<int>(measurement[0].N.cols());
+  ReducedOverStates out;
+  out.information = Eigen::MatrixXd::Zero(n, n);
+  out.gradient = Eigen::VectorXd::Zero(n);
+  double rr = 0.0;
+  for (const MeasurementBlock& m : measurement) {
+    out.information.noalias() += m.N.transpose() * m.N;
+    out.gradient.noalias() += m.N.transpose() * m.r0;
+    rr += m.r0.squaredNorm();
+  }
+  for (const ProcessBlock& p : process) {
+    out.information.noalias() += p.C.transpose() * p.C;
+    out.gradient.noalias() += p.C.transpose() * p.r0;
+    rr += p.r0.squaredNorm();
+  }
+  // The diagonal block, theta coupling and right-hand side of state e before
+  // the elimination of the states before it.
+  auto block = [&](std::size_t e, Mat6* S, Eigen::MatrixXd* G, Vec6* h) {
+    const MeasurementBlock& m = measurement[e];
+    *S = m.M.transpose() * m.M;
+    *G = m.M.transpose() * m.N;
+    *h = m.M.transpose() * m.r0;
+    if (e > 0) {
+      const ProcessBlock& p = process[e - 1];
+      *S += p.B.transpose() * p.B;
+      *G += p.B.transpose() * p.C;
+      *h += p.B.transpose() * p.r0;
+    }
+    if (e < process.size()) {
+      const ProcessBlock& p = process[e];
+      *S += p.A.transpose() * p.A;
+      *G += p.A.transpose() * p.C;
+      *h += p.A.transpose() * p.r0;
+    }
+  };
+  Mat6 S;
+  Eigen::MatrixXd G;
+  Vec6 h;
+  block(0, &S, &G, &h);
+  double hSh = 0.0;
+  // For the back substitution: x_e = S_e^-1 (-h_e - U_e x_{e+1}).
+  std::vector<Mat6> Sinv_U(with_states ? E : 0);
+  std::vector<Vec6> Sinv_h(with_states ? E : 0);
+  for (std::size_t e = 0; e < E; ++e) {
+    const Eigen::LDLT<Mat6> ldlt(S);
+    const Eigen::MatrixXd SiG = ldlt.solve(G);
+    const Vec6 Sih = ldlt.solve(h);
+    out.information.noalias() -= G.transpose() * SiG;
+    out.gradient.noalias() -= G.transpose() * Sih;
+    hSh += h.dot(Sih);
+    if (with_states) Sinv_h[e] = Sih;
+    if (e + 1 == E) break;
+    const ProcessBlock& p = process[e];
+    const Mat6 U = p.A.transpose() * p.B;
+    const Mat6 SiU = ldlt.solve(U);
+    if (with_states) Sinv_U[e] = SiU;
+    Mat6 Sn;
+    Eigen::MatrixXd Gn;
+    Vec6 hn;
+    block(e + 1, &Sn, &Gn, &hn);
+    S = Sn - U.transpose() * SiU;
+    G = Gn - U.transpose() * SiG;
+    h = hn - U.transpose() * Sih;
+  }
+  out.cost = 0.5 * (rr - hSh);
+  out.information = 0.5 * (out.information + out.information.transpose());
+  if (with_states) {
+    // theta is held (the states are optimal for this theta): x_e = -S_e^-1 (h_e + U_e x_{e+1}).
+    out.states.assign(E, Vec6::Zero());
+    for (std::size_t k = E; k-- > 0;) {
+      out.states[k] = -Sinv_h[k];
+      if (k + 1 < E) out.states[k] -= Sinv_U[k] * out.states[k + 1];
+    }
+  }
+  return out;
+}
+
 Eigen::MatrixXd ThetaCovarianceBySchur(const std::vector<ProcessBlock>& process,
                                        const std::vector<MeasurementBlock>& measurement,
                                        const Eigen::MatrixXd& theta_rows) {

@@ -23,10 +23,13 @@ namespace triadcal {
 struct ProcessBlock {      // residual couples x_e, x_{e+1} and theta
   Eigen::Matrix<double, 6, 6> A, B;  // d r / d x_e, d r / d x_{e+1}
   Eigen::MatrixXd C;                 // d r / d theta (6 x n)
+  // The residual at x = 0 (ReduceOverStates only): r = r0 + A x_e + B x_{e+1}.
+  Eigen::Matrix<double, 6, 1> r0 = Eigen::Matrix<double, 6, 1>::Zero();
 };
 struct MeasurementBlock {  // residual couples x_e and theta
   Eigen::Matrix<double, 6, 6> M;
   Eigen::MatrixXd N;                 // 6 x n
+  Eigen::Matrix<double, 6, 1> r0 = Eigen::Matrix<double, 6, 1>::Zero();  // r = r0 + M x_e
 };
 
 // process[e] links epoch e and e+1 (E - 1 of them); measurement[e] is at epoch
@@ -41,5 +44,25 @@ Eigen::MatrixXd ThetaCovarianceBySchur(const std::vector<ProcessBlock>& process,
 Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process,
                                         const std::vector<MeasurementBlock>& measurement,
                                         const Eigen::MatrixXd& theta_rows);
+
+// The problem at one theta with the states solved for (variable projection).
+// The residuals are affine in the states for a given theta (r = r0 + J_x x),
+// so min over x of 0.5 |r|^2 is one linear solve; at that minimum the
+// gradient of the reduced cost by theta is J_theta^T r (J_x^T r = 0 there)
+// and its Gauss-Newton Hessian is the information above. The same block
+// forward elimination carries the right-hand side:
+//
+//   cost      = 0.5 |r0|^2 - 0.5 b_x^T H_xx^-1 b_x,       b = J^T r0
+//   gradient  = b_t - H_tx H_xx^-1 b_x
+//   x_optimal = -H_xx^-1 b_x            (when asked: back substitution)
+struct ReducedOverStates {
+  double cost = 0.0;             // 0.5 |r|^2 at the optimal states
+  Eigen::VectorXd gradient;      // d cost / d theta at the optimal states (n)
+  Eigen::MatrixXd information;   // H_tt - H_tx H_xx^-1 H_xt (n x n)
+  std::vector<Eigen::Matrix<double, 6, 1>> states;  // optimal x_e, when asked
+};
+ReducedOverStates ReduceOverStates(const std::vector<ProcessBlock>& process,
+                                   const std::vector<MeasurementBlock>& measurement,
+                                   bool with_states = false);
 
 }  // namespace triadcal

@@ -1,0 +1,377 @@
+#include "solvers/multirun/joint_solver.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "core/model/errors.h"
+#include "solvers/diagnosis/statistics.h"
+#include "solvers/estimation/parallel.h"
+#include "solvers/estimation/reduced_run.h"
+#include "solvers/estimation/run_problem.h"
+
+namespace triadcal {
+namespace {
+
+double Seconds(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The joint cost at phi over the free unknowns F: sum of the runs' reduced
+// costs, the priors and the constraints, with gradient and Gauss-Newton
+// information.
+struct JointEvaluation {
+  double cost = 0.0;
+  Eigen::VectorXd gradient;      // over F
+  Eigen::MatrixXd information;   // over F, with priors and constraints
+  std::vector<ReducedRun> runs;  // information over each run's whole layout
+  std::vector<Eigen::MatrixXd> data_information;  // T_rF^T I_r T_rF
+};
+
+class JointProblem {
+ public:
+  JointProblem(const JointLayout& jl, const std::vector<RunProblem>& problems,
+               const std::vector<int>& free, int threads)
+      : jl_(jl), problems_(problems), free_(free), threads_(threads) {
+    for (int r = 0; r < jl.runs(); ++r) {
+      Eigen::MatrixXd T(jl.layout().size(), free.size());
+      for (std::size_t k = 0; k < free.size(); ++k) T.col(k) = jl.map(r).col(free[k]);
+      map_free_.push_back(T);
+    }
+  }
+
+  const Eigen::MatrixXd& map_free(int r) const { return map_free_[r]; }
+
+  JointEvaluation Evaluate(const Eigen::VectorXd& phi) const {
+    const int nf = static_cast<int>(free_.size());
+    JointEvaluation ev;
+    ev.gradient = Eigen::VectorXd::Zero(nf);
+    ev.information = Eigen::MatrixXd::Zero(nf, nf);
+    for (int r = 0; r < jl_.runs(); ++r) {
+      const Eigen::VectorXd theta = jl_.ThetaOfRun(r, phi);
+      ReducedRun red = ReduceRun(problems_[r], theta, threads_);
+      const Eigen::MatrixXd& T = map_free_[r];
+      ev.cost += red.cost;
+      ev.gradient.noalias() += T.transpose() * red.gradient;
+      Eigen::MatrixXd D = T.transpose() * red.information * T;
+      ev.information += D;
+      ev.data_information.push_back(std::move(D));
+      // Each run's pseudo-measurements, over its parameters.
+      for (const ConstraintRow& c : problems_[r].constraints) {
+        const double res = (c.c.dot(theta) - c.value) / c.sigma;
+        const Eigen::VectorXd row = T.transpose() * c.c / c.sigma;
+        ev.cost += 0.5 * res * res;
+        ev.gradient += res * row;
+        ev.information += row * row.transpose();
+      }
+      ev.runs.push_back(std::move(red));
+    }
+    for (int k = 0; k < nf; ++k) {
+      const JointParam& p = jl_.param(free_[k]);
+      const double res = (phi[free_[k]] - p.prior_mean) / p.prior_sigma;
+      ev.cost += 0.5 * res * res;
+      ev.gradient[k] += res / p.prior_sigma;
+      ev.information(k, k) += 1.0 / (p.prior_sigma * p.prior_sigma);
+    }
+    return ev;
+  }
+
+ private:
+  const JointLayout& jl_;
+  const std::vector<RunProblem>& problems_;
+  std::vector<int> free_;
+  int threads_;
+  std::vector<Eigen::MatrixXd> map_free_;
+};
+
+// Scale factors stay within [1/5, 5] of their nominal values (as in the batch
+// solver's bounds).
+void KeepScalesInBounds(const JointLayout& jl, Eigen::VectorXd* phi) {
+  for (int j = 0; j < jl.size(); ++j) {
+    const JointParam& p = jl.param(j);
+    if (p.base < kKx || p.base > kKz || p.degree != 0) continue;
+    const double k0 = std::abs(p.prior_mean);
+    const double lo = p.prior_mean < 0 ? -5.0 * k0 : 0.2 * k0;
+    const double hi = p.prior_mean < 0 ? -0.2 * k0 : 5.0 * k0;
+    (*phi)[j] = std::clamp((*phi)[j], lo, hi);
+  }
+}
+
+// The phi index whose column moves run-layout parameter i the most among the
+// shared unknowns of degree 0 (-1 when none): names a platform-axis parameter
+// in the IMU's axes.
+int SharedSourceOf(const JointLayout& jl, int r, int i) {
+  int best = -1;
+  double best_w = 0.0;
+  for (int j = 0; j < jl.size(); ++j) {
+    const JointParam& p = jl.param(j);
+    if (p.run >= 0 || p.degree != 0) continue;
+    const double w = std::abs(jl.map(r)(i, j));
+    if (w > best_w + 1e-12) {
+      best_w = w;
+      best = j;
+    }
+  }
+  return best;
+}
+
+// Score form of the Hausman test: run r's gradient at the joint solution
+// over the parameters it determines alone, against its variance under "the
+// runs agree", I_r - I_r T Sigma_J T^T I_r (the part of run r's information
+// the joint solution did not use up).
+RunConsistency TestConsistency(const JointLayout& jl, int r, const BatchResult& alone,
+                               const ReducedRun& at_joint, const Eigen::MatrixXd& map_free,
+                               const Eigen::MatrixXd& cov_free, double alpha) {
+  RunConsistency out;
+  const ParameterLayout& layout = jl.layout();
+  const int n = layout.size();
+  std::vector<bool> held(n, false);
+  for (const std::string& name : alone.held) held[layout.IndexOf(name)] = true;
+  std::vector<int> f;
+  for (int i = 0; i < n; ++i) {
+    if (!held[i]) f.push_back(i);
+  }
+  const Eigen::MatrixXd& I = at_joint.information;
+  const Eigen::MatrixXd IT = I * map_free;
+  const Eigen::MatrixXd Vg_all = I - IT * cov_free * IT.transpose();
+  const int m = static_cast<int>(f.size());
+  Eigen::VectorXd g(m), s(m);
+  Eigen::MatrixXd Vg(m, m);
+  for (int a = 0; a < m; ++a) {
+    g[a] = at_joint.gradient[f[a]];
+    s[a] = std::sqrt(std::max(I(f[a], f[a]), 1e-300));
+    for (int b = 0; b < m; ++b) Vg(a, b) = Vg_all(f[a], f[b]);
+  }
+  // In units of the run's own information; directions with less than 1e-3 of
+  // it left (what the joint fit takes from this run alone: its own set-up)
+  // carry no test.
+  const Eigen::MatrixXd Vn = s.cwiseInverse().asDiagonal() * Vg * s.cwiseInverse().asDiagonal();
+  const Eigen::VectorXd gn = g.cwiseQuotient(s);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (Vn + Vn.transpose()));
+  for (int k = 0; k < m; ++k) {
+    const double lambda = eig.eigenvalues()[k];
+    if (!(lambda > 1e-3)) continue;
+    const double u = eig.eigenvectors().col(k).dot(gn);
+    out.chi2 += u * u / lambda;
+    out.dof += 1;
+  }
+  out.tested = out.dof > 0;
+  out.p_value = out.tested ? ChiSquareSurvival(out.chi2, out.dof) : 1.0;
+  out.consistent = out.p_value >= alpha;
+  for (int a = 0; a < m; ++a) {
+    if (!(Vn(a, a) > 1e-3)) continue;
+    const int i = f[a];
+    // Positive z: the run alone would put the parameter below the joint value.
+    const double z = gn[a] / std::sqrt(Vn(a, a));
+    out.z.emplace_back(layout.info(i).name, z);
+    const int source = SharedSourceOf(jl, r, i);
+    if (std::abs(z) >= 3.0) {
+      out.pulls.emplace_back(source >= 0 ? jl.param(source).name : layout.info(i).name, z);
+    }
+  }
+  std::sort(out.pulls.begin(), out.pulls.end(),
+            [](const auto& a, const auto& b) { return std::abs(a.second) > std::abs(b.second); });
+  return out;
+}
+
+}  // namespace
+
+JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
+                       const JointOptions& opt) {
+  const int threads = opt.batch.threads > 0 ? opt.batch.threads : DefaultThreads();
+  const ParameterLayout& layout = jl.layout();
+  const int m = jl.size();
+  const int R = jl.runs();
+  auto say = [&](const std::string& s) {
+    if (opt.batch.progress) opt.batch.progress(s);
+  };
+  JointResult res;
+  res.runs.resize(R);
+
+  // 1. Each run alone: its estimate, held set and noise.
+  const auto t_alone = std::chrono::steady_clock::now();
+  std::vector<RunProblem> problems;
+  for (int r = 0; r < R; ++r) {
+    JointRunResult& rr = res.runs[r];
+    rr.name = jl.run_name(r);
+    BatchOptions bo = opt.batch;
+    bo.holding.hold.clear();
+    bo.holding.free.clear();
+    const auto progress = opt.batch.progress;
+    bo.progress = [&, progress](const std::string& s) {
+      if (progress) progress("run " + rr.name + " alone: " + s);
+    };
+    bo.fraction = nullptr;
+    rr.alone = SolveBatch(runs[r].run, runs[r].data, layout, bo);
+    rr.noise_mV = rr.alone.noise_used_mV;
+    RunProblem p = BuildRunProblem(runs[r].run, runs[r].data, layout, opt.batch.epoch_s,
+                                   opt.batch.derivatives);
+    p.noise_mV = rr.noise_mV;
+    problems.push_back(std::move(p));
+  }
+  res.seconds_alone = Seconds(t_alone);
+  const auto t_joint = std::chrono::steady_clock::now();
+
+  // 2. What the runs together determine, at the nominal values.
+  Eigen::VectorXd phi = jl.Nominal();
+  std::vector<int> all(m);
+  for (int j = 0; j < m; ++j) all[j] = j;
+  std::vector<bool> held(m, false);
+  {
+    say("joint: choosing the parameters the runs determine together");
+    const JointProblem full(jl, problems, all, threads);
+    const JointEvaluation ev = full.Evaluate(phi);
+    const Eigen::VectorXd sigma = jl.PriorSigma();
+    // Data and constraint information in prior units (the priors' identity removed).
+    Eigen::MatrixXd info = sigma.asDiagonal() * ev.information * sigma.asDiagonal();
+    info.diagonal().array() -= 1.0;
+    Eigen::VectorXd min_info(m), priority(m);
+    for (int j = 0; j < m; ++j) {
+      const JointParam& p = jl.param(j);
+      const bool base = p.base >= 0 && p.base < kNumBaseParams;
+      min_info[j] = base || p.base < 0 ? opt.batch.holding.min_information
+                                       : opt.batch.holding.min_information_effects;
+      priority[j] = p.base >= 0 ? HoldPriority(p.base) : 2.0;
+    }
+    if (opt.batch.holding.auto_hold) {
+      held.assign(m, true);
+      for (int j : SupportedByInformation(info, min_info, priority)) held[j] = false;
+    }
+    auto index_of = [&](const std::string& name) {
+      const int j = jl.IndexOf(name);
+      if (j < 0) throw OptionError("hold_free", "unknown joint parameter '" + name + "'");
+      return j;
+    };
+    for (const std::string& name : opt.batch.holding.hold) held[index_of(name)] = true;
+    for (const std::string& name : opt.batch.holding.free) held[index_of(name)] = false;
+  }
+  std::vector<int> free;
+  for (int j = 0; j < m; ++j) (held[j] ? res.held : free).push_back(j);
+
+  // 3. The start: each run's own estimate, the shared unknowns as the
+  // precision-weighted mean of what the runs say about them.
+  {
+    Eigen::VectorXd num = Eigen::VectorXd::Zero(m), den = Eigen::VectorXd::Zero(m);
+    for (int r = 0; r < R; ++r) {
+      const BatchResult& a = res.runs[r].alone;
+      for (int i = 0; i < layout.size(); ++i) {
+        const double var = a.estimate.cov(i, i);
+        if (!(var > 0.0)) continue;
+        // The unknown that carries parameter i in this run, if one does alone.
+        int source = -1;
+        double weight = 0.0;
+        for (int j = 0; j < m; ++j) {
+          const double w = jl.map(r)(i, j);
+          if (std::abs(w) > 0.5 && jl.param(j).degree == 0 && jl.param(j).base >= 0) {
+            if (source >= 0) {
+              source = -2;
+              break;
+            }
+            source = j;
+            weight = w;
+          }
+        }
+        if (source < 0 || held[source]) continue;
+        num[source] += a.estimate.theta[i] / weight / var;
+        den[source] += 1.0 / var;
+      }
+    }
+    for (int j = 0; j < m; ++j) {
+      if (den[j] > 0.0) phi[j] = num[j] / den[j];
+    }
+    KeepScalesInBounds(jl, &phi);
+  }
+
+  // 4. Levenberg-Marquardt on the free unknowns.
+  const JointProblem problem(jl, problems, free, threads);
+  const int nf = static_cast<int>(free.size());
+  JointEvaluation ev = problem.Evaluate(phi);
+  double mu = 1e-6;
+  for (int it = 0; it < opt.max_iterations; ++it) {
+    Eigen::MatrixXd H = ev.information;
+    H.diagonal() += mu * ev.information.diagonal();
+    const Eigen::VectorXd step = -H.ldlt().solve(ev.gradient);
+    const double predicted =
+        -(ev.gradient.dot(step) + 0.5 * step.dot(ev.information * step));
+    char line[160];
+    std::snprintf(line, sizeof(line), "joint: iteration %d, chi2 %.6g, predicted decrease %.3g",
+                  it + 1, 2.0 * ev.cost, predicted);
+    say(line);
+    if (!(predicted >= 0.0) || !std::isfinite(predicted)) break;
+    if (predicted < opt.tolerance) {
+      res.converged = true;
+      break;
+    }
+    Eigen::VectorXd trial = phi;
+    for (int k = 0; k < nf; ++k) trial[free[k]] += step[k];
+    KeepScalesInBounds(jl, &trial);
+    JointEvaluation next = problem.Evaluate(trial);
+    res.iterations = it + 1;
+    const double actual = ev.cost - next.cost;
+    if (actual > 0.0 && std::isfinite(next.cost)) {
+      phi = trial;
+      ev = std::move(next);
+      mu = std::max(mu / 5.0, 1e-9);
+    } else {
+      mu = std::max(mu * 8.0, 1e-4);
+      if (mu > 1e8) break;
+    }
+  }
+  res.phi = phi;
+  res.cost = ev.cost;
+  res.cov = Eigen::MatrixXd::Zero(m, m);
+  const Eigen::MatrixXd cov_free =
+      ev.information.ldlt().solve(Eigen::MatrixXd::Identity(nf, nf));
+  for (int a = 0; a < nf; ++a)
+    for (int b = 0; b < nf; ++b) res.cov(free[a], free[b]) = cov_free(a, b);
+
+  // Degrees of freedom and each run's share.
+  res.share = Eigen::MatrixXd::Zero(R, m);
+  Eigen::VectorXd total = Eigen::VectorXd::Zero(nf);
+  for (int r = 0; r < R; ++r) total += ev.data_information[r].diagonal();
+  for (int r = 0; r < R; ++r) {
+    JointRunResult& rr = res.runs[r];
+    rr.theta = jl.ThetaOfRun(r, phi);
+    rr.degrees_of_freedom = ev.runs[r].degrees_of_freedom;
+    rr.chi2_per_dof = 2.0 * ev.runs[r].cost / std::max(1, rr.degrees_of_freedom);
+    res.degrees_of_freedom += rr.degrees_of_freedom + static_cast<int>(problems[r].constraints.size());
+    for (int k = 0; k < nf; ++k) {
+      if (total[k] > 0.0) res.share(r, free[k]) = ev.data_information[r](k, k) / total[k];
+    }
+  }
+  res.chi2_per_dof = 2.0 * res.cost / std::max(1, res.degrees_of_freedom);
+
+  // Determined together, by no run alone.
+  for (int k = 0; k < nf; ++k) {
+    const JointParam& p = jl.param(free[k]);
+    if (p.degree != 0 || p.base < 0) continue;
+    bool alone = false;
+    for (int r = 0; r < R && !alone; ++r) {
+      if (p.run >= 0 && p.run != r) continue;
+      int i = -1;
+      double best = 0.0;
+      for (int q = 0; q < layout.size(); ++q) {
+        if (std::abs(jl.map(r)(q, free[k])) > best) {
+          best = std::abs(jl.map(r)(q, free[k]));
+          i = q;
+        }
+      }
+      const auto& h = res.runs[r].alone.held;
+      alone = i >= 0 && std::find(h.begin(), h.end(), layout.info(i).name) == h.end();
+    }
+    if (!alone) res.jointly_only.push_back(p.name);
+  }
+
+  // 5. Each run against the joint solution.
+  for (int r = 0; r < R; ++r) {
+    res.runs[r].consistency = TestConsistency(jl, r, res.runs[r].alone, ev.runs[r],
+                                              problem.map_free(r), cov_free, opt.consistency_alpha);
+  }
+  res.seconds_joint = Seconds(t_joint);
+  return res;
+}
+
+}  // namespace triadcal

@@ -1,0 +1,92 @@
+// The joint fit of several runs of one IMU (docs/multi-run.md).
+//
+// 1. Each run is fitted alone (SolveBatch): its own estimate, held set and
+//    reading noise (declared, or estimated from its residuals), which the joint
+//    problem then uses for that run.
+// 2. The unknowns phi (joint_layout.h) that the runs together do not
+//    determine are held at their nominal values, by the hold rule of
+//    HoldPolicy (SupportedByInformation) applied to the combined information
+//    sum_r T_r^T I_r T_r at the nominal values, plus the constraints.
+// 3. Levenberg-Marquardt on phi over the sum of the runs' reduced costs
+//    (reduced_run.h: each run's trajectory solved for at every step), the
+//    priors once, and each run's constraints: a Gauss-Newton method on
+//    exactly the batch problem of all runs together (the trajectories are
+//    independent given phi). Its covariance is the inverse of the combined
+//    Gauss-Newton information at the solution.
+// 4. Consistency: each run's score (its gradient at the joint solution) over
+//    the parameters it determines alone, against its variance if the runs
+//    agree, I_r - I_r T_r Sigma_J T_r^T I_r: the part of run r's information
+//    the joint solution did not absorb (a score form of the Hausman test of
+//    the run's own estimate against the joint one; at the joint solution,
+//    so the values at which the run alone held its undetermined parameters
+//    do not enter). chi2 over the directions with at least 1e-3 of the run's
+//    own information left, their number the degrees of freedom; a run with
+//    p < consistency_alpha is named, with the parameters it pulls (|z| >= 3).
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "solvers/estimation/batch_solver.h"
+#include "solvers/multirun/joint_layout.h"
+
+namespace triadcal {
+
+struct JointOptions {
+  // Epochs, derivatives, threads, hold policy, noise estimation, progress:
+  // for the runs fitted alone and for the joint problem.
+  BatchOptions batch;
+  int max_iterations = 40;
+  // Converged when the predicted decrease of the cost (0.5 chi^2) of the next
+  // step is below this: a step of ~0.01 sigma.
+  double tolerance = 1e-4;
+  double consistency_alpha = 1e-3;
+};
+
+struct RunConsistency {
+  bool tested = false;
+  double chi2 = 0.0;
+  int dof = 0;
+  double p_value = 1.0;
+  bool consistent = true;
+  // Joint parameter names (IMU axes) and the score z of each, |z| >= 3,
+  // largest first (z > 0: the run alone would put it below the joint value).
+  std::vector<std::pair<std::string, double>> pulls;
+  // Every compared parameter, in the run's layout (platform axes): z.
+  std::vector<std::pair<std::string, double>> z;
+};
+
+struct JointRunResult {
+  std::string name;
+  BatchResult alone;               // the run fitted alone
+  Eigen::Vector3d noise_mV = Eigen::Vector3d::Zero();  // used for this run
+  Eigen::VectorXd theta;           // its parameters at the joint solution (run layout)
+  double chi2_per_dof = 0.0;       // of its residuals at the joint solution
+  int degrees_of_freedom = 0;
+  RunConsistency consistency;
+};
+
+struct JointResult {
+  Eigen::VectorXd phi;     // all joint unknowns (SI); held ones at nominal
+  Eigen::MatrixXd cov;     // zero rows and columns for the held ones
+  std::vector<int> held;   // indices into phi
+  std::vector<JointRunResult> runs;
+  // share(r, j): run r's part of the data information on phi_j (diagonal).
+  Eigen::MatrixXd share;
+  // Shared unknowns the runs determine together that no run determines alone.
+  std::vector<std::string> jointly_only;
+  double cost = 0.0, chi2_per_dof = 0.0;
+  int degrees_of_freedom = 0, iterations = 0;
+  bool converged = false;
+  double seconds_alone = 0.0, seconds_joint = 0.0;
+};
+
+// Throws InputError/OptionError for bad settings; runtime_error when a run
+// alone cannot be fitted.
+JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& layout,
+                       const JointOptions& options);
+
+}  // namespace triadcal

@@ -1,0 +1,277 @@
+// Several runs of one IMU as one problem: the mounting map against the model,
+// one run against its own fit, two single-axis runs with different shafts,
+// runs at several temperatures, a run whose mounting changed, and bad input.
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "core/model/bench_model.h"
+#include "core/model/errors.h"
+#include "solvers/multirun/joint_layout.h"
+#include "solvers/multirun/joint_solver.h"
+#include "tests/sim_fixtures.h"
+
+namespace triadcal {
+namespace {
+
+using testing_fixtures::PaperScenario;
+
+void SetMounting(RunDescription* run, const int source[3], const double sign[3]) {
+  for (int i = 0; i < 3; ++i) {
+    run->axis_source[i] = source[i];
+    run->axis_sign[i] = sign[i];
+  }
+}
+
+// The platform readings of a mounted triad are the IMU's readings of the
+// specific force in its own axes, remapped: W_p = P^T-rotated, u_p = P u.
+TEST(MountingMap, ReadingsOfTheMappedParametersAreTheRemappedReadings) {
+  const ParameterLayout layout({Effect::kScaleAsymmetry, Effect::kThermalDrift});
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> gauss;
+  const int sources[3][3] = {{1, 0, 2}, {2, 1, 0}, {1, 2, 0}};
+  const double signs[3][3] = {{1, 1, -1}, {-1, 1, 1}, {-1, -1, 1}};
+  for (int m = 0; m < 3; ++m) {
+    RunDescription run;
+    SetMounting(&run, sources[m], signs[m]);
+    const ModelConfig cfg = MakeModelConfig(run, layout);
+    Eigen::Matrix3d P = Eigen::Matrix3d::Zero();
+    for (int i = 0; i < 3; ++i) P(i, sources[m][i]) = signs[m][i];
+    Eigen::VectorXd imu = Eigen::VectorXd::Zero(layout.size());
+    for (int i = 0; i < layout.size(); ++i) imu[i] = 1e-3 * gauss(rng);
+    for (int i = 0; i < 3; ++i) {
+      imu[kKx + i] = 170.0 + i;
+      imu[kW0x + i] = 1500.0 + 3.0 * i;
+      imu[layout.offset(Effect::kScaleAsymmetry) + i] = 2.0 + i;
+      imu[layout.offset(Effect::kThermalDrift) + i] = 0.01 * (i + 1);
+    }
+    const Eigen::VectorXd platform = MountingMap(run, layout) * imu;
+    for (int k = 0; k < 5; ++k) {
+      const Eigen::Vector3d W(gauss(rng), gauss(rng), gauss(rng));
+      const SampleContext ctx{12.0, 25.0};
+      const Eigen::Vector3d up = Readings_mV(cfg, platform.data(), W, ctx);
+      const Eigen::Vector3d ui = Readings_mV(cfg, imu.data(), Eigen::Vector3d(P.transpose() * W), ctx);
+      EXPECT_LT((up - P * ui).cwiseAbs().maxCoeff(), 1e-9) << "mounting " << m;
+    }
+  }
+}
+
+JointRun MakeRun(const std::string& name, const Scenario& s) {
+  JointRun r;
+  r.name = name;
+  r.source = name;
+  r.run = s.run;
+  r.run.yaml_path = name + ".yaml";
+  r.run.data_path = name + ".csv";
+  r.data = Simulate(s);
+  r.temperature_C = 20.0;
+  return r;
+}
+
+JointOptions Options() {
+  JointOptions o;
+  o.batch.threads = 2;
+  return o;
+}
+
+TEST(JointFit, OneRunGivesItsOwnFit) {
+  const Scenario s = PaperScenario(50.0, 40.0, 2.0, 15.0, 11);
+  const std::vector<JointRun> runs = {MakeRun("a", s)};
+  const JointLayout jl(runs, ParameterLayout(), {}, "test");
+  const JointResult r = SolveJoint(runs, jl, Options());
+  ASSERT_TRUE(r.converged);
+  const BatchResult& alone = r.runs[0].alone;
+  for (int j = 0; j < jl.size(); ++j) {
+    const int i = jl.param(j).base;
+    const double sigma = std::sqrt(alone.estimate.cov(i, i));
+    EXPECT_NEAR((r.phi[j] - alone.estimate.theta[i]) / sigma, 0.0, 0.05) << jl.param(j).name;
+    EXPECT_NEAR(std::sqrt(r.cov(j, j)) / sigma, 1.0, 0.02) << jl.param(j).name;
+  }
+  EXPECT_TRUE(r.runs[0].consistency.consistent);
+  EXPECT_LT(r.runs[0].consistency.chi2, 1.0);
+}
+
+// A single-axis run: the outer axis (platform y) turns, the inner stays at 0.
+Scenario SingleAxis(std::uint64_t seed) {
+  Scenario s = PaperScenario(50.0, 60.0, 2.0, 15.0, seed);
+  s.profile.amplitude_rad[0] = 360.0 * kDegToRad;
+  s.profile.amplitude_rad[1] = 0.0;
+  return s;
+}
+
+TEST(JointFit, TwoSingleAxisRunsWithDifferentShaftsDetermineWhatNeitherDoesAlone) {
+  const ParameterLayout layout;
+  double sum_z2 = 0.0;
+  int count = 0;
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    // Run a: shaft along the IMU's y. Run b: the IMU turned so that its x
+    // lies along the shaft: platform (x, y, z) = IMU (+y, +x, -z).
+    Scenario a = SingleAxis(seed);
+    Scenario b = SingleAxis(seed + 100);
+    const int src[3] = {1, 0, 2};
+    const double sgn[3] = {1, 1, -1};
+    SetMounting(&b.run, src, sgn);
+    const Eigen::MatrixXd mount = MountingMap(b.run, layout);
+    const Eigen::VectorXd imu_truth = a.truth;
+    b.truth = mount * imu_truth;
+    // b's own set-up errors.
+    b.truth[kDpsi] = b.truth[kDlambda2] = 12.0 * kArcminToRad;
+    b.truth[kDthetaC] = -20.0 * kArcminToRad;
+    b.run.scale_mV_per_g = mount.block<3, 3>(kKx, kKx) * a.run.scale_mV_per_g;
+    b.run.bias_mV = mount.block<3, 3>(kW0x, kW0x) * a.run.bias_mV;
+    const std::vector<JointRun> runs = {MakeRun("a", a), MakeRun("b", b)};
+    const JointLayout jl(runs, layout, {}, "test");
+    const JointResult r = SolveJoint(runs, jl, Options());
+    ASSERT_TRUE(r.converged) << "seed " << seed;
+    // Alone, each holds the nonlinearity of the axis along its shaft (it
+    // never sees gravity) and the tilt about it: Kyy (platform) is IMU Kyy
+    // in run a and IMU Kxx in run b, so each is estimated by one run. The
+    // tilts need the misalignments the other run fixes: estimated only
+    // together.
+    const auto held = [](const BatchResult& x, const std::string& name) {
+      return std::find(x.held.begin(), x.held.end(), name) != x.held.end();
+    };
+    for (const JointRunResult& rr : r.runs) {
+      EXPECT_TRUE(held(rr.alone, "Kyy")) << rr.name << " seed " << seed;
+      EXPECT_TRUE(held(rr.alone, "dtheta_c")) << rr.name << " seed " << seed;
+    }
+    EXPECT_TRUE(r.held.empty()) << "seed " << seed;
+    for (const char* name : {"dtheta_c@a", "dtheta_c@b"}) {
+      EXPECT_TRUE(std::find(r.jointly_only.begin(), r.jointly_only.end(), name) !=
+                  r.jointly_only.end())
+          << name << " seed " << seed;
+    }
+    // Run a sees gravity on its y axis only through the bench's tilt; run b
+    // turns the IMU's y axis through gravity.
+    const int ky = jl.IndexOf("Ky");
+    EXPECT_LT(std::sqrt(r.cov(ky, ky)), 0.2 * std::sqrt(r.runs[0].alone.estimate.cov(kKy, kKy)));
+    for (int j = 0; j < jl.size(); ++j) {
+      if (jl.param(j).run >= 0 || r.cov(j, j) <= 0.0) continue;
+      const double z = (r.phi[j] - imu_truth[jl.param(j).base]) / std::sqrt(r.cov(j, j));
+      EXPECT_LT(std::abs(z), 4.5) << jl.param(j).name << " seed " << seed;
+      sum_z2 += z * z;
+      ++count;
+    }
+    for (const JointRunResult& rr : r.runs) EXPECT_TRUE(rr.consistency.consistent) << rr.name;
+  }
+  const double rms = std::sqrt(sum_z2 / count);
+  EXPECT_GT(rms, 0.6);
+  EXPECT_LT(rms, 1.4);
+}
+
+// Four runs at -20, 0, 20, 40 degC with zero offsets and scale factors linear
+// in temperature.
+std::vector<JointRun> TemperatureRuns(std::uint64_t seed, Eigen::VectorXd* truth_coef,
+                                      double rotation_arcmin_of_run_3) {
+  const double temps[4] = {-20.0, 0.0, 20.0, 40.0};
+  truth_coef->resize(6);
+  *truth_coef << 0.05, -0.08, 0.03, 0.01, -0.02, 0.015;  // mV/degC (W0), mV/g/degC (K)
+  std::vector<JointRun> runs;
+  for (int k = 0; k < 4; ++k) {
+    Scenario s = PaperScenario(50.0, 60.0, 2.0, 15.0, 1000 * seed + k);
+    for (int i = 0; i < 3; ++i) {
+      s.truth[kW0x + i] += (*truth_coef)[i] * (temps[k] - 20.0);
+      s.truth[kKx + i] += (*truth_coef)[3 + i] * (temps[k] - 20.0);
+    }
+    if (k == 3) {
+      s.truth[kAlphaX] += rotation_arcmin_of_run_3 * kArcminToRad;
+      s.truth[kAlphaY] += rotation_arcmin_of_run_3 * kArcminToRad;
+    }
+    JointRun r = MakeRun("T" + std::to_string(k), s);
+    r.temperature_C = temps[k];
+    r.has_temperature = true;
+    runs.push_back(std::move(r));
+  }
+  return runs;
+}
+
+JointSpec LinearInTemperature() {
+  JointSpec spec;
+  for (const char* name : {"W0x", "W0y", "W0z", "Kx", "Ky", "Kz"}) spec.temperature_degree[name] = 1;
+  spec.temperature_ref_C = 20.0;
+  return spec;
+}
+
+TEST(JointFit, RecoversLinearTemperatureCoefficients) {
+  double sum_z2 = 0.0;
+  int count = 0;
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    Eigen::VectorXd coef;
+    const std::vector<JointRun> runs = TemperatureRuns(seed, &coef, 0.0);
+    const JointLayout jl(runs, ParameterLayout(), LinearInTemperature(), "test");
+    const JointResult r = SolveJoint(runs, jl, Options());
+    ASSERT_TRUE(r.converged);
+    const char* names[6] = {"W0x.t1", "W0y.t1", "W0z.t1", "Kx.t1", "Ky.t1", "Kz.t1"};
+    for (int c = 0; c < 6; ++c) {
+      const int j = jl.IndexOf(names[c]);
+      ASSERT_GE(j, 0) << names[c];
+      EXPECT_EQ(jl.param(j).unit, c < 3 ? "mV/degC" : "mV/g/degC");
+      const double z = (r.phi[j] - coef[c]) / std::sqrt(r.cov(j, j));
+      EXPECT_LT(std::abs(z), 4.0) << names[c];
+      sum_z2 += z * z;
+      ++count;
+    }
+    for (const JointRunResult& rr : r.runs) EXPECT_TRUE(rr.consistency.consistent) << rr.name;
+  }
+  const double rms = std::sqrt(sum_z2 / count);
+  EXPECT_GT(rms, 0.5);
+  EXPECT_LT(rms, 1.5);
+}
+
+TEST(JointFit, NamesTheRunWhoseMountingChanged) {
+  Eigen::VectorXd coef;
+  // Run T3 was remounted 10 arcmin turned about z: its misalignments moved.
+  const std::vector<JointRun> runs = TemperatureRuns(4, &coef, 10.0);
+  const JointLayout jl(runs, ParameterLayout(), LinearInTemperature(), "test");
+  const JointResult r = SolveJoint(runs, jl, Options());
+  const RunConsistency& odd = r.runs[3].consistency;
+  EXPECT_FALSE(odd.consistent);
+  for (int k = 0; k < 3; ++k) EXPECT_LT(r.runs[k].consistency.chi2, odd.chi2);
+  ASSERT_FALSE(odd.pulls.empty());
+  EXPECT_TRUE(odd.pulls[0].first == "alpha_x" || odd.pulls[0].first == "alpha_y")
+      << odd.pulls[0].first;
+}
+
+TEST(JointLayoutErrors, RejectsRunsOfAnotherImuARunListedTwiceAndUnknownNames) {
+  const Scenario s = PaperScenario(50.0, 10.0, 2.0, 15.0, 1);
+  JointRun a = MakeRun("a", s), b = MakeRun("b", s);
+  const ParameterLayout layout;
+  auto message = [&](const std::vector<JointRun>& runs, const JointSpec& spec) {
+    try {
+      JointLayout jl(runs, layout, spec, "runs.yaml");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  JointRun other = b;
+  other.run.scale_mV_per_g[1] = 300.0;
+  EXPECT_EQ(message({a, other}, {}),
+            "runs.yaml: run 'b' (b.yaml) declares another IMU: its triad in the IMU's own axes "
+            "(mounting undone) has scale_mV_per_g [174, 300, 174] and bias_mV [1500, 1500, "
+            "1500], run 'a' has [174, 174, 174] and [1500, 1500, 1500] (runs of one IMU declare "
+            "the same nominal triad)");
+  JointRun twice = a;
+  twice.name = "a2";
+  twice.source = "a2";
+  EXPECT_EQ(message({a, twice}, {}),
+            "runs.yaml: run 'a2' (a2) is run 'a' (a) again: the same data a.csv (a run listed "
+            "twice)");
+  JointSpec spec;
+  spec.per_run = {"W0q"};
+  EXPECT_EQ(message({a, b}, spec),
+            "runs.yaml: per_run: 'W0q' is not a parameter (see `triadcal params`)");
+  spec.per_run = {"dpsi"};
+  EXPECT_EQ(message({a, b}, spec),
+            "runs.yaml: per_run: 'dpsi' belongs to each run already (bench set-up and angle- "
+            "or geometry-stage effects are per run unless listed under shared)");
+  spec = {};
+  spec.temperature_degree["W0x"] = 1;
+  EXPECT_EQ(message({a, b}, spec),
+            "runs.yaml: run 'a' has no temperature for the temperature model (give "
+            "temperature_C in the runs file or a temp_C column)");
+}
+
+}  // namespace
+}  // namespace triadcal
