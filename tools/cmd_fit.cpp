@@ -16,6 +16,8 @@
 #include "tools/commands.h"
 #include "tools/provenance.h"
 #include "tools/fit_job.h"
+#include "tools/joint_fit_job.h"
+#include "core/io/runs_file_io.h"
 #include "tools/report/html_report.h"
 #include "tools/report/fit_report.h"
 #include "tools/report/residual_plot_json.h"
@@ -24,11 +26,20 @@ namespace triadcal {
 namespace {
 
 struct FitArgs {
+  std::vector<std::string> runs;
   std::string run_yaml, out_json, report_html, residuals_csv;
   FitSettings fit;
 };
 
-int RunFit(const FitArgs& a) {
+int RunFit(FitArgs a) {
+  // Several runs, or one runs file: one problem over all (docs/multi-run.md).
+  if (a.runs.size() > 1 || IsRunsFile(a.runs[0])) {
+    if (!a.residuals_csv.empty()) {
+      throw InputError("--residuals: not available for a joint fit of several runs");
+    }
+    return RunJointFit(a.fit, a.runs, a.out_json, a.report_html);
+  }
+  a.run_yaml = a.runs[0];
   if (!a.report_html.empty()) CheckOutputPath(a.report_html);
   CheckFitSettings(a.fit);
   CheckOutputPath(a.out_json);
@@ -76,7 +87,10 @@ Command AddFitCommand(CLI::App& app) {
   auto a = std::make_shared<FitArgs>();
   Command c;
   c.app = app.add_subcommand("fit", "Batch least-squares solution of the whole run (Ceres)");
-  c.app->add_option("run", a->run_yaml, "run description (run.yaml)")->required();
+  c.app->add_option("run", a->runs,
+                    "run description (run.yaml); several, or a runs file, fit one IMU "
+                    "from several runs (docs/multi-run.md)")
+      ->required();
   c.app->add_option("-o,--output", a->out_json, "output JSON")->required();
   c.app->add_option("--report", a->report_html,
                     "also write the HTML report of OUT (one self-contained file)");

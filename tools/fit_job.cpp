@@ -57,12 +57,7 @@ int FitExitStatus(const FitSettings& s, const std::string& run_yaml, const Batch
   return 0;
 }
 
-FitOutcome FitRun(const FitSettings& a, const std::string& run_yaml, const LoadedRun& run,
-                  const std::function<void(const std::string&)>& progress,
-                  const std::function<void(double)>& fraction) {
-  CheckFitSettings(a);
-  FitOutcome f;
-  f.layout = ParameterLayout(ParseEffectList(a.effects, run.data));
+BatchOptions MakeBatchOptions(const FitSettings& a) {
   BatchOptions opt;
   opt.epoch_s = a.epoch_s;
   opt.derivatives.half_window_s = a.rate_window_s;
@@ -75,6 +70,16 @@ FitOutcome FitRun(const FitSettings& a, const std::string& run_yaml, const Loade
   opt.holding.auto_hold = !a.no_auto_hold;
   opt.holding.hold = SplitList(a.hold);
   opt.holding.free = SplitList(a.free);
+  return opt;
+}
+
+FitOutcome FitRun(const FitSettings& a, const std::string& run_yaml, const LoadedRun& run,
+                  const std::function<void(const std::string&)>& progress,
+                  const std::function<void(double)>& fraction) {
+  CheckFitSettings(a);
+  FitOutcome f;
+  f.layout = ParameterLayout(ParseEffectList(a.effects, run.data));
+  BatchOptions opt = MakeBatchOptions(a);
   opt.progress = progress;
   opt.fraction = fraction;
   f.result = SolveBatch(run.description, run.data, f.layout, opt);

@@ -34,6 +34,9 @@ struct FitOutcome {
   nlohmann::json json;  // OUT.json of `fit`
 };
 
+// The batch solver's options of these settings (progress not set).
+BatchOptions MakeBatchOptions(const FitSettings& s);
+
 // Throws InputError for a bad setting (before any work).
 void CheckFitSettings(const FitSettings& s);
 

@@ -165,7 +165,7 @@ RunDescription ParseRunDescription(const YAML::Node& node, const std::string& ya
   if (!node.IsDefined() || node.IsNull()) return run;
   CheckKeys(node, at,
             {"data", "bench", "triad", "constraints", "columns", "mounting", "priors",
-             "data_format", "positions", "sensor", "time_range_s"});
+             "data_format", "positions", "sensor", "time_range_s", "temperature_C"});
   if (node["data"]) {
     const std::string data = ReadString(node["data"], at.Child("data"));
     if (data.empty()) at.Child("data").Fail("empty file name");
@@ -201,6 +201,16 @@ RunDescription ParseRunDescription(const YAML::Node& node, const std::string& ya
                     run.time_range_s->second);
       p.Fail(std::string("from must be before to, got ") + got);
     }
+  }
+  if (node["temperature_C"]) {
+    // The run's temperature, for a calibration with a temperature model
+    // (docs/multi-run.md) when the data have no temp_C column.
+    const YamlPlace p = at.Child("temperature_C");
+    const double t = ReadNumber(node["temperature_C"], p);
+    if (!(t >= -100.0 && t <= 200.0)) {
+      p.Fail("expected a temperature of -100 to 200 degC, got " + FormatDouble(t));
+    }
+    run.temperature_C = t;
   }
   DefaultTriadForGReadings(node["triad"], &run);
   CheckDescriptionPlausible(run, where);

@@ -32,10 +32,24 @@ struct Calibration {
   std::string command;  // the "command" of the OUT file, or ""
   ParameterLayout layout;
   Eigen::VectorXd theta;  // SI
+  // A joint fit of several runs (docs/multi-run.md) gives the triad in the
+  // IMU's own axes ("axes": "imu"): applied through the run's mounting
+  // (core/model/mounting.h). Other calibrations are in the axes of the run
+  // they came from, as the readings after its mounting.
+  bool imu_axes = false;
+  // Temperature model: theta_i(T) = theta_i + sum_k c_ik (T - reference)^k,
+  // T the sample's temp_C, else the run's temperature_C.
+  double temperature_ref_C = 0.0;
+  struct TemperatureTerm {
+    int index;                  // in the layout
+    std::vector<double> coefficients;  // SI per degC^k, k = 1, 2, ...
+  };
+  std::vector<TemperatureTerm> temperature_terms;
 };
 
 // W [g] in the triad frame of every sample of the run, by the exact inverse of
-// the readings model with the calibration's parameters.
+// the readings model with the calibration's parameters. Throws InputError when
+// the calibration has a temperature model and the run no temperature.
 std::vector<Eigen::Vector3d> ApplyCalibration(const Calibration& cal, const RunDescription& run,
                                               const RunData& data);
 

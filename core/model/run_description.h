@@ -103,6 +103,9 @@ struct RunDescription {
   std::string sensor_serial;
   // time_range_s: [from, to]: only the samples with from <= t <= to [s].
   std::optional<std::pair<double, double>> time_range_s;
+  // temperature_C: the run's temperature [degC], for a calibration with a
+  // temperature model when the data have no temp_C column (docs/multi-run.md).
+  std::optional<double> temperature_C;
   std::string sensor_model;
 };
 

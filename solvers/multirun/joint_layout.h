@@ -17,10 +17,7 @@
 //
 // Run r's parameter vector (platform axes, its ParameterLayout) is affine in
 // phi: theta_r = offset_r + T_r phi. The mounting maps IMU axes to platform
-// axes exactly (MountingMap): with P the signed permutation of `mounting`
-// (platform reading i = s_i IMU reading src_i),
-//   K_p = |P| K,  W0_p = P W0,  M_p = P M P^T,  K_ij,p = |P| K_ij P^T,
-// and sensor effects per axis as W0 (the sign follows the reading).
+// axes exactly (MountingMap, core/model/mounting.h).
 // A small rotation rho (platform axes) adds to the misalignment matrix
 // M_p + [[0, -rho_z, rho_y], [rho_z, 0, -rho_x], [-rho_y, rho_x, 0]]:
 // alpha_x, alpha_y += rho_z; beta_x, beta_z += rho_y; gamma_y, gamma_z += rho_x.
@@ -32,6 +29,7 @@
 
 #include <Eigen/Core>
 
+#include "core/model/mounting.h"
 #include "core/model/parameters.h"
 #include "core/model/run_data.h"
 #include "core/model/run_description.h"
@@ -71,12 +69,6 @@ struct JointParam {
   int degree = 0;     // temperature degree (0: the value at T_ref)
   double prior_mean = 0.0, prior_sigma = 1.0;  // SI
 };
-
-// The signed permutation of run.yaml's mounting as a map of the run layout's
-// theta from IMU axes to platform axes (n x n, identity on everything that is
-// not a triad parameter or a sensor-stage effect). Throws InputError naming
-// the effect when a sensor-stage effect has no per-axis form.
-Eigen::MatrixXd MountingMap(const RunDescription& run, const ParameterLayout& layout);
 
 class JointLayout {
  public:

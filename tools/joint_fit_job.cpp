@@ -1,0 +1,273 @@
+#include "tools/joint_fit_job.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numeric>
+
+#include "core/io/file_util.h"
+#include "core/model/errors.h"
+#include "tools/command_util.h"
+#include "tools/provenance.h"
+#include "tools/report/fit_report.h"
+#include "tools/report/value_format.h"
+
+namespace triadcal {
+namespace {
+
+nlohmann::json Entry(const JointParam& p, double value, double var, bool held) {
+  nlohmann::json e;
+  e["value"] = value / p.si_per_unit;
+  e["sigma"] = held ? nlohmann::json(nullptr) : nlohmann::json(std::sqrt(std::max(0.0, var)) / p.si_per_unit);
+  e["unit"] = p.unit;
+  e["estimable"] = !held;
+  if (held) {
+    e["held"] = true;
+    e["reason"] = "no information in the runs together: held at its nominal value";
+  }
+  return e;
+}
+
+std::string Names(const std::vector<std::string>& v) {
+  std::string s;
+  for (const std::string& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s.empty() ? "none" : s;
+}
+
+}  // namespace
+
+RunsFile RunsOfCommandLine(const std::vector<std::string>& inputs) {
+  if (inputs.size() == 1) return LoadRunsFile(inputs[0]);
+  for (const std::string& in : inputs) {
+    if (IsRunsFile(in)) {
+      throw InputError(in + ": a runs file is given alone (fit runs.yaml), not with other runs");
+    }
+  }
+  return RunsFromCommandLine(inputs);
+}
+
+std::vector<JointRun> LoadJointRuns(const RunsFile& file) {
+  std::vector<JointRun> runs;
+  for (const RunsFile::Entry& e : file.runs) {
+    LoadedRun lr = LoadRunOrThrow(e.run_yaml);
+    RecordInput("run " + e.name, e.run_yaml);
+    JointRun r;
+    r.name = e.name;
+    r.source = e.where;
+    r.run = std::move(lr.description);
+    r.data = std::move(lr.data);
+    if (e.temperature_C) {
+      r.temperature_C = *e.temperature_C;
+      r.has_temperature = true;
+    } else if (r.run.temperature_C) {
+      r.temperature_C = *r.run.temperature_C;
+      r.has_temperature = true;
+    } else if (r.data.has_temp()) {
+      r.temperature_C = std::accumulate(r.data.temp_C.begin(), r.data.temp_C.end(), 0.0) /
+                        static_cast<double>(r.data.temp_C.size());
+      r.has_temperature = true;
+    }
+    runs.push_back(std::move(r));
+  }
+  return runs;
+}
+
+JointSpec JointSpecOf(const RunsFile& file) {
+  JointSpec spec;
+  spec.per_run = file.per_run;
+  spec.shared = file.shared;
+  spec.temperature_degree = file.temperature_degree;
+  spec.temperature_ref_C = file.temperature_ref_C;
+  return spec;
+}
+
+std::string JointVerdict(const JointResult& r) {
+  if (!r.converged) return "NOT CONVERGED (the joint solve stopped before its tolerance)";
+  std::vector<std::string> bad;
+  int tested = 0;
+  for (const JointRunResult& rr : r.runs) {
+    tested += rr.consistency.tested;
+    if (rr.consistency.tested && !rr.consistency.consistent) {
+      char b[200];
+      std::snprintf(b, sizeof(b), "%s (chi2 %.1f for %d, p %.2g", rr.name.c_str(),
+                    rr.consistency.chi2, rr.consistency.dof, rr.consistency.p_value);
+      std::string s = b;
+      for (std::size_t k = 0; k < rr.consistency.pulls.size() && k < 3; ++k) {
+        std::snprintf(b, sizeof(b), "%s %s z %+.1f", k ? "," : "; pulls",
+                      rr.consistency.pulls[k].first.c_str(), rr.consistency.pulls[k].second);
+        s += b;
+      }
+      bad.push_back(s + ")");
+    }
+  }
+  if (!bad.empty()) {
+    std::string s = "RUNS DISAGREE: ";
+    for (std::size_t k = 0; k < bad.size(); ++k) s += (k ? "; " : "") + bad[k];
+    return s + " -- a remount, a turn-on bias or an effect that differs between the runs";
+  }
+  if (tested < 2) return "converged (fewer than two runs could be compared with the others)";
+  return "converged; the runs agree within their sigma";
+}
+
+nlohmann::json JointJson(const JointLayout& jl, const std::vector<JointRun>& runs,
+                         const JointResult& r, const RunsFile& file) {
+  nlohmann::json out;
+  out["command"] = "fit";
+  out["kind"] = "joint";
+  out["axes"] = "imu";
+  out["runs_file"] = file.path.empty() ? nlohmann::json(nullptr) : nlohmann::json(file.path);
+  std::vector<bool> held(jl.size(), false);
+  for (int j : r.held) held[j] = true;
+  nlohmann::json shared = nlohmann::json::object();
+  for (int j = 0; j < jl.size(); ++j) {
+    const JointParam& p = jl.param(j);
+    if (p.run >= 0) continue;
+    shared[p.name] = Entry(p, r.phi[j], r.cov(j, j), held[j]);
+    nlohmann::json share = nlohmann::json::object();
+    for (int q = 0; q < jl.runs(); ++q) share[jl.run_name(q)] = r.share(q, j);
+    if (!held[j]) shared[p.name]["information_share"] = share;
+  }
+  out["parameters"] = shared;
+  if (!file.temperature_degree.empty()) {
+    out["temperature_model"] = {{"reference_C", file.temperature_ref_C},
+                                {"degree", file.temperature_degree}};
+  } else {
+    out["temperature_model"] = nullptr;
+  }
+  out["determined_jointly_only"] = r.jointly_only;
+  nlohmann::json held_names = nlohmann::json::array();
+  for (int j : r.held) held_names.push_back(jl.param(j).name);
+  out["held"] = held_names;
+  nlohmann::json jr = nlohmann::json::array();
+  for (int q = 0; q < jl.runs(); ++q) {
+    const JointRunResult& rr = r.runs[q];
+    nlohmann::json e;
+    e["name"] = rr.name;
+    e["run"] = file.runs[q].run_yaml;
+    e["samples"] = runs[q].data.size();
+    e["temperature_C"] =
+        runs[q].has_temperature ? nlohmann::json(runs[q].temperature_C) : nlohmann::json(nullptr);
+    e["noise_mV"] = {rr.noise_mV[0], rr.noise_mV[1], rr.noise_mV[2]};
+    e["noise_source"] = rr.alone.noise_source;
+    e["chi2_per_dof"] = rr.chi2_per_dof;
+    nlohmann::json own = nlohmann::json::object();
+    for (int j = 0; j < jl.size(); ++j) {
+      const JointParam& p = jl.param(j);
+      if (p.run != q) continue;
+      own[p.name.substr(0, p.name.rfind('@'))] = Entry(p, r.phi[j], r.cov(j, j), held[j]);
+    }
+    e["parameters"] = own;
+    const BatchResult& a = rr.alone;
+    nlohmann::json alone;
+    alone["converged"] = a.converged;
+    alone["chi2_per_dof"] = a.chi2_per_dof;
+    alone["held"] = a.held;
+    nlohmann::json ap = nlohmann::json::object();
+    for (int i = 0; i < jl.layout().size(); ++i) {
+      const ParameterInfo& info = jl.layout().info(i);
+      const bool h = std::find(a.held.begin(), a.held.end(), info.name) != a.held.end();
+      ap[info.name] = {{"value", a.estimate.theta[i] / info.si_per_unit},
+                       {"sigma", h ? nlohmann::json(nullptr)
+                                   : nlohmann::json(std::sqrt(std::max(0.0, a.estimate.cov(i, i))) /
+                                                    info.si_per_unit)},
+                       {"unit", info.unit}};
+    }
+    alone["parameters"] = ap;
+    alone["axes"] = "platform";
+    e["alone"] = alone;
+    const RunConsistency& c = rr.consistency;
+    nlohmann::json cj;
+    cj["tested"] = c.tested;
+    cj["chi2"] = c.chi2;
+    cj["dof"] = c.dof;
+    cj["p_value"] = c.p_value;
+    cj["consistent"] = c.consistent;
+    nlohmann::json pulls = nlohmann::json::array();
+    for (const auto& [name, z] : c.pulls) pulls.push_back({{"parameter", name}, {"z", z}});
+    cj["pulls"] = pulls;
+    e["consistency"] = cj;
+    jr.push_back(e);
+  }
+  out["runs"] = jr;
+  out["chi2_per_dof"] = r.chi2_per_dof;
+  out["degrees_of_freedom"] = r.degrees_of_freedom;
+  out["converged"] = r.converged;
+  out["iterations"] = r.iterations;
+  out["verdict"] = JointVerdict(r);
+  out["timing_s"] = {{"runs_alone", r.seconds_alone}, {"joint", r.seconds_joint}};
+  return out;
+}
+
+int RunJointFit(const FitSettings& s, const std::vector<std::string>& inputs,
+                const std::string& out_json, const std::string& report_html) {
+  CheckFitSettings(s);
+  if (!s.robust.empty()) {
+    throw InputError("--robust: not available for a joint fit of several runs");
+  }
+  if (!report_html.empty()) {
+    throw InputError("--report: not available for a joint fit of several runs yet");
+  }
+  CheckOutputPath(out_json);
+  const RunsFile file = RunsOfCommandLine(inputs);
+  std::vector<JointRun> runs = LoadJointRuns(file);
+  CheckOverwrite(out_json);
+  // The effects must suit every run's data.
+  std::vector<Effect> effects;
+  for (const JointRun& r : runs) effects = ParseEffectList(s.effects, r.data);
+  const ParameterLayout layout(effects);
+  const JointLayout jl(runs, layout, JointSpecOf(file),
+                       file.path.empty() ? "command line" : file.path);
+  JointOptions opt;
+  opt.batch = MakeBatchOptions(s);
+  StageProgress progress("fit: ");
+  opt.batch.progress = [&](const std::string& line) { progress.Stage(line); };
+  const JointResult r = SolveJoint(runs, jl, opt);
+  EndProgress();
+  WriteJson(JointJson(jl, runs, r, file), out_json);
+
+  std::printf("fit: %zu runs of one IMU as one problem; %s\n", runs.size(),
+              JointVerdict(r).c_str());
+  std::printf("joint: chi2/dof %.3f over %d degrees of freedom, %d iterations, %.1f s (runs "
+              "alone %.1f s)\n",
+              r.chi2_per_dof, r.degrees_of_freedom, r.iterations, r.seconds_joint,
+              r.seconds_alone);
+  std::vector<bool> held(jl.size(), false);
+  for (int j : r.held) held[j] = true;
+  std::printf("%-26s %22s %-10s", "parameter (IMU axes)", "value ± sigma", "unit");
+  for (int q = 0; q < jl.runs(); ++q) std::printf(" %8.8s", jl.run_name(q).c_str());
+  std::printf("   (share of the information)\n");
+  for (int j = 0; j < jl.size(); ++j) {
+    const JointParam& p = jl.param(j);
+    const double value = r.phi[j] / p.si_per_unit;
+    const std::string text =
+        held[j] ? FormatDouble(value) + " (held)"
+                : ValuePlusMinus(value, std::sqrt(std::max(0.0, r.cov(j, j))) / p.si_per_unit);
+    std::printf("%-26s %22s %-10s", p.name.c_str(), text.c_str(), p.unit.c_str());
+    if (!held[j]) {
+      for (int q = 0; q < jl.runs(); ++q) std::printf(" %8.2f", r.share(q, j));
+    }
+    std::printf("\n");
+  }
+  for (const JointRunResult& rr : r.runs) {
+    const RunConsistency& c = rr.consistency;
+    std::printf("run %s: chi2/dof %.3f at the joint solution; alone %s, held %s; ",
+                rr.name.c_str(), rr.chi2_per_dof, rr.alone.converged ? "converged" : "NOT converged",
+                Names(rr.alone.held).c_str());
+    if (c.tested) {
+      std::printf("against the others chi2 %.1f for %d, p %.3g: %s\n", c.chi2, c.dof, c.p_value,
+                  c.consistent ? "agrees" : "DISAGREES");
+    } else {
+      std::printf("not compared (nothing of its own to compare)\n");
+    }
+  }
+  std::printf("determined only by the runs together: %s\n", Names(r.jointly_only).c_str());
+  std::printf("wrote %s\n", out_json.c_str());
+  if (!r.converged) {
+    std::fprintf(stderr, "triadcal: error: the joint fit did not converge (exit %d)\n",
+                 kExitNotConverged);
+    return kExitNotConverged;
+  }
+  return 0;
+}
+
+}  // namespace triadcal
