@@ -204,7 +204,7 @@ Scenario LoadScenario(const std::string& yaml_path) {
   CheckSection(
       root, top,
       {"profile", "truth", "truth_spread", "noise", "effects", "run", "seed", "sensor", "output",
-       "temperature"});
+       "temperature", "truth_temperature"});
   auto section = [&root](const char* key) {
     return root[key] ? root[key] : YAML::Node(YAML::NodeType::Null);
   };
@@ -268,6 +268,29 @@ Scenario LoadScenario(const std::string& yaml_path) {
       top.Child("effects")
           .Child(GetEffectSpec(e).name)
           .Fail("needs a section temperature: {start_C, rate_C_per_h} (the drift follows temp_C)");
+    }
+  }
+
+  // truth_temperature: {reference_C: 20, per_C: {W0x: 0.05}}: the truth is
+  // that of reference_C; the run, at temperature.start_C, gets
+  // truth + per_C * (start_C - reference_C) (runs of one IMU at several
+  // temperatures, docs/multi-run.md).
+  const YAML::Node tt = section("truth_temperature");
+  if (!tt.IsNull()) {
+    const YamlPlace tt_at = top.Child("truth_temperature");
+    CheckSection(tt, tt_at, {"reference_C", "per_C"});
+    if (!has_temperature) tt_at.Fail("needs a section temperature: {start_C} (the run's temperature)");
+    const double ref = tt["reference_C"] ? ReadNumber(tt["reference_C"], tt_at.Child("reference_C"))
+                                         : 20.0;
+    const YAML::Node per = tt["per_C"];
+    const YamlPlace per_at = tt_at.Child("per_C");
+    if (!per || !per.IsMap()) per_at.Fail("expected a map {parameter: change per degC, file units}");
+    for (const auto& kv : per) {
+      const std::string name = KeyOf(kv.first, per_at);
+      const int i = s.truth_layout.IndexOf(name);
+      if (i < 0) per_at.Child(name).Fail("unknown parameter (docs/file-formats.md names)");
+      s.truth[i] += ReadNumber(kv.second, per_at.Child(name)) * (s.temp_start_C - ref) *
+                    s.truth_layout.info(i).si_per_unit;
     }
   }
 

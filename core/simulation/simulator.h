@@ -30,6 +30,11 @@
 //   sensor: {quantization_mV: 0.5, saturation_mV: [0, 3300]}   # recording chain
 //   temperature: {start_C: 25, rate_C_per_h: 10}   # temp_C(t) = start + rate t;
 //                                             # required by thermal_drift_temp
+//   truth_temperature: {reference_C: 20, per_C: {W0x: 0.05, Kx: 0.01}}
+//                                             # truth is that of reference_C; the
+//                                             # run's is truth + per_C (start_C -
+//                                             # reference_C): runs of one IMU at
+//                                             # several temperatures
 //   output: {rates: false, temperature: <true when `temperature` is given>}
 //                                             # write lambda1_rate/lambda2_rate
 //                                             # (exact recorded rates) / temp_C

@@ -2,6 +2,8 @@
 // one run against its own fit, two single-axis runs with different shafts,
 // runs at several temperatures, a run whose mounting changed, and bad input.
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -271,6 +273,104 @@ TEST(JointLayoutErrors, RejectsRunsOfAnotherImuARunListedTwiceAndUnknownNames) {
   EXPECT_EQ(message({a, b}, spec),
             "runs.yaml: run 'a' has no temperature for the temperature model (give "
             "temperature_C in the runs file or a temp_C column)");
+}
+
+}  // namespace
+}  // namespace triadcal
+
+namespace triadcal {
+namespace {
+
+// The criteria over many seeds (bench/multirun_accuracy.sh runs these:
+// they take minutes). Each prints its figures; the assertions are the
+// targets.
+int BenchSeeds() {
+  const char* env = std::getenv("TRIADCAL_BENCH_SEEDS");
+  return env ? std::max(1, std::atoi(env)) : 20;
+}
+
+TEST(JointFitBench, DISABLED_TwoShaftsOverManySeeds) {
+  const ParameterLayout layout;
+  const int seeds = BenchSeeds();
+  double sum_z2 = 0.0;
+  int count = 0, inconsistent = 0, max_held_jointly = 0;
+  for (int seed = 1; seed <= seeds; ++seed) {
+    Scenario a = SingleAxis(seed);
+    Scenario b = SingleAxis(seed + 1000);
+    const int src[3] = {1, 0, 2};
+    const double sgn[3] = {1, 1, -1};
+    SetMounting(&b.run, src, sgn);
+    const Eigen::MatrixXd mount = MountingMap(b.run, layout);
+    b.truth = mount * a.truth;
+    b.truth[kDpsi] = b.truth[kDlambda2] = 12.0 * kArcminToRad;
+    b.truth[kDthetaC] = -20.0 * kArcminToRad;
+    b.run.scale_mV_per_g = mount.block<3, 3>(kKx, kKx) * a.run.scale_mV_per_g;
+    b.run.bias_mV = mount.block<3, 3>(kW0x, kW0x) * a.run.bias_mV;
+    const std::vector<JointRun> runs = {MakeRun("a", a), MakeRun("b", b)};
+    const JointLayout jl(runs, layout, {}, "bench");
+    const JointResult r = SolveJoint(runs, jl, Options());
+    max_held_jointly = std::max(max_held_jointly, static_cast<int>(r.held.size()));
+    for (const JointRunResult& rr : r.runs) inconsistent += !rr.consistency.consistent;
+    for (int j = 0; j < jl.size(); ++j) {
+      if (r.cov(j, j) <= 0.0) continue;
+      const JointParam& p = jl.param(j);
+      const Eigen::VectorXd& truth = p.run == 1 ? b.truth : a.truth;
+      const double z = (r.phi[j] - truth[p.base]) / std::sqrt(r.cov(j, j));
+      sum_z2 += z * z;
+      ++count;
+    }
+  }
+  const double rms = std::sqrt(sum_z2 / count);
+  std::printf("two single-axis runs (shaft along IMU y, then x), %d seeds: RMS z %.3f over %d "
+              "estimates (all joint unknowns); most held jointly %d; runs named inconsistent "
+              "%d of %d\n",
+              seeds, rms, count, max_held_jointly, inconsistent, 2 * seeds);
+  EXPECT_GT(rms, 0.85);
+  EXPECT_LT(rms, 1.15);
+}
+
+TEST(JointFitBench, DISABLED_TemperatureOverManySeeds) {
+  const int seeds = BenchSeeds();
+  double sum_z2 = 0.0, sum_z2_all = 0.0;
+  int count = 0, count_all = 0, inconsistent = 0, named = 0;
+  for (int seed = 1; seed <= seeds; ++seed) {
+    Eigen::VectorXd coef;
+    const std::vector<JointRun> runs = TemperatureRuns(seed, &coef, 0.0);
+    const JointLayout jl(runs, ParameterLayout(), LinearInTemperature(), "bench");
+    const JointResult r = SolveJoint(runs, jl, Options());
+    const char* names[6] = {"W0x.t1", "W0y.t1", "W0z.t1", "Kx.t1", "Ky.t1", "Kz.t1"};
+    for (int c = 0; c < 6; ++c) {
+      const int j = jl.IndexOf(names[c]);
+      const double z = (r.phi[j] - coef[c]) / std::sqrt(r.cov(j, j));
+      sum_z2 += z * z;
+      ++count;
+    }
+    for (int j = 0; j < jl.size(); ++j) {
+      const JointParam& p = jl.param(j);
+      if (p.degree != 0 || p.run >= 0 || r.cov(j, j) <= 0.0) continue;
+      // The truth at the reference temperature is the paper truth.
+      const double z = (r.phi[j] - PaperScenario(50.0, 60.0, 2.0, 15.0, 1).truth[p.base]) /
+                       std::sqrt(r.cov(j, j));
+      sum_z2_all += z * z;
+      ++count_all;
+    }
+    for (const JointRunResult& rr : r.runs) inconsistent += !rr.consistency.consistent;
+    // The same runs with T3 remounted 10 arcmin turned about z.
+    const std::vector<JointRun> moved = TemperatureRuns(seed, &coef, 10.0);
+    const JointResult m = SolveJoint(moved, jl, Options());
+    bool odd_worst = !m.runs[3].consistency.consistent;
+    for (int k = 0; k < 3; ++k) odd_worst = odd_worst && m.runs[k].consistency.chi2 < m.runs[3].consistency.chi2;
+    named += odd_worst;
+  }
+  const double rms = std::sqrt(sum_z2 / count), rms_all = std::sqrt(sum_z2_all / count_all);
+  std::printf("four runs at -20, 0, 20, 40 degC, %d seeds: RMS z of the 6 temperature "
+              "coefficients %.3f (%d), of the 21 shared parameters at 20 degC %.3f (%d); "
+              "clean runs named inconsistent %d of %d; remounted run named (and worst) in %d "
+              "of %d\n",
+              seeds, rms, count, rms_all, count_all, inconsistent, 4 * seeds, named, seeds);
+  EXPECT_GT(rms, 0.85);
+  EXPECT_LT(rms, 1.15);
+  EXPECT_EQ(named, seeds);
 }
 
 }  // namespace

@@ -1,0 +1,125 @@
+// `triadcal fit` on several runs (docs/multi-run.md) at the command line:
+// runs simulated at three temperatures with a temperature model in a runs
+// file, the joint OUT.json, `apply` with it, and bad input (runs of another
+// IMU, a run listed twice, a per-run name that is not a parameter), each an
+// exact one-line error with exit 2 and no output file.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/io/file_util.h"
+#include "tests/command_runner.h"
+#include "tests/temp_dir_test.h"
+
+namespace triadcal {
+namespace {
+
+namespace fs = std::filesystem;
+using testing_fixtures::RunTriadcal;
+
+class JointFitCli : public testing_fixtures::TempDirTest {
+ protected:
+  // A 40-s paper run at 50 Hz at temperature T: W0x and Kx change with it.
+  std::string Simulate(const std::string& name, double T, int seed) {
+    const std::string scenario = WriteText(name + ".scenario.yaml", R"(
+profile: {duration_s: 40, rate_hz: 50}
+truth: {Kx: 171.5, Ky: 175.8, Kz: 174.8, W0x: 1504.2, W0y: 1504.2, W0z: 1504.3,
+        dpsi: -33, dtheta_c: 43, dlambda2: -33, dx2: -7, dy2: 16, dz2: 4}
+noise: {accel_mV: 2.0, angle_arcsec: 15}
+temperature: {start_C: )" + std::to_string(T) + R"(}
+truth_temperature: {reference_C: 20, per_C: {W0x: 0.05, Kx: 0.02}}
+run:
+  triad: {scale_mV_per_g: [174, 174, 174], bias_mV: [1500, 1500, 1500]}
+  constraints:
+    - {expr: "dpsi - dlambda2", value_arcmin: 0, sigma_arcsec: 30}
+)");
+    const auto r = RunTriadcal("simulate " + scenario + " -o " + Path(name) + " --seed " +
+                                   std::to_string(seed),
+                               Path("sim.err"));
+    EXPECT_EQ(r.status, 0) << r.err;
+    return Path(name + "/run.yaml");
+  }
+
+  void ExpectError(const std::string& args, const std::string& what) {
+    const auto r = RunTriadcal(args, Path("stderr.txt"));
+    EXPECT_EQ(r.status, 2) << args << "\n" << r.err;
+    EXPECT_EQ(r.err, "triadcal: error: " + what + "\n") << args;
+    EXPECT_FALSE(fs::exists(Path("out.json"))) << args;
+  }
+};
+
+TEST_F(JointFitCli, TemperatureModelFromThreeRunsAndApplyUsesIt) {
+  Simulate("cold", 0.0, 1);
+  Simulate("room", 20.0, 2);
+  Simulate("hot", 40.0, 3);
+  const std::string runs = WriteText("runs.yaml", R"(runs:
+  - cold/run.yaml
+  - {run: room/run.yaml, name: room}
+  - {run: hot/run.yaml}
+temperature: {reference_C: 20, degree: {W0x: 1, Kx: 1}}
+)");
+  const auto r = RunTriadcal("fit " + runs + " -o " + Path("out.json"), Path("fit.err"));
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(ReadFile(Path("out.json")));
+  EXPECT_EQ(j["kind"], "joint");
+  EXPECT_EQ(j["axes"], "imu");
+  EXPECT_EQ(j["temperature_model"]["reference_C"], 20.0);
+  ASSERT_EQ(j["runs"].size(), 3u);
+  EXPECT_EQ(j["runs"][0]["name"], "cold");
+  EXPECT_NEAR(j["runs"][0]["temperature_C"].get<double>(), 0.0, 1e-9);  // the temp_C column
+  const struct {
+    const char* name;
+    const char* unit;
+    double truth;
+  } checks[] = {{"W0x.t1", "mV/degC", 0.05}, {"Kx.t1", "mV/g/degC", 0.02},
+                {"W0x", "mV", 1504.2},      {"Kx", "mV/g", 171.5}};
+  for (const auto& c : checks) {
+    const nlohmann::json& p = j["parameters"][c.name];
+    EXPECT_EQ(p["unit"], c.unit) << c.name;
+    EXPECT_LT(std::abs(p["value"].get<double>() - c.truth) / p["sigma"].get<double>(), 4.0)
+        << c.name << " " << p.dump();
+  }
+  EXPECT_FALSE(j["parameters"].contains("dpsi@room"));  // per run: under runs[]
+  EXPECT_TRUE(j["runs"][1]["parameters"].contains("dpsi"));
+  for (const auto& run : j["runs"]) EXPECT_TRUE(run["consistency"]["consistent"]) << run.dump();
+
+  // apply evaluates the temperature model at each sample's temp_C.
+  const auto a = RunTriadcal("apply " + Path("out.json") + " " + Path("hot/run.yaml") + " -o " +
+                                 Path("hot.csv"),
+                             Path("apply.err"));
+  EXPECT_EQ(a.status, 0) << a.err;
+  EXPECT_TRUE(fs::exists(Path("hot.csv")));
+}
+
+TEST_F(JointFitCli, BadInputIsOneLineNamingTheRun) {
+  const std::string a = Simulate("a", 20.0, 1);
+  const std::string b = Simulate("b", 20.0, 2);
+  ExpectError("fit " + a + " " + a + " -o " + Path("out.json"),
+              "command line: run 2 (" + a + "): " + a + " is listed twice (also command line: "
+              "run 1 (" + a + "))");
+  // Another IMU: another nominal scale factor.
+  std::string text = ReadFile(b);
+  const std::string from = "scale_mV_per_g: [174, 174, 174]";
+  ASSERT_NE(text.find(from), std::string::npos) << text;
+  text.replace(text.find(from), from.size(), "scale_mV_per_g: [174, 300, 174]");
+  WriteText("b/other.yaml", text);
+  ExpectError("fit " + a + " " + Path("b/other.yaml") + " -o " + Path("out.json"),
+              "command line: run 'other' (" + Path("b/other.yaml") + ") declares another IMU: "
+              "its triad in the IMU's own axes (mounting undone) has scale_mV_per_g [174, 300, "
+              "174] and bias_mV [1500, 1500, 1500], run 'a' has [174, 174, 174] and [1500, "
+              "1500, 1500] (runs of one IMU declare the same nominal triad)");
+  const std::string runs = WriteText("runs.yaml", "runs: [a/run.yaml, b/run.yaml]\nper_run: [W0q]\n");
+  ExpectError("fit " + runs + " -o " + Path("out.json"),
+              runs + ": per_run: 'W0q' is not a parameter (see `triadcal params`)");
+  const std::string twice = WriteText("twice.yaml", "runs: [a/run.yaml, {run: a/run.yaml, name: again}]\n");
+  ExpectError("fit " + twice + " -o " + Path("out.json"),
+              twice + ": runs[1]: " + Path("a/run.yaml") + " is listed twice (also " + twice +
+                  ": runs[0])");
+}
+
+}  // namespace
+}  // namespace triadcal
