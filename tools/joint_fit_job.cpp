@@ -221,6 +221,7 @@ int RunJointFit(const FitSettings& s, const std::vector<std::string>& inputs,
   opt.batch = MakeBatchOptions(s);
   StageProgress progress("fit: ");
   opt.batch.progress = [&](const std::string& line) { progress.Stage(line); };
+  opt.batch.fraction = [&](double x) { progress.Fraction(x); };
   const JointResult r = SolveJoint(runs, jl, opt);
   EndProgress();
   WriteJson(JointJson(jl, runs, r, file), out_json);

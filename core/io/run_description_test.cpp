@@ -222,7 +222,9 @@ TEST_F(RunDescriptionTest, ErrorsNameTheKey) {
   const std::string f = Path();
   EXPECT_EQ(ErrorOf("data: run.csv\ntrid: {}\n"),
             f + ": trid: unknown key (allowed: data, bench, triad, constraints, columns, "
-                "mounting, priors, data_format, positions, sensor, time_range_s)");
+                "mounting, priors, data_format, positions, sensor, time_range_s, temperature_C)");
+  EXPECT_EQ(ErrorOf("data: run.csv\ntemperature_C: 400\n"),
+            f + ": temperature_C: expected a temperature of -100 to 200 degC, got 400");
   EXPECT_EQ(ErrorOf("data: run.csv\ntriad: {scale_mV_per_g: [174, 174]}\n"),
             f + ": triad.scale_mV_per_g: expected a list of 3 numbers, got 2");
   EXPECT_EQ(ErrorOf("data: run.csv\ntriad: {scale_mV_per_g: [174, x, 174]}\n"),

@@ -499,7 +499,11 @@ TEST(ScenarioErrors, EveryBadInputNamesFileKeyAndProblem) {
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"foo: 1\n",
        f + ": foo: unknown key (allowed: profile, truth, truth_spread, noise, effects, run, seed, sensor, "
-           "output, temperature)"},
+           "output, temperature, truth_temperature)"},
+      {"truth_temperature: {per_C: {W0x: 0.1}}\n",
+       f + ": truth_temperature: needs a section temperature: {start_C} (the run's temperature)"},
+      {"temperature: {start_C: 30}\ntruth_temperature: {per_C: {W0q: 0.1}}\n",
+       f + ": truth_temperature.per_C.W0q: unknown parameter (docs/file-formats.md names)"},
       {"profile: {durations: 3}\n",
        f + ": profile.durations: unknown key (allowed: amplitude_deg, period_s, phase_deg, "
            "duration_s, rate_hz)"},

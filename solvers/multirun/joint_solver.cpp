@@ -204,7 +204,10 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
     bo.progress = [&, progress](const std::string& s) {
       if (progress) progress("run " + rr.name + " alone: " + s);
     };
+    // Each run alone a share of the work, the joint solve the last share.
+    const auto fraction = opt.batch.fraction;
     bo.fraction = nullptr;
+    if (fraction) bo.fraction = [fraction, r, R](double x) { fraction((r + x) / (R + 1.0)); };
     rr.alone = SolveBatch(runs[r].run, runs[r].data, layout, bo);
     rr.noise_mV = rr.alone.noise_used_mV;
     RunProblem p = BuildRunProblem(runs[r].run, runs[r].data, layout, opt.batch.epoch_s,
@@ -300,6 +303,9 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
     std::snprintf(line, sizeof(line), "joint: iteration %d, chi2 %.6g, predicted decrease %.3g",
                   it + 1, 2.0 * ev.cost, predicted);
     say(line);
+    if (opt.batch.fraction) {
+      opt.batch.fraction((R + 1.0 - std::pow(0.7, it + 1)) / (R + 1.0));
+    }
     if (!(predicted >= 0.0) || !std::isfinite(predicted)) break;
     if (predicted < opt.tolerance) {
       res.converged = true;
