@@ -1,5 +1,9 @@
 #include "solvers/estimation/reduced_run.h"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
 #include "solvers/estimation/batch_costs.h"
 #include "solvers/estimation/batch_linearization.h"
 #include "solvers/estimation/parallel.h"
@@ -70,6 +74,83 @@ ReducedRun ReduceRun(const RunProblem& p, const Eigen::VectorXd& theta, int thre
   }
   out.degrees_of_freedom = static_cast<int>(6 * (E - 1));
   return out;
+}
+
+Eigen::VectorXd MinimiseReducedCost(const RunProblem& p, const Eigen::VectorXd& theta_free,
+                                    int threads, int max_iterations, double tolerance,
+                                    bool* converged, int* iterations,
+                                    const std::function<void(const std::string&)>& say) {
+  const StateSpaceModel model(p);
+  Eigen::MatrixXd A;
+  Eigen::VectorXd b;
+  model.ThetaRows(true, &A, &b);
+  struct Point {
+    Eigen::VectorXd theta_free;
+    double cost = 0.0;
+    Eigen::VectorXd gradient;
+    Eigen::MatrixXd information;
+  };
+  auto evaluate = [&](const Eigen::VectorXd& tf) {
+    Point pt;
+    pt.theta_free = tf;
+    const ReducedRun red = ReduceRun(p, model.Expand(tf), threads);
+    const Eigen::VectorXd r = A * tf - b;
+    pt.cost = red.cost + 0.5 * r.squaredNorm();
+    pt.gradient = red.gradient + A.transpose() * r;
+    pt.information = red.information + A.transpose() * A;
+    return pt;
+  };
+  // Scale factors stay within [1/5, 5] of nominal, as in the Ceres problem.
+  auto clamp = [&](Eigen::VectorXd* tf) {
+    for (std::size_t j = 0; j < p.free.size(); ++j) {
+      const int i = p.free[j];
+      if (i < kKx || i > kKz) continue;
+      const double k0 = std::abs(p.prior.mean[i]);
+      const bool negative = p.prior.mean[i] < 0.0;
+      (*tf)[j] = std::clamp((*tf)[j], negative ? -5.0 * k0 : 0.2 * k0,
+                            negative ? -0.2 * k0 : 5.0 * k0);
+    }
+  };
+  Point at = evaluate(theta_free);
+  double mu = 1e-6, nu = 2.0;
+  *converged = false;
+  *iterations = 0;
+  for (int it = 0; it < max_iterations; ++it) {
+    Eigen::MatrixXd H = at.information;
+    H.diagonal() += mu * at.information.diagonal();
+    const Eigen::VectorXd step = -H.ldlt().solve(at.gradient);
+    const double predicted = -(at.gradient.dot(step) + 0.5 * step.dot(at.information * step));
+    if (say) {
+      char line[160];
+      std::snprintf(line, sizeof(line),
+                    "Gauss-Newton on the exact increments: step %d, chi2 %.8g, predicted "
+                    "decrease %.3g",
+                    it + 1, 2.0 * at.cost, predicted);
+      say(line);
+    }
+    if (!std::isfinite(predicted) || predicted < 0.0) break;
+    if (predicted < tolerance) {
+      *converged = true;
+      break;
+    }
+    Eigen::VectorXd trial = at.theta_free + step;
+    clamp(&trial);
+    Point next = evaluate(trial);
+    *iterations += 1;
+    // Nielsen's damping update: by the gain ratio rho on success, doubling
+    // factors on failure (each rejected step costs a linearisation).
+    const double rho = (at.cost - next.cost) / predicted;
+    if (std::isfinite(next.cost) && next.cost < at.cost) {
+      at = std::move(next);
+      mu = std::max(mu * std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3)), 1e-9);
+      nu = 2.0;
+    } else {
+      mu = std::max(mu * nu, 1e-6);
+      nu *= 2.0;
+      if (mu > 1e8) break;
+    }
+  }
+  return at.theta_free;
 }
 
 }  // namespace triadcal

@@ -14,6 +14,8 @@
 // the priors' is the inverse of the fit's covariance (reduced_run_test.cpp).
 #pragma once
 
+#include <functional>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -34,5 +36,16 @@ struct ReducedRun {
 
 ReducedRun ReduceRun(const RunProblem& p, const Eigen::VectorXd& theta, int threads,
                      bool with_states = false);
+
+// Levenberg-Marquardt on theta alone over the reduced cost plus the priors
+// and constraints (StateSpaceModel::ThetaRows): Gauss-Newton on the exact
+// nonlinear problem, one linearisation of the run per iteration. The batch
+// solver finishes with it when relinearising converges only linearly.
+// Returns the free parameters; *converged when the predicted decrease of the
+// last step fell below tolerance (0.5 chi^2 units).
+Eigen::VectorXd MinimiseReducedCost(const RunProblem& p, const Eigen::VectorXd& theta_free,
+                                    int threads, int max_iterations, double tolerance,
+                                    bool* converged, int* iterations,
+                                    const std::function<void(const std::string&)>& say = nullptr);
 
 }  // namespace triadcal

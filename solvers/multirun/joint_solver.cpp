@@ -292,7 +292,7 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
   const JointProblem problem(jl, problems, free, threads);
   const int nf = static_cast<int>(free.size());
   JointEvaluation ev = problem.Evaluate(phi);
-  double mu = 1e-6;
+  double mu = 1e-6, nu = 2.0;
   for (int it = 0; it < opt.max_iterations; ++it) {
     Eigen::MatrixXd H = ev.information;
     H.diagonal() += mu * ev.information.diagonal();
@@ -317,12 +317,16 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
     JointEvaluation next = problem.Evaluate(trial);
     res.iterations = it + 1;
     const double actual = ev.cost - next.cost;
+    // Nielsen's damping update (as MinimiseReducedCost).
     if (actual > 0.0 && std::isfinite(next.cost)) {
       phi = trial;
       ev = std::move(next);
-      mu = std::max(mu / 5.0, 1e-9);
+      const double rho = actual / predicted;
+      mu = std::max(mu * std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3)), 1e-9);
+      nu = 2.0;
     } else {
-      mu = std::max(mu * 8.0, 1e-4);
+      mu = std::max(mu * nu, 1e-6);
+      nu *= 2.0;
       if (mu > 1e8) break;
     }
   }
