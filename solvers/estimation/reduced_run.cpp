@@ -6,6 +6,7 @@
 
 #include "solvers/estimation/batch_costs.h"
 #include "solvers/estimation/batch_linearization.h"
+#include "solvers/estimation/levenberg_marquardt.h"
 #include "solvers/estimation/parallel.h"
 #include "solvers/estimation/schur_covariance.h"
 #include "solvers/estimation/state_space_model.h"
@@ -112,44 +113,25 @@ Eigen::VectorXd MinimiseReducedCost(const RunProblem& p, const Eigen::VectorXd& 
     }
   };
   Point at = evaluate(theta_free);
-  double mu = 1e-6, nu = 2.0;
-  *converged = false;
-  *iterations = 0;
-  for (int it = 0; it < max_iterations; ++it) {
-    Eigen::MatrixXd H = at.information;
-    H.diagonal() += mu * at.information.diagonal();
-    const Eigen::VectorXd step = -H.ldlt().solve(at.gradient);
-    const double predicted = -(at.gradient.dot(step) + 0.5 * step.dot(at.information * step));
-    if (say) {
-      char line[160];
-      std::snprintf(line, sizeof(line),
-                    "Gauss-Newton on the exact increments: step %d, chi2 %.8g, predicted "
-                    "decrease %.3g",
-                    it + 1, 2.0 * at.cost, predicted);
-      say(line);
-    }
-    if (!std::isfinite(predicted) || predicted < 0.0) break;
-    if (predicted < tolerance) {
-      *converged = true;
-      break;
-    }
-    Eigen::VectorXd trial = at.theta_free + step;
-    clamp(&trial);
-    Point next = evaluate(trial);
-    *iterations += 1;
-    // Nielsen's damping update: by the gain ratio rho on success, doubling
-    // factors on failure (each rejected step costs a linearisation).
-    const double rho = (at.cost - next.cost) / predicted;
-    if (std::isfinite(next.cost) && next.cost < at.cost) {
-      at = std::move(next);
-      mu = std::max(mu * std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3)), 1e-9);
-      nu = 2.0;
-    } else {
-      mu = std::max(mu * nu, 1e-6);
-      nu *= 2.0;
-      if (mu > 1e8) break;
-    }
-  }
+  const LmOutcome lm = MinimiseLevenbergMarquardt(
+      &at, evaluate,
+      [&](const Point& from, const Eigen::VectorXd& step) {
+        Eigen::VectorXd trial = from.theta_free + step;
+        clamp(&trial);
+        return trial;
+      },
+      [&](int it, const Point& pt, double predicted) {
+        if (!say) return;
+        char line[160];
+        std::snprintf(line, sizeof(line),
+                      "Gauss-Newton on the exact increments: step %d, chi2 %.8g, predicted "
+                      "decrease %.3g",
+                      it + 1, 2.0 * pt.cost, predicted);
+        say(line);
+      },
+      max_iterations, tolerance);
+  *converged = lm.converged;
+  *iterations = lm.iterations;
   return at.theta_free;
 }
 

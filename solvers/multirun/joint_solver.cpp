@@ -9,6 +9,7 @@
 
 #include "core/model/errors.h"
 #include "solvers/diagnosis/statistics.h"
+#include "solvers/estimation/levenberg_marquardt.h"
 #include "solvers/estimation/parallel.h"
 #include "solvers/estimation/reduced_run.h"
 #include "solvers/estimation/run_problem.h"
@@ -24,6 +25,7 @@ double Seconds(std::chrono::steady_clock::time_point t0) {
 // costs, the priors and the constraints, with gradient and Gauss-Newton
 // information.
 struct JointEvaluation {
+  Eigen::VectorXd phi;           // where
   double cost = 0.0;
   Eigen::VectorXd gradient;      // over F
   Eigen::MatrixXd information;   // over F, with priors and constraints
@@ -48,6 +50,7 @@ class JointProblem {
   JointEvaluation Evaluate(const Eigen::VectorXd& phi) const {
     const int nf = static_cast<int>(free_.size());
     JointEvaluation ev;
+    ev.phi = phi;
     ev.gradient = Eigen::VectorXd::Zero(nf);
     ev.information = Eigen::MatrixXd::Zero(nf, nf);
     for (int r = 0; r < jl_.runs(); ++r) {
@@ -292,44 +295,28 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
   const JointProblem problem(jl, problems, free, threads);
   const int nf = static_cast<int>(free.size());
   JointEvaluation ev = problem.Evaluate(phi);
-  double mu = 1e-6, nu = 2.0;
-  for (int it = 0; it < opt.max_iterations; ++it) {
-    Eigen::MatrixXd H = ev.information;
-    H.diagonal() += mu * ev.information.diagonal();
-    const Eigen::VectorXd step = -H.ldlt().solve(ev.gradient);
-    const double predicted =
-        -(ev.gradient.dot(step) + 0.5 * step.dot(ev.information * step));
-    char line[160];
-    std::snprintf(line, sizeof(line), "joint: iteration %d, chi2 %.6g, predicted decrease %.3g",
-                  it + 1, 2.0 * ev.cost, predicted);
-    say(line);
-    if (opt.batch.fraction) {
-      opt.batch.fraction((R + 1.0 - std::pow(0.7, it + 1)) / (R + 1.0));
-    }
-    if (!(predicted >= 0.0) || !std::isfinite(predicted)) break;
-    if (predicted < opt.tolerance) {
-      res.converged = true;
-      break;
-    }
-    Eigen::VectorXd trial = phi;
-    for (int k = 0; k < nf; ++k) trial[free[k]] += step[k];
-    KeepScalesInBounds(jl, &trial);
-    JointEvaluation next = problem.Evaluate(trial);
-    res.iterations = it + 1;
-    const double actual = ev.cost - next.cost;
-    // Nielsen's damping update (as MinimiseReducedCost).
-    if (actual > 0.0 && std::isfinite(next.cost)) {
-      phi = trial;
-      ev = std::move(next);
-      const double rho = actual / predicted;
-      mu = std::max(mu * std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3)), 1e-9);
-      nu = 2.0;
-    } else {
-      mu = std::max(mu * nu, 1e-6);
-      nu *= 2.0;
-      if (mu > 1e8) break;
-    }
-  }
+  const LmOutcome lm = MinimiseLevenbergMarquardt(
+      &ev, [&](const Eigen::VectorXd& trial) { return problem.Evaluate(trial); },
+      [&](const JointEvaluation& from, const Eigen::VectorXd& step) {
+        Eigen::VectorXd trial = from.phi;
+        for (int k = 0; k < nf; ++k) trial[free[k]] += step[k];
+        KeepScalesInBounds(jl, &trial);
+        return trial;
+      },
+      [&](int it, const JointEvaluation& at, double predicted) {
+        char line[160];
+        std::snprintf(line, sizeof(line),
+                      "joint: iteration %d, chi2 %.6g, predicted decrease %.3g", it + 1,
+                      2.0 * at.cost, predicted);
+        say(line);
+        if (opt.batch.fraction) {
+          opt.batch.fraction((R + 1.0 - std::pow(0.7, it + 1)) / (R + 1.0));
+        }
+      },
+      opt.max_iterations, opt.tolerance);
+  res.converged = lm.converged;
+  res.iterations = lm.iterations;
+  phi = ev.phi;
   res.phi = phi;
   res.cost = ev.cost;
   res.cov = Eigen::MatrixXd::Zero(m, m);
