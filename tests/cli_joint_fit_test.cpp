@@ -44,11 +44,11 @@ run:
     return Path(name + "/run.yaml");
   }
 
-  void ExpectError(const std::string& args, const std::string& what) {
+  void ExpectError(const std::string& args, const std::string& what, bool out_json = true) {
     const auto r = RunTriadcal(args, Path("stderr.txt"));
     EXPECT_EQ(r.status, 2) << args << "\n" << r.err;
     EXPECT_EQ(r.err, "triadcal: error: " + what + "\n") << args;
-    EXPECT_FALSE(fs::exists(Path("out.json"))) << args;
+    if (out_json) EXPECT_FALSE(fs::exists(Path("out.json"))) << args;
   }
 };
 
@@ -93,6 +93,13 @@ temperature: {reference_C: 20, degree: {W0x: 1, Kx: 1}}
                              Path("apply.err"));
   EXPECT_EQ(a.status, 0) << a.err;
   EXPECT_TRUE(fs::exists(Path("hot.csv")));
+  // export holds one set of parameters: a temperature model is refused.
+  ExpectError("export " + Path("out.json") + " --format yaml -o " + Path("cal.yaml"),
+              Path("out.json") + ": temperature_model: a calibration with a temperature model "
+                                 "cannot be exported (apply evaluates it; export a fit at one "
+                                 "temperature)",
+              false);
+  EXPECT_FALSE(fs::exists(Path("cal.yaml")));
 }
 
 TEST_F(JointFitCli, BadInputIsOneLineNamingTheRun) {

@@ -63,6 +63,12 @@ int RunExport(const ExportArgs& a) {
   }
   CheckOutputPath(a.out);
   const Calibration cal = LoadCalibration(a.calibration_json);
+  if (!cal.temperature_terms.empty()) {
+    // The exported forms hold one set of parameters.
+    throw InputError(a.calibration_json +
+                     ": temperature_model: a calibration with a temperature model cannot be "
+                     "exported (apply evaluates it; export a fit at one temperature)");
+  }
   RecordInput("calibration", a.calibration_json);
   const std::string provenance = CurrentProvenance().dump();
 
