@@ -407,7 +407,7 @@ void Relinearise(const RunProblem& p, const StateSpaceModel& model, const Eigen:
       say("Gauss-Newton on the exact increments");
       bool gn_converged = false;
       int gn_iterations = 0;
-      theta_free = MinimiseReducedCost(p, theta_free, threads, 30, 0.1 * opt.outer_tolerance,
+      theta_free = MinimiseReducedCost(p, theta_free, threads, 30, opt.outer_tolerance,
                                        &gn_converged, &gn_iterations, say);
       res->ceres_iterations += gn_iterations;
       for (std::size_t e = 0; e < E; ++e) {
