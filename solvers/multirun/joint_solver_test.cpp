@@ -102,27 +102,34 @@ Scenario SingleAxis(std::uint64_t seed) {
   return s;
 }
 
+// Run a: shaft along the IMU's y. Run b: the IMU turned so that its x lies
+// along the shaft, platform (x, y, z) = IMU (+y, +x, -z), with its own set-up
+// errors. truth_a is also the IMU's truth (run a has no mounting).
+std::vector<JointRun> TwoShaftRuns(std::uint64_t seed_a, std::uint64_t seed_b,
+                                   Eigen::VectorXd* truth_a, Eigen::VectorXd* truth_b) {
+  Scenario a = SingleAxis(seed_a);
+  Scenario b = SingleAxis(seed_b);
+  const int src[3] = {1, 0, 2};
+  const double sgn[3] = {1, 1, -1};
+  SetMounting(&b.run, src, sgn);
+  const Eigen::MatrixXd mount = MountingMap(b.run, ParameterLayout());
+  b.truth = mount * a.truth;
+  b.truth[kDpsi] = b.truth[kDlambda2] = 12.0 * kArcminToRad;
+  b.truth[kDthetaC] = -20.0 * kArcminToRad;
+  b.run.scale_mV_per_g = mount.block<3, 3>(kKx, kKx) * a.run.scale_mV_per_g;
+  b.run.bias_mV = mount.block<3, 3>(kW0x, kW0x) * a.run.bias_mV;
+  *truth_a = a.truth;
+  *truth_b = b.truth;
+  return {MakeRun("a", a), MakeRun("b", b)};
+}
+
 TEST(JointFit, TwoSingleAxisRunsWithDifferentShaftsDetermineWhatNeitherDoesAlone) {
   const ParameterLayout layout;
   double sum_z2 = 0.0;
   int count = 0;
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
-    // Run a: shaft along the IMU's y. Run b: the IMU turned so that its x
-    // lies along the shaft: platform (x, y, z) = IMU (+y, +x, -z).
-    Scenario a = SingleAxis(seed);
-    Scenario b = SingleAxis(seed + 100);
-    const int src[3] = {1, 0, 2};
-    const double sgn[3] = {1, 1, -1};
-    SetMounting(&b.run, src, sgn);
-    const Eigen::MatrixXd mount = MountingMap(b.run, layout);
-    const Eigen::VectorXd imu_truth = a.truth;
-    b.truth = mount * imu_truth;
-    // b's own set-up errors.
-    b.truth[kDpsi] = b.truth[kDlambda2] = 12.0 * kArcminToRad;
-    b.truth[kDthetaC] = -20.0 * kArcminToRad;
-    b.run.scale_mV_per_g = mount.block<3, 3>(kKx, kKx) * a.run.scale_mV_per_g;
-    b.run.bias_mV = mount.block<3, 3>(kW0x, kW0x) * a.run.bias_mV;
-    const std::vector<JointRun> runs = {MakeRun("a", a), MakeRun("b", b)};
+    Eigen::VectorXd imu_truth, truth_b;
+    const std::vector<JointRun> runs = TwoShaftRuns(seed, seed + 100, &imu_truth, &truth_b);
     const JointLayout jl(runs, layout, {}, "test");
     const JointResult r = SolveJoint(runs, jl, Options());
     ASSERT_TRUE(r.converged) << "seed " << seed;
@@ -295,18 +302,8 @@ TEST(JointFitBench, DISABLED_TwoShaftsOverManySeeds) {
   double sum_z2 = 0.0;
   int count = 0, inconsistent = 0, max_held_jointly = 0;
   for (int seed = 1; seed <= seeds; ++seed) {
-    Scenario a = SingleAxis(seed);
-    Scenario b = SingleAxis(seed + 1000);
-    const int src[3] = {1, 0, 2};
-    const double sgn[3] = {1, 1, -1};
-    SetMounting(&b.run, src, sgn);
-    const Eigen::MatrixXd mount = MountingMap(b.run, layout);
-    b.truth = mount * a.truth;
-    b.truth[kDpsi] = b.truth[kDlambda2] = 12.0 * kArcminToRad;
-    b.truth[kDthetaC] = -20.0 * kArcminToRad;
-    b.run.scale_mV_per_g = mount.block<3, 3>(kKx, kKx) * a.run.scale_mV_per_g;
-    b.run.bias_mV = mount.block<3, 3>(kW0x, kW0x) * a.run.bias_mV;
-    const std::vector<JointRun> runs = {MakeRun("a", a), MakeRun("b", b)};
+    Eigen::VectorXd truth_a, truth_b;
+    const std::vector<JointRun> runs = TwoShaftRuns(seed, seed + 1000, &truth_a, &truth_b);
     const JointLayout jl(runs, layout, {}, "bench");
     const JointResult r = SolveJoint(runs, jl, Options());
     max_held_jointly = std::max(max_held_jointly, static_cast<int>(r.held.size()));
@@ -314,7 +311,7 @@ TEST(JointFitBench, DISABLED_TwoShaftsOverManySeeds) {
     for (int j = 0; j < jl.size(); ++j) {
       if (r.cov(j, j) <= 0.0) continue;
       const JointParam& p = jl.param(j);
-      const Eigen::VectorXd& truth = p.run == 1 ? b.truth : a.truth;
+      const Eigen::VectorXd& truth = p.run == 1 ? truth_b : truth_a;
       const double z = (r.phi[j] - truth[p.base]) / std::sqrt(r.cov(j, j));
       sum_z2 += z * z;
       ++count;
