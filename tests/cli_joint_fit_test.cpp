@@ -102,6 +102,22 @@ temperature: {reference_C: 20, degree: {W0x: 1, Kx: 1}}
   EXPECT_FALSE(fs::exists(Path("cal.yaml")));
 }
 
+TEST_F(JointFitCli, ObservabilityOfTheRunsTogether) {
+  const std::string a = Simulate("a", 20.0, 1);
+  const std::string b = Simulate("b", 20.0, 2);
+  const auto r = RunTriadcal("observability " + a + " " + b + " -o " + Path("obs.json"),
+                             Path("obs.err"));
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(ReadFile(Path("obs.json")));
+  EXPECT_EQ(j["kind"], "joint");
+  EXPECT_GT(j["parameters"]["Kx"]["crb_sigma"].get<double>(), 0.0);
+  EXPECT_NEAR(j["parameters"]["Kx"]["information_share"]["a"].get<double>(), 0.5, 0.05);
+  EXPECT_TRUE(j["parameters"].contains("dpsi@b"));
+  EXPECT_EQ(j["runs"].size(), 2u);
+  ExpectError("observability " + a + " " + b + " --at " + a + " -o " + Path("out.json"),
+              "--at: not available for several runs yet");
+}
+
 TEST_F(JointFitCli, BadInputIsOneLineNamingTheRun) {
   const std::string a = Simulate("a", 20.0, 1);
   const std::string b = Simulate("b", 20.0, 2);

@@ -24,11 +24,14 @@
 #include "tools/commands.h"
 #include "tools/provenance.h"
 #include "tools/report/observability_report.h"
+#include "core/io/runs_file_io.h"
+#include "tools/joint_fit_job.h"
 
 namespace triadcal {
 namespace {
 
 struct ObservabilityArgs {
+  std::vector<std::string> inputs;
   std::string input, out_json, report_html, at, effects;
   double epoch_s = kDefaultEpoch_s, rate_window_s = 0.1;
   double unobservable_below = ObservabilityThresholds{}.unobservable;
@@ -48,7 +51,100 @@ bool IsScenario(const std::string& path) {
   return root.IsMap() && root["profile"];
 }
 
-int RunObservability(const ObservabilityArgs& a) {
+// Several runs (or a runs file): the combined problem at the nominal values,
+// as `fit` on several runs poses it (docs/multi-run.md).
+int RunJointObservability(const ObservabilityArgs& a) {
+  if (!a.report_html.empty() || !a.at.empty()) {
+    throw InputError(std::string(a.at.empty() ? "--report" : "--at") +
+                     ": not available for several runs yet");
+  }
+  CheckOutputPath(a.out_json);
+  const RunsFile file = RunsOfCommandLine(a.inputs);
+  ShowProgress("observability: loading the runs", 0.0);
+  const std::vector<JointRun> runs = LoadJointRuns(file);
+  CheckOverwrite(a.out_json);
+  std::vector<Effect> effects;
+  for (const JointRun& r : runs) effects = ParseEffectList(a.effects, r.data);
+  const ParameterLayout layout(effects);
+  const JointLayout jl(runs, layout, JointSpecOf(file),
+                       file.path.empty() ? "command line" : file.path);
+  JointOptions opt;
+  opt.batch.epoch_s = a.epoch_s;
+  opt.batch.derivatives.half_window_s = a.rate_window_s;
+  opt.batch.threads = a.threads;
+  ShowProgress("observability: Fisher information of the runs together", 0.3);
+  const JointInformation info = JointInformationAtNominal(runs, jl, opt);
+  EndProgress();
+
+  std::vector<bool> held(jl.size(), false);
+  for (int j : info.held) held[j] = true;
+  nlohmann::json params = nlohmann::json::object();
+  for (int j = 0; j < jl.size(); ++j) {
+    const JointParam& p = jl.param(j);
+    nlohmann::json e;
+    e["crb_sigma"] = held[j] ? nlohmann::json(nullptr)
+                             : nlohmann::json(std::sqrt(info.cov(j, j)) / p.si_per_unit);
+    e["prior_sigma"] = p.prior_sigma / p.si_per_unit;
+    e["unit"] = p.unit;
+    e["estimable"] = !held[j];
+    nlohmann::json share = nlohmann::json::object();
+    for (int r = 0; r < jl.runs(); ++r) share[jl.run_name(r)] = info.share(r, j);
+    if (!held[j]) e["information_share"] = share;
+    params[p.name] = e;
+  }
+  nlohmann::json out;
+  out["command"] = "observability";
+  out["kind"] = "joint";
+  out["axes"] = "imu";
+  out["evaluated_at"] = "nominal";
+  out["parameters"] = params;
+  nlohmann::json held_names = nlohmann::json::array();
+  for (int j : info.held) held_names.push_back(jl.param(j).name);
+  out["held"] = held_names;
+  out["determined_jointly_only"] = info.jointly_only;
+  nlohmann::json jr = nlohmann::json::array();
+  for (int r = 0; r < jl.runs(); ++r) {
+    jr.push_back({{"name", jl.run_name(r)},
+                  {"run", file.runs[r].run_yaml},
+                  {"samples", runs[r].data.size()},
+                  {"held_alone", info.held_alone[r]}});
+  }
+  out["runs"] = jr;
+  out["settings"] = {{"epoch_s", a.epoch_s}, {"effects", a.effects}};
+  WriteJson(out, a.out_json);
+
+  std::printf("observability: %zu runs together, at the nominal values, declared noise\n",
+              runs.size());
+  std::printf("%-26s %14s %14s %-10s", "parameter (IMU axes)", "CRB sigma", "prior sigma", "unit");
+  for (int r = 0; r < jl.runs(); ++r) std::printf(" %8.8s", jl.run_name(r).c_str());
+  std::printf("   (share of the information)\n");
+  for (int j = 0; j < jl.size(); ++j) {
+    const JointParam& p = jl.param(j);
+    char crb[32] = "held";
+    if (!held[j]) std::snprintf(crb, sizeof(crb), "%.4g", std::sqrt(info.cov(j, j)) / p.si_per_unit);
+    std::printf("%-26s %14s %14.4g %-10s", p.name.c_str(), crb, p.prior_sigma / p.si_per_unit,
+                p.unit.c_str());
+    if (!held[j]) {
+      for (int r = 0; r < jl.runs(); ++r) std::printf(" %8.2f", info.share(r, j));
+    }
+    std::printf("\n");
+  }
+  for (int r = 0; r < jl.runs(); ++r) {
+    std::string h;
+    for (const std::string& x : info.held_alone[r]) h += (h.empty() ? "" : ", ") + x;
+    std::printf("run %s alone would hold: %s\n", jl.run_name(r).c_str(),
+                h.empty() ? "none" : h.c_str());
+  }
+  std::string jo;
+  for (const std::string& x : info.jointly_only) jo += (jo.empty() ? "" : ", ") + x;
+  std::printf("determined only by the runs together: %s\n", jo.empty() ? "none" : jo.c_str());
+  std::printf("wrote %s\n", a.out_json.c_str());
+  return 0;
+}
+
+int RunObservability(ObservabilityArgs a) {
+  if (a.inputs.size() > 1 || IsRunsFile(a.inputs[0])) return RunJointObservability(a);
+  a.input = a.inputs[0];
   if (!a.report_html.empty()) CheckOutputPath(a.report_html);
   if (!(a.unobservable_below > 0.0) || !(a.weak_below >= a.unobservable_below)) {
     throw InputError("--unobservable-below, --weak-below: expected 0 < unobservable <= weak");
@@ -125,7 +221,9 @@ Command AddObservabilityCommand(CLI::App& app) {
   c.app = app.add_subcommand(
       "observability",
       "Cramer-Rao sigma and unobservable directions of a run or a scenario's profile");
-  c.app->add_option("input", a->input, "RUN.yaml (recorded motion) or SCENARIO.yaml (profile)")
+  c.app->add_option("input", a->inputs,
+                    "RUN.yaml (recorded motion) or SCENARIO.yaml (profile); several RUN.yaml "
+                    "or a runs file: the runs together (docs/multi-run.md)")
       ->required();
   c.app->add_option("-o,--output", a->out_json, "output JSON")->required();
   c.app->add_option("--report", a->report_html,

@@ -180,7 +180,131 @@ RunConsistency TestConsistency(const JointLayout& jl, int r, const BatchResult& 
   return out;
 }
 
+// The hold rule (SupportedByInformation, as a single run's fit) on the
+// combined information at the nominal values, with --hold/--free on top.
+// *ev_out, when given, gets that evaluation (over every unknown).
+std::vector<bool> HeldByRule(const JointLayout& jl, const std::vector<RunProblem>& problems,
+                             const JointOptions& opt, int threads, JointEvaluation* ev_out) {
+  const int m = jl.size();
+  std::vector<int> all(m);
+  for (int j = 0; j < m; ++j) all[j] = j;
+  const JointProblem full(jl, problems, all, threads);
+  JointEvaluation ev = full.Evaluate(jl.Nominal());
+  const Eigen::VectorXd sigma = jl.PriorSigma();
+  // Data and constraint information in prior units (the priors' identity removed).
+  Eigen::MatrixXd info = sigma.asDiagonal() * ev.information * sigma.asDiagonal();
+  info.diagonal().array() -= 1.0;
+  Eigen::VectorXd min_info(m), priority(m);
+  for (int j = 0; j < m; ++j) {
+    const JointParam& p = jl.param(j);
+    const bool base = p.base >= 0 && p.base < kNumBaseParams;
+    min_info[j] = base || p.base < 0 ? opt.batch.holding.min_information
+                                     : opt.batch.holding.min_information_effects;
+    priority[j] = p.base >= 0 ? HoldPriority(p.base) : 2.0;
+  }
+  std::vector<bool> held(m, false);
+  if (opt.batch.holding.auto_hold) {
+    held.assign(m, true);
+    for (int j : SupportedByInformation(info, min_info, priority)) held[j] = false;
+  }
+  auto index_of = [&](const std::string& name) {
+    const int j = jl.IndexOf(name);
+    if (j < 0) throw OptionError("hold_free", "unknown joint parameter '" + name + "'");
+    return j;
+  };
+  for (const std::string& name : opt.batch.holding.hold) held[index_of(name)] = true;
+  for (const std::string& name : opt.batch.holding.free) held[index_of(name)] = false;
+  if (ev_out) *ev_out = std::move(ev);
+  return held;
+}
+
+// The free unknowns that no run determines alone: for each, the run-layout
+// parameter it moves most is held in every run alone (a per-run unknown
+// counts as its own run's).
+std::vector<std::string> JointlyOnly(const JointLayout& jl, const std::vector<int>& free,
+                                     const std::vector<std::vector<std::string>>& held_alone) {
+  const ParameterLayout& layout = jl.layout();
+  std::vector<std::string> out;
+  for (int j : free) {
+    const JointParam& p = jl.param(j);
+    if (p.degree != 0 || p.base < 0) continue;
+    bool alone = false;
+    for (int r = 0; r < jl.runs() && !alone; ++r) {
+      if (p.run >= 0 && p.run != r) continue;
+      int i = -1;
+      double best = 0.0;
+      for (int q = 0; q < layout.size(); ++q) {
+        if (std::abs(jl.map(r)(q, j)) > best) {
+          best = std::abs(jl.map(r)(q, j));
+          i = q;
+        }
+      }
+      const auto& h = held_alone[r];
+      alone = i >= 0 && std::find(h.begin(), h.end(), layout.info(i).name) == h.end();
+    }
+    if (!alone) out.push_back(p.name);
+  }
+  return out;
+}
+
 }  // namespace
+
+JointInformation JointInformationAtNominal(const std::vector<JointRun>& runs,
+                                           const JointLayout& jl, const JointOptions& opt) {
+  const int threads = opt.batch.threads > 0 ? opt.batch.threads : DefaultThreads();
+  const ParameterLayout& layout = jl.layout();
+  const int m = jl.size(), R = jl.runs(), n = layout.size();
+  std::vector<RunProblem> problems;
+  for (const JointRun& r : runs) {
+    problems.push_back(BuildRunProblem(r.run, r.data, layout, opt.batch.epoch_s,
+                                       opt.batch.derivatives));
+  }
+  JointInformation out;
+  JointEvaluation ev;
+  const std::vector<bool> held = HeldByRule(jl, problems, opt, threads, &ev);
+  out.information = ev.information;
+  std::vector<int> free;
+  for (int j = 0; j < m; ++j) (held[j] ? out.held : free).push_back(j);
+  const int nf = static_cast<int>(free.size());
+  Eigen::MatrixXd H(nf, nf);
+  for (int a = 0; a < nf; ++a)
+    for (int b = 0; b < nf; ++b) H(a, b) = ev.information(free[a], free[b]);
+  const Eigen::MatrixXd cov_free = H.ldlt().solve(Eigen::MatrixXd::Identity(nf, nf));
+  out.cov = Eigen::MatrixXd::Zero(m, m);
+  for (int a = 0; a < nf; ++a)
+    for (int b = 0; b < nf; ++b) out.cov(free[a], free[b]) = cov_free(a, b);
+  out.share = Eigen::MatrixXd::Zero(R, m);
+  Eigen::VectorXd total = Eigen::VectorXd::Zero(m);
+  for (int r = 0; r < R; ++r) total += ev.data_information[r].diagonal();
+  for (int r = 0; r < R; ++r) {
+    for (int j : free) {
+      if (total[j] > 0.0) out.share(r, j) = ev.data_information[r](j, j) / total[j];
+    }
+  }
+  // Each run alone by the same rule, over its own layout at its nominal values.
+  for (int r = 0; r < R; ++r) {
+    const RunProblem& p = problems[r];
+    Eigen::MatrixXd info = ev.runs[r].information;
+    for (const ConstraintRow& c : p.constraints) info += c.c * c.c.transpose() / (c.sigma * c.sigma);
+    info = p.prior.sigma.asDiagonal() * info * p.prior.sigma.asDiagonal();
+    Eigen::VectorXd min_info(n), priority(n);
+    for (int i = 0; i < n; ++i) {
+      min_info[i] = i < kNumBaseParams ? opt.batch.holding.min_information
+                                       : opt.batch.holding.min_information_effects;
+      priority[i] = HoldPriority(i);
+    }
+    std::vector<bool> kept(n, false);
+    for (int i : SupportedByInformation(info, min_info, priority)) kept[i] = true;
+    std::vector<std::string> h;
+    for (int i = 0; i < n; ++i) {
+      if (!kept[i]) h.push_back(layout.info(i).name);
+    }
+    out.held_alone.push_back(h);
+  }
+  out.jointly_only = JointlyOnly(jl, free, out.held_alone);
+  return out;
+}
+
 
 JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
                        const JointOptions& opt) {
@@ -223,37 +347,8 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
 
   // 2. What the runs together determine, at the nominal values.
   Eigen::VectorXd phi = jl.Nominal();
-  std::vector<int> all(m);
-  for (int j = 0; j < m; ++j) all[j] = j;
-  std::vector<bool> held(m, false);
-  {
-    say("joint: choosing the parameters the runs determine together");
-    const JointProblem full(jl, problems, all, threads);
-    const JointEvaluation ev = full.Evaluate(phi);
-    const Eigen::VectorXd sigma = jl.PriorSigma();
-    // Data and constraint information in prior units (the priors' identity removed).
-    Eigen::MatrixXd info = sigma.asDiagonal() * ev.information * sigma.asDiagonal();
-    info.diagonal().array() -= 1.0;
-    Eigen::VectorXd min_info(m), priority(m);
-    for (int j = 0; j < m; ++j) {
-      const JointParam& p = jl.param(j);
-      const bool base = p.base >= 0 && p.base < kNumBaseParams;
-      min_info[j] = base || p.base < 0 ? opt.batch.holding.min_information
-                                       : opt.batch.holding.min_information_effects;
-      priority[j] = p.base >= 0 ? HoldPriority(p.base) : 2.0;
-    }
-    if (opt.batch.holding.auto_hold) {
-      held.assign(m, true);
-      for (int j : SupportedByInformation(info, min_info, priority)) held[j] = false;
-    }
-    auto index_of = [&](const std::string& name) {
-      const int j = jl.IndexOf(name);
-      if (j < 0) throw OptionError("hold_free", "unknown joint parameter '" + name + "'");
-      return j;
-    };
-    for (const std::string& name : opt.batch.holding.hold) held[index_of(name)] = true;
-    for (const std::string& name : opt.batch.holding.free) held[index_of(name)] = false;
-  }
+  say("joint: choosing the parameters the runs determine together");
+  const std::vector<bool> held = HeldByRule(jl, problems, opt, threads, nullptr);
   std::vector<int> free;
   for (int j = 0; j < m; ++j) (held[j] ? res.held : free).push_back(j);
 
@@ -342,24 +437,10 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
   res.chi2_per_dof = 2.0 * res.cost / std::max(1, res.degrees_of_freedom);
 
   // Determined together, by no run alone.
-  for (int k = 0; k < nf; ++k) {
-    const JointParam& p = jl.param(free[k]);
-    if (p.degree != 0 || p.base < 0) continue;
-    bool alone = false;
-    for (int r = 0; r < R && !alone; ++r) {
-      if (p.run >= 0 && p.run != r) continue;
-      int i = -1;
-      double best = 0.0;
-      for (int q = 0; q < layout.size(); ++q) {
-        if (std::abs(jl.map(r)(q, free[k])) > best) {
-          best = std::abs(jl.map(r)(q, free[k]));
-          i = q;
-        }
-      }
-      const auto& h = res.runs[r].alone.held;
-      alone = i >= 0 && std::find(h.begin(), h.end(), layout.info(i).name) == h.end();
-    }
-    if (!alone) res.jointly_only.push_back(p.name);
+  {
+    std::vector<std::vector<std::string>> held_alone;
+    for (const JointRunResult& rr : res.runs) held_alone.push_back(rr.alone.held);
+    res.jointly_only = JointlyOnly(jl, free, held_alone);
   }
 
   // 5. Each run against the joint solution.

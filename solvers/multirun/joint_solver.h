@@ -84,6 +84,23 @@ struct JointResult {
   double seconds_alone = 0.0, seconds_joint = 0.0;
 };
 
+// What the runs together determine, without fitting (observability of
+// several runs): the Fisher information of the joint unknowns at their
+// nominal values for each run's declared noise, the hold rule's decision on
+// it, each run's share, and what no run determines alone (each run's own hold
+// rule at the nominal values).
+struct JointInformation {
+  Eigen::MatrixXd information;  // m x m: data, constraints and priors
+  Eigen::MatrixXd cov;          // m x m: the Cramer-Rao bound over the free unknowns, zero for held
+  std::vector<int> held;        // indices into phi
+  Eigen::MatrixXd share;        // R x m, as JointResult::share
+  std::vector<std::vector<std::string>> held_alone;  // per run, its layout's names
+  std::vector<std::string> jointly_only;
+};
+JointInformation JointInformationAtNominal(const std::vector<JointRun>& runs,
+                                           const JointLayout& layout,
+                                           const JointOptions& options);
+
 // Throws InputError/OptionError for bad settings; runtime_error when a run
 // alone cannot be fitted.
 JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& layout,

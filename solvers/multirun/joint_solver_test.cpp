@@ -242,6 +242,43 @@ TEST(JointFit, NamesTheRunWhoseMountingChanged) {
       << odd.pulls[0].first;
 }
 
+// Without fitting: two runs of the same profile halve the variance of the
+// shared parameters; of two single-axis runs with different shafts, each
+// alone would hold its shaft's Kyy and tilt, and the tilts are determined
+// only together (as the joint fit finds, above).
+TEST(JointInformation, TwoRunsHalveTheVarianceAndNameWhatOnlyTogetherDetermine) {
+  const Scenario s = PaperScenario(50.0, 40.0, 2.0, 15.0, 21);
+  const std::vector<JointRun> one = {MakeRun("a", s)};
+  Scenario s2 = s;
+  s2.seed = 22;
+  const std::vector<JointRun> two = {MakeRun("a", s), MakeRun("b", s2)};
+  const JointLayout jl1(one, ParameterLayout(), {}, "test"), jl2(two, ParameterLayout(), {}, "test");
+  const JointInformation i1 = JointInformationAtNominal(one, jl1, Options());
+  const JointInformation i2 = JointInformationAtNominal(two, jl2, Options());
+  for (int i = 0; i < kDpsi; ++i) {
+    const std::string name = ParameterLayout().info(i).name;
+    const double ratio = std::sqrt(i2.cov(jl2.IndexOf(name), jl2.IndexOf(name)) /
+                                   i1.cov(jl1.IndexOf(name), jl1.IndexOf(name)));
+    EXPECT_NEAR(ratio, 1.0 / std::sqrt(2.0), 0.03) << name;
+    EXPECT_NEAR(i2.share(0, jl2.IndexOf(name)), 0.5, 0.05) << name;
+  }
+  Eigen::VectorXd ta, tb;
+  const std::vector<JointRun> shafts = TwoShaftRuns(1, 101, &ta, &tb);
+  const JointLayout jl(shafts, ParameterLayout(), {}, "test");
+  const JointInformation info = JointInformationAtNominal(shafts, jl, Options());
+  EXPECT_TRUE(info.held.empty());
+  for (int r = 0; r < 2; ++r) {
+    const auto& h = info.held_alone[r];
+    EXPECT_TRUE(std::find(h.begin(), h.end(), "Kyy") != h.end()) << r;
+    EXPECT_TRUE(std::find(h.begin(), h.end(), "dtheta_c") != h.end()) << r;
+  }
+  for (const char* name : {"dtheta_c@a", "dtheta_c@b"}) {
+    EXPECT_TRUE(std::find(info.jointly_only.begin(), info.jointly_only.end(), name) !=
+                info.jointly_only.end())
+        << name;
+  }
+}
+
 TEST(JointLayoutErrors, RejectsRunsOfAnotherImuARunListedTwiceAndUnknownNames) {
   const Scenario s = PaperScenario(50.0, 10.0, 2.0, 15.0, 1);
   JointRun a = MakeRun("a", s), b = MakeRun("b", s);
