@@ -58,16 +58,11 @@ int RunJointObservability(const ObservabilityArgs& a) {
     throw InputError(std::string(a.at.empty() ? "--report" : "--at") +
                      ": not available for several runs yet");
   }
-  CheckOutputPath(a.out_json);
-  const RunsFile file = RunsOfCommandLine(a.inputs);
   ShowProgress("observability: loading the runs", 0.0);
-  const std::vector<JointRun> runs = LoadJointRuns(file);
-  CheckOverwrite(a.out_json);
-  std::vector<Effect> effects;
-  for (const JointRun& r : runs) effects = ParseEffectList(a.effects, r.data);
-  const ParameterLayout layout(effects);
-  const JointLayout jl(runs, layout, JointSpecOf(file),
-                       file.path.empty() ? "command line" : file.path);
+  const JointInput in = LoadJointInput(a.inputs, a.effects, a.out_json);
+  const RunsFile& file = in.file;
+  const std::vector<JointRun>& runs = in.runs;
+  const JointLayout& jl = *in.layout;
   JointOptions opt;
   opt.batch.epoch_s = a.epoch_s;
   opt.batch.derivatives.half_window_s = a.rate_window_s;

@@ -72,6 +72,21 @@ std::vector<JointRun> LoadJointRuns(const RunsFile& file) {
   return runs;
 }
 
+JointInput LoadJointInput(const std::vector<std::string>& inputs, const std::string& effects,
+                          const std::string& out_json) {
+  CheckOutputPath(out_json);
+  JointInput in;
+  in.file = RunsOfCommandLine(inputs);
+  in.runs = LoadJointRuns(in.file);
+  CheckOverwrite(out_json);
+  // The effects must suit every run's data.
+  std::vector<Effect> list;
+  for (const JointRun& r : in.runs) list = ParseEffectList(effects, r.data);
+  in.layout = std::make_unique<JointLayout>(in.runs, ParameterLayout(list), JointSpecOf(in.file),
+                                            in.file.path.empty() ? "command line" : in.file.path);
+  return in;
+}
+
 JointSpec JointSpecOf(const RunsFile& file) {
   JointSpec spec;
   spec.per_run = file.per_run;
@@ -207,16 +222,10 @@ int RunJointFit(const FitSettings& s, const std::vector<std::string>& inputs,
   if (!report_html.empty()) {
     throw InputError("--report: not available for a joint fit of several runs yet");
   }
-  CheckOutputPath(out_json);
-  const RunsFile file = RunsOfCommandLine(inputs);
-  std::vector<JointRun> runs = LoadJointRuns(file);
-  CheckOverwrite(out_json);
-  // The effects must suit every run's data.
-  std::vector<Effect> effects;
-  for (const JointRun& r : runs) effects = ParseEffectList(s.effects, r.data);
-  const ParameterLayout layout(effects);
-  const JointLayout jl(runs, layout, JointSpecOf(file),
-                       file.path.empty() ? "command line" : file.path);
+  const JointInput in = LoadJointInput(inputs, s.effects, out_json);
+  const RunsFile& file = in.file;
+  const std::vector<JointRun>& runs = in.runs;
+  const JointLayout& jl = *in.layout;
   JointOptions opt;
   opt.batch = MakeBatchOptions(s);
   StageProgress progress("fit: ");

@@ -5,6 +5,7 @@
 // runs agree.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,19 @@ RunsFile RunsOfCommandLine(const std::vector<std::string>& inputs);
 std::vector<JointRun> LoadJointRuns(const RunsFile& runs);
 
 JointSpec JointSpecOf(const RunsFile& runs);
+
+// What `fit` and `observability` on several runs start from: the runs (one
+// runs file, or several run.yaml), loaded, and their joint unknowns with
+// the effects of `effects` (checked against every run's data). Checks that
+// out_json can be written before the loading and that it is not another
+// input's result after it.
+struct JointInput {
+  RunsFile file;
+  std::vector<JointRun> runs;
+  std::unique_ptr<JointLayout> layout;
+};
+JointInput LoadJointInput(const std::vector<std::string>& inputs, const std::string& effects,
+                          const std::string& out_json);
 
 // OUT.json of a joint fit (docs/multi-run.md).
 nlohmann::json JointJson(const JointLayout& layout, const std::vector<JointRun>& runs,

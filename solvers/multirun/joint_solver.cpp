@@ -180,6 +180,31 @@ RunConsistency TestConsistency(const JointLayout& jl, int r, const BatchResult& 
   return out;
 }
 
+// The covariance over the free unknowns placed in an m x m matrix (zero for
+// the held ones).
+Eigen::MatrixXd ExpandFree(const Eigen::MatrixXd& cov_free, const std::vector<int>& free, int m) {
+  Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(m, m);
+  for (std::size_t a = 0; a < free.size(); ++a)
+    for (std::size_t b = 0; b < free.size(); ++b) cov(free[a], free[b]) = cov_free(a, b);
+  return cov;
+}
+
+// share(r, j): run r's part of the diagonal of the data information on
+// unknown free[k] (data_information over the free unknowns, in their order).
+Eigen::MatrixXd InformationShare(const std::vector<Eigen::MatrixXd>& data_information,
+                                 const std::vector<int>& free, int m) {
+  const int R = static_cast<int>(data_information.size());
+  Eigen::MatrixXd share = Eigen::MatrixXd::Zero(R, m);
+  Eigen::VectorXd total = Eigen::VectorXd::Zero(free.size());
+  for (const Eigen::MatrixXd& D : data_information) total += D.diagonal();
+  for (int r = 0; r < R; ++r) {
+    for (std::size_t k = 0; k < free.size(); ++k) {
+      if (total[k] > 0.0) share(r, free[k]) = data_information[r](k, k) / total[k];
+    }
+  }
+  return share;
+}
+
 // The hold rule (SupportedByInformation, as a single run's fit) on the
 // combined information at the nominal values, with --hold/--free on top.
 // *ev_out, when given, gets that evaluation (over every unknown).
@@ -269,18 +294,16 @@ JointInformation JointInformationAtNominal(const std::vector<JointRun>& runs,
   Eigen::MatrixXd H(nf, nf);
   for (int a = 0; a < nf; ++a)
     for (int b = 0; b < nf; ++b) H(a, b) = ev.information(free[a], free[b]);
-  const Eigen::MatrixXd cov_free = H.ldlt().solve(Eigen::MatrixXd::Identity(nf, nf));
-  out.cov = Eigen::MatrixXd::Zero(m, m);
-  for (int a = 0; a < nf; ++a)
-    for (int b = 0; b < nf; ++b) out.cov(free[a], free[b]) = cov_free(a, b);
-  out.share = Eigen::MatrixXd::Zero(R, m);
-  Eigen::VectorXd total = Eigen::VectorXd::Zero(m);
-  for (int r = 0; r < R; ++r) total += ev.data_information[r].diagonal();
-  for (int r = 0; r < R; ++r) {
-    for (int j : free) {
-      if (total[j] > 0.0) out.share(r, j) = ev.data_information[r](j, j) / total[j];
-    }
+  out.cov = ExpandFree(H.ldlt().solve(Eigen::MatrixXd::Identity(nf, nf)), free, m);
+  // The evaluation is over every unknown: its data information restricted to the free ones.
+  std::vector<Eigen::MatrixXd> data_free;
+  for (const Eigen::MatrixXd& D : ev.data_information) {
+    Eigen::MatrixXd F(nf, nf);
+    for (int a = 0; a < nf; ++a)
+      for (int b = 0; b < nf; ++b) F(a, b) = D(free[a], free[b]);
+    data_free.push_back(F);
   }
+  out.share = InformationShare(data_free, free, m);
   // Each run alone by the same rule, over its own layout at its nominal values.
   for (int r = 0; r < R; ++r) {
     const RunProblem& p = problems[r];
@@ -414,25 +437,18 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
   phi = ev.phi;
   res.phi = phi;
   res.cost = ev.cost;
-  res.cov = Eigen::MatrixXd::Zero(m, m);
   const Eigen::MatrixXd cov_free =
       ev.information.ldlt().solve(Eigen::MatrixXd::Identity(nf, nf));
-  for (int a = 0; a < nf; ++a)
-    for (int b = 0; b < nf; ++b) res.cov(free[a], free[b]) = cov_free(a, b);
+  res.cov = ExpandFree(cov_free, free, m);
 
   // Degrees of freedom and each run's share.
-  res.share = Eigen::MatrixXd::Zero(R, m);
-  Eigen::VectorXd total = Eigen::VectorXd::Zero(nf);
-  for (int r = 0; r < R; ++r) total += ev.data_information[r].diagonal();
+  res.share = InformationShare(ev.data_information, free, m);
   for (int r = 0; r < R; ++r) {
     JointRunResult& rr = res.runs[r];
     rr.theta = jl.ThetaOfRun(r, phi);
     rr.degrees_of_freedom = ev.runs[r].degrees_of_freedom;
     rr.chi2_per_dof = 2.0 * ev.runs[r].cost / std::max(1, rr.degrees_of_freedom);
     res.degrees_of_freedom += rr.degrees_of_freedom + static_cast<int>(problems[r].constraints.size());
-    for (int k = 0; k < nf; ++k) {
-      if (total[k] > 0.0) res.share(r, free[k]) = ev.data_information[r](k, k) / total[k];
-    }
   }
   res.chi2_per_dof = 2.0 * res.cost / std::max(1, res.degrees_of_freedom);
 
