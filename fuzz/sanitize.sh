@@ -21,7 +21,7 @@
 #        fuzz/sanitize.sh -R NAME    (ctest arguments: some tests only)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-flags="-O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined"
+flags="-fno-omit-frame-pointer -fsanitize=address,undefined"
 flags+=" -fno-sanitize-recover=undefined -DEIGEN_MALLOC_ALREADY_ALIGNED=1"
 launcher=()
 command -v ccache > /dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
@@ -30,9 +30,10 @@ command -v ccache > /dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 state() { git rev-parse HEAD 2> /dev/null; git status --porcelain 2> /dev/null | grep -v '^??' || true; }
 before="$(state)"
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
   "${launcher[@]}" > /dev/null
 cmake --build build-asan -j2
+echo "sanitize: build-asan built in ${SECONDS} s"
 if [ "$(state)" != "$before" ]; then
   echo "fuzz/sanitize.sh: the sources changed during the build; build-asan may hold stale objects (touch the changed headers and run again)" >&2
   exit 1
@@ -54,4 +55,5 @@ LD_PRELOAD="$(gcc -print-file-name=libasan.so):$(gcc -print-file-name=libubsan.s
   LSAN_OPTIONS=suppressions=$supp/lsan_python.supp PYTHONPATH=build-asan/python \
   PYTHONDONTWRITEBYTECODE=1 TRIADCAL_BIN=build-asan/tools/triadcal TRIADCAL_SOURCE_DIR="$PWD" \
   /usr/bin/python3 -m pytest -q -p no:cacheprovider python/tests || status=1
+echo "sanitize: build and suite in ${SECONDS} s"
 exit $status
