@@ -75,6 +75,13 @@ int RunDiagnose(const DiagnoseArgs& a) {
                 t.statistic, t.dof, t.p_value, t.selected ? "SELECTED" : "",
                 t.note.empty() ? "" : ("(" + t.note + ")").c_str());
   }
+  for (const CandidateTest& t : d.absorbing) {
+    std::printf("  round %d: %s NOT a finding (p %.3g): %s\n", t.round,
+                GetEffectSpec(t.effect).name.c_str(), t.p_value, t.absorbs.c_str());
+  }
+  for (const EffectCorrelation& c : d.correlations) {
+    std::printf("  %s correlates with %s at %+.2f\n", c.parameter.c_str(), c.with.c_str(), c.rho);
+  }
   for (const CandidateTest& t : d.tests) {
     if (t.round > 1 && t.selected) {
       std::printf("  round %d: %s selected (p %.3g)\n", t.round, GetEffectSpec(t.effect).name.c_str(),

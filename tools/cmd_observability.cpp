@@ -26,6 +26,7 @@
 #include "tools/report/observability_report.h"
 #include "core/io/runs_file_io.h"
 #include "tools/joint_fit_job.h"
+#include "tools/diagnose_job.h"
 
 namespace triadcal {
 namespace {
@@ -37,6 +38,8 @@ struct ObservabilityArgs {
   double unobservable_below = ObservabilityThresholds{}.unobservable;
   double weak_below = ObservabilityThresholds{}.weak;
   int threads = 0;
+  bool could_hide = false;
+  double alpha = 0.01;
 };
 
 // "parameters" of a fit/filter OUT ({"Kx": {"value": ...}}), of its "rts"
@@ -177,6 +180,10 @@ int RunObservability(ObservabilityArgs a) {
     SetFromFileUnits(layout, ReadParameterValues(a.at), &theta);
     at = a.at;
   }
+  if (a.could_hide && source != "scenario (simulated without noise)") {
+    throw InputError("--could-hide: needs a SCENARIO.yaml (a planned profile); for a recorded "
+                     "run, `diagnose` reports what could hide");
+  }
   // Stages, none reporting from inside. Measured shares (paper's run 90 s at
   // 1 kHz; a 25-min real run at 100 Hz): loading the run 64 % / 29 %,
   // building the problem 8 % / 1 %, the Fisher information 28 % / 70 %.
@@ -184,6 +191,16 @@ int RunObservability(ObservabilityArgs a) {
   const RunProblem p = BuildRunProblem(run, data, layout, a.epoch_s, derivatives);
   ShowProgress("observability: Fisher information", 0.4);
   const ObservabilityResult r = AnalyseObservability(run, p, theta, oo);
+  std::vector<HideCase> hide;
+  if (a.could_hide) {
+    ShowProgress("observability: what could hide (fit and score analysis)", 0.8);
+    DiagnoseOptions d;
+    d.alpha = a.alpha;
+    d.fit.epoch_s = a.epoch_s;
+    d.fit.derivatives = derivatives;
+    d.fit.threads = a.threads;
+    hide = CouldHideOnProfile(run, data, layout, theta, d);
+  }
   EndProgress();
 
   nlohmann::json out = ObservabilityJson(r);
@@ -198,12 +215,28 @@ int RunObservability(ObservabilityArgs a) {
                      {"weak_below", a.weak_below},
                      {"declared_noise_mV", run.noise_mV},
                      {"declared_angle_noise_arcsec", run.angle_noise_rad / kArcsecToRad}};
+  if (a.could_hide) {
+    out["could_hide"] = CouldHideJson(hide);
+    out["settings"]["could_hide_alpha"] = a.alpha;
+  }
   WriteJson(out, a.out_json);
   WriteReportIfAsked(a.report_html, out, a.out_json);
 
   std::printf("observability: %s, %zu samples over %.4g s, %zu epochs; evaluated at %s; %.2f s\n",
               source.c_str(), r.samples, r.duration_s, r.epochs, at.c_str(), r.seconds);
   PrintObservability(r);
+  if (a.could_hide) {
+    std::printf("could hide (alpha %.3g over %zu candidates, power 80 %%):\n", a.alpha, hide.size());
+    for (const HideCase& h : hide) {
+      if (h.direction.empty()) {
+        std::printf("  %-26s this profile cannot detect it\n", GetEffectSpec(h.effect).name.c_str());
+      } else {
+        std::printf("  %-26s up to %10.4g %-7s undetected; moves %s by up to %.3g sigma\n",
+                    GetEffectSpec(h.effect).name.c_str(), h.minimal_detectable, h.unit.c_str(),
+                    h.parameter.c_str(), h.max_shift_sigma);
+      }
+    }
+  }
   std::printf("wrote %s\n", a.out_json.c_str());
   return 0;
 }
@@ -227,6 +260,14 @@ Command AddObservabilityCommand(CLI::App& app) {
                     "evaluate at these parameters (fit/filter OUT or truth.json) instead of the "
                     "nominal values (run) or the truth (scenario)");
   c.app->add_option("--effects", a->effects, "catalogue effects to include, e.g. a,b");
+  c.app->add_flag("--could-hide", a->could_hide,
+                  "SCENARIO.yaml only: also the catalogue effects that could go undetected on "
+                  "this profile, their minimal detectable size and the largest parameter shift "
+                  "they would cause (as diagnose's could_hide)");
+  c.app->add_option("--alpha", a->alpha,
+                    "with --could-hide: the loop's false-selection rate per round")
+      ->capture_default_str()
+      ->check(CLI::Range(1e-9, 0.5));
   c.app->add_option("--epoch-s", a->epoch_s, "interval between trajectory epochs [s]")
       ->capture_default_str()
       ->check(kEpochRange);

@@ -51,54 +51,9 @@ nlohmann::json StateJson(const ParameterLayout& layout, const BatchResult& r,
 
 }  // namespace
 
-nlohmann::json DiagnoseJson(const std::string& run_yaml, double alpha, const DiagnosisResult& d,
-                            const std::map<std::string, double>* tp) {
-  nlohmann::json out;
-  out["command"] = "diagnose";
-  out["run"] = run_yaml;
-  nlohmann::json ranking = nlohmann::json::array();
-  for (const CandidateTest& t : d.ranking) {
-    ranking.push_back({{"effect", GetEffectSpec(t.effect).name},
-                       {"statistic", t.statistic},
-                       {"likelihood_ratio", t.lr},
-                       {"dof", t.dof},
-                       {"p_value", t.p_value},
-                       {"threshold", t.threshold},
-                       {"selected", t.selected},
-                       {"note", t.note},
-                       {"score", t.score},
-                       {"score_p_value", t.score_p_value},
-                       {"refit", t.refit}});
-  }
-  out["ranking"] = ranking;
-  nlohmann::json tests = nlohmann::json::array();
-  for (const CandidateTest& t : d.tests) {
-    tests.push_back({{"round", t.round},
-                     {"effect", GetEffectSpec(t.effect).name},
-                     {"statistic", t.statistic},
-                     {"dof", t.dof},
-                     {"p_value", t.p_value},
-                     {"threshold", t.threshold},
-                     {"selected", t.selected},
-                     {"score", t.score},
-                     {"score_p_value", t.score_p_value},
-                     {"refit", t.refit}});
-  }
-  out["tests"] = tests;
-  out["selected"] = nlohmann::json::array();
-  for (Effect e : d.selected) out["selected"].push_back(GetEffectSpec(e).name);
-  out["selection_rule"] =
-      "forward, one effect per round; selected when its p-value < alpha / "
-      "(candidates in the round), alpha = " +
-      std::to_string(alpha);
-  out["before"] = StateJson(d.before_layout, d.before, d.before_residuals, tp);
-  out["after"] = StateJson(d.after_layout, d.after, d.after_residuals, tp);
-  out["parameters"] = out["after"]["parameters"];
-  out["score_rule"] =
-      "every candidate is scored from the current fit (score test); refitted for the "
-      "likelihood ratio only when its score p-value < refit_factor x threshold";
+nlohmann::json CouldHideJson(const std::vector<HideCase>& could_hide) {
   nlohmann::json hide = nlohmann::json::array();
-  for (const HideCase& h : d.could_hide) {
+  for (const HideCase& h : could_hide) {
     nlohmann::json j = {{"effect", GetEffectSpec(h.effect).name},
                         {"unit", h.unit},
                         {"alpha", h.alpha},
@@ -120,7 +75,80 @@ nlohmann::json DiagnoseJson(const std::string& run_yaml, double alpha, const Dia
     }
     hide.push_back(j);
   }
-  out["could_hide"] = hide;
+  return hide;
+}
+
+nlohmann::json DiagnoseJson(const std::string& run_yaml, double alpha, const DiagnosisResult& d,
+                            const std::map<std::string, double>* tp) {
+  nlohmann::json out;
+  out["command"] = "diagnose";
+  out["run"] = run_yaml;
+  nlohmann::json ranking = nlohmann::json::array();
+  for (const CandidateTest& t : d.ranking) {
+    ranking.push_back({{"effect", GetEffectSpec(t.effect).name},
+                       {"statistic", t.statistic},
+                       {"likelihood_ratio", t.lr},
+                       {"dof", t.dof},
+                       {"p_value", t.p_value},
+                       {"threshold", t.threshold},
+                       {"selected", t.selected},
+                       {"note", t.note},
+                       {"score", t.score},
+                       {"score_p_value", t.score_p_value},
+                       {"refit", t.refit}});
+    if (t.refit) ranking.back()["chi2_per_dof_after"] = t.chi2_per_dof_after;
+    if (!t.absorbs.empty()) ranking.back()["absorbs"] = t.absorbs;
+  }
+  out["ranking"] = ranking;
+  nlohmann::json tests = nlohmann::json::array();
+  for (const CandidateTest& t : d.tests) {
+    tests.push_back({{"round", t.round},
+                     {"effect", GetEffectSpec(t.effect).name},
+                     {"statistic", t.statistic},
+                     {"dof", t.dof},
+                     {"p_value", t.p_value},
+                     {"threshold", t.threshold},
+                     {"selected", t.selected},
+                     {"score", t.score},
+                     {"score_p_value", t.score_p_value},
+                     {"refit", t.refit}});
+    if (t.refit) tests.back()["chi2_per_dof_after"] = t.chi2_per_dof_after;
+    if (!t.absorbs.empty()) tests.back()["absorbs"] = t.absorbs;
+  }
+  out["tests"] = tests;
+  auto brief = [](const CandidateTest& t) {
+    return nlohmann::json{{"round", t.round},
+                          {"effect", GetEffectSpec(t.effect).name},
+                          {"statistic", t.statistic},
+                          {"dof", t.dof},
+                          {"p_value", t.p_value},
+                          {"chi2_per_dof_after", t.chi2_per_dof_after}};
+  };
+  out["absorbing"] = nlohmann::json::array();
+  for (const CandidateTest& t : d.absorbing) {
+    out["absorbing"].push_back(brief(t));
+    out["absorbing"].back()["absorbs"] = t.absorbs;
+  }
+  out["alternatives"] = nlohmann::json::array();
+  for (const CandidateTest& t : d.alternatives) out["alternatives"].push_back(brief(t));
+  out["correlations"] = nlohmann::json::array();
+  for (const EffectCorrelation& c : d.correlations) {
+    out["correlations"].push_back(
+        {{"parameter", c.parameter}, {"with", c.with}, {"rho", c.rho}});
+  }
+  out["selected"] = nlohmann::json::array();
+  for (Effect e : d.selected) out["selected"].push_back(GetEffectSpec(e).name);
+  out["selection_rule"] =
+      "forward, one effect per round; selected when its p-value < alpha / "
+      "(candidates in the round), alpha = " +
+      std::to_string(alpha);
+  out["before"] = StateJson(d.before_layout, d.before, d.before_residuals, tp);
+  out["after"] = StateJson(d.after_layout, d.after, d.after_residuals, tp);
+  out["parameters"] = out["after"]["parameters"];
+  out["score_rule"] =
+      "every candidate is scored from the current fit (score test); refitted for the "
+      "likelihood ratio only when its score p-value < refit_factor x threshold";
+  out["could_hide"] = CouldHideJson(d.could_hide);
   out["unexplained_structure"] = d.unexplained;
   out["notes"] = d.notes;
   out["verdict"] = d.verdict;

@@ -15,6 +15,10 @@ namespace triadcal {
 nlohmann::json DiagnoseJson(const std::string& run_yaml, double alpha, const DiagnosisResult& d,
                             const std::map<std::string, double>* truth);
 
+// The "could_hide" array of OUT (docs/file-formats.md), also written by
+// `observability --could-hide`.
+nlohmann::json CouldHideJson(const std::vector<HideCase>& could_hide);
+
 // `diagnose` with its default settings (alpha 0.01, at most 4 effects, every
 // candidate) at the given epoch interval and fit threads.
 nlohmann::json DiagnoseRun(const std::string& run_yaml, const LoadedRun& run, double epoch_s,

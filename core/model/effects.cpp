@@ -124,6 +124,7 @@ const std::vector<EffectSpec>& EffectCatalogue() {
       e.plausible_reason =
           "the scale asymmetry of MEMS accelerometers is below 1 % of the scale; 10 % is a "
           "damaged sensor";
+      e.needs.both_signs_per_axis = true;
       c.push_back(e);
     }
     {

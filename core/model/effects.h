@@ -92,6 +92,11 @@ struct ParamSpec {
 struct EffectNeeds {
   bool temp_C = false;                 // a temp_C column (a temperature section to simulate)
   bool rates_at_every_sample = false;  // lambda', lambda'' at every sample, not only at epochs
+  // Parameter i belongs to axis i and needs that axis's reading to leave its
+  // zero offset clearly on both sides (beyond 4 noise sigma, on at least 5 %
+  // of the samples each way): scale_asymmetry, whose |u| is otherwise K u or
+  // a function of the noise's sign (effect_information.cpp).
+  bool both_signs_per_axis = false;
 };
 
 struct EffectSpec {

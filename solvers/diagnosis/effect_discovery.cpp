@@ -65,12 +65,113 @@ std::string FormatNumber(double x) {
   return o.str();
 }
 
+// Why effect e's fitted size in r cannot be a finding: the first parameter
+// beyond its plausible range, or "" when all are within.
+std::string Implausible(const RunDescription& run, const ParameterLayout& layout,
+                        const BatchResult& r, Effect e) {
+  const EffectSpec& spec = GetEffectSpec(e);
+  const double k_nom = run.scale_mV_per_g.cwiseAbs().maxCoeff();
+  for (std::size_t q = 0; q < spec.params.size(); ++q) {
+    const ParamSpec& ps = spec.params[q];
+    const double v = r.estimate.theta[layout.offset(e) + static_cast<int>(q)] / ps.si_per_unit;
+    const double lo = PlausibleMin(spec, ps, k_nom), hi = PlausibleMax(spec, ps, k_nom);
+    if (v < lo || v > hi) {
+      return spec.name + "." + ps.name + " = " + FormatNumber(v) + " " + ps.unit +
+             " is beyond its plausible range " + FormatNumber(lo) + " to " + FormatNumber(hi) +
+             " " + ps.unit + " (" + spec.plausible_reason + ")";
+    }
+  }
+  return "";
+}
+
+// For every parameter of the effects in `effects`, the free base parameter
+// (not of an effect) it correlates with most in r's covariance.
+std::vector<EffectCorrelation> Correlations(const ParameterLayout& layout, const BatchResult& r,
+                                            const std::vector<Effect>& effects) {
+  std::vector<EffectCorrelation> out;
+  const Eigen::MatrixXd& C = r.estimate.cov;
+  if (C.rows() != layout.size()) return out;
+  for (Effect e : effects) {
+    const EffectSpec& spec = GetEffectSpec(e);
+    for (std::size_t q = 0; q < spec.params.size(); ++q) {
+      const int i = layout.offset(e) + static_cast<int>(q);
+      if (!(C(i, i) > 0.0)) continue;
+      EffectCorrelation c;
+      c.parameter = spec.name + "." + spec.params[q].name;
+      for (int j = 0; j < layout.size(); ++j) {
+        if (layout.info(j).effect || !(C(j, j) > 0.0)) continue;
+        const double rho = C(i, j) / std::sqrt(C(i, i) * C(j, j));
+        if (c.with.empty() || std::abs(rho) > std::abs(c.rho)) {
+          c.rho = rho;
+          c.with = layout.info(j).name;
+        }
+      }
+      if (!c.with.empty()) out.push_back(c);
+    }
+  }
+  return out;
+}
+
 std::vector<Effect> WithEffect(std::vector<Effect> v, Effect e) {
   v.push_back(e);
   return v;
 }
 
 }  // namespace
+
+std::vector<Effect> CatalogueCandidates(const RunData& data, const std::vector<Effect>& current,
+                                        std::vector<std::string>* notes) {
+  // Effects need the data their catalogue entry names (temp_C). With temp_C
+  // recorded and (nearly) linear in time, a zero-offset drift in time and
+  // one in temperature are the same function of the samples: test the
+  // temperature form only (docs/method.md lists them as one effect).
+  std::vector<Effect> out;
+  const bool temp_linear_in_time =
+      data.has_temp() && std::abs(Correlation(data.t_s, data.temp_C)) > 0.99;
+  for (const EffectSpec& e : EffectCatalogue()) {
+    if (std::find(current.begin(), current.end(), e.id) != current.end()) continue;
+    if (e.needs.temp_C && !data.has_temp()) continue;
+    if (e.zero_offset_signal == ZeroOffsetSignal::kTime_s && temp_linear_in_time) {
+      const std::string same = SameZeroOffsetSignal(ZeroOffsetSignal::kTempRise_C);
+      if (!same.empty()) {
+        if (notes) {
+          notes->push_back(e.name + " not tested apart from " + same +
+                           ": temp_C is linear in time in this run, so the two are the same");
+        }
+        continue;
+      }
+    }
+    out.push_back(e.id);
+  }
+  return out;
+}
+
+std::vector<HideCase> CouldHideOnProfile(const RunDescription& run, const RunData& noise_free,
+                                         const ParameterLayout& layout, const Eigen::VectorXd& theta,
+                                         const DiagnoseOptions& options) {
+  const std::vector<Effect> candidates =
+      options.candidates.empty() ? CatalogueCandidates(noise_free, layout.effects(), nullptr)
+                                 : options.candidates;
+  if (candidates.empty()) return {};
+  BatchOptions o = options.fit;
+  o.estimate_noise = false;
+  o.init = BatchInit::kGiven;
+  o.init_theta = theta;
+  RunDescription declared = run;
+  declared.noise_auto = false;  // the scenario's declared noise
+  const BatchResult fit = SolveBatch(declared, noise_free, layout, o);
+  const EffectInformation info =
+      AnalyseCandidates(declared, noise_free, layout.effects(), fit, candidates, o);
+  const double threshold = options.alpha / static_cast<double>(candidates.size());
+  std::vector<HideCase> out;
+  for (const CandidateInformation& c : info.candidates) {
+    out.push_back(MinimalDetectable(info, c, threshold, options.power));
+  }
+  std::stable_sort(out.begin(), out.end(), [](const HideCase& a, const HideCase& b) {
+    return a.max_shift_sigma > b.max_shift_sigma;
+  });
+  return out;
+}
 
 DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data,
                          const DiagnoseOptions& options) {
@@ -95,27 +196,8 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
     if (opt.progress) opt.progress(s);
   };
   DiagnosisResult res;
-  std::vector<Effect> candidates = opt.candidates;
-  if (candidates.empty()) {
-    // Effects need the data their catalogue entry names (temp_C). With temp_C
-    // recorded and (nearly) linear in time, a zero-offset drift in time and
-    // one in temperature are the same function of the samples: test the
-    // temperature form only (docs/method.md lists them as one effect).
-    const bool temp_linear_in_time =
-        data.has_temp() && std::abs(Correlation(data.t_s, data.temp_C)) > 0.99;
-    for (const EffectSpec& e : EffectCatalogue()) {
-      if (e.needs.temp_C && !data.has_temp()) continue;
-      if (e.zero_offset_signal == ZeroOffsetSignal::kTime_s && temp_linear_in_time) {
-        const std::string same = SameZeroOffsetSignal(ZeroOffsetSignal::kTempRise_C);
-        if (!same.empty()) {
-          res.notes.push_back(e.name + " not tested apart from " + same +
-                              ": temp_C is linear in time in this run, so the two are the same");
-          continue;
-        }
-      }
-      candidates.push_back(e.id);
-    }
-  }
+  std::vector<Effect> candidates =
+      opt.candidates.empty() ? CatalogueCandidates(data, {}, &res.notes) : opt.candidates;
 
   // Progress: every fit reports into [span_begin, span_end].
   double span_begin = 0.0, span_end = 0.15;
@@ -222,11 +304,13 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
       t.dof = k - held_new;
       t.lr = 2.0 * (fit.final_cost - r.final_cost);
       t.statistic = std::max(0.0, t.lr) / std::max(1.0, r.chi2_per_dof);
+      t.chi2_per_dof_after = r.chi2_per_dof;
       if (t.dof == 0) {
         t.p_value = 1.0;
         t.note = "not supported by this run's motion";
       } else {
         t.p_value = ChiSquareSurvival(t.statistic, t.dof);
+        t.absorbs = Implausible(run, aug, r, e);
       }
       tests.push_back(t);
       refits.push_back(std::move(r));
@@ -241,17 +325,57 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
     std::vector<CandidateTest> sorted;
     for (int i : order) sorted.push_back(tests[i]);
     for (CandidateTest& t : sorted) t.threshold = threshold;
-    const bool pass = sorted.front().refit && sorted.front().p_value < threshold;
-    if (pass) sorted.front().selected = true;
+    if (round == 1) {
+      for (const CandidateInformation& c : info.candidates) {
+        const EffectSpec& spec = GetEffectSpec(c.effect);
+        for (const auto& [q, why] : c.held_because) {
+          res.notes.push_back(spec.name + "." + spec.params[q].name + " held, not tested: " + why);
+        }
+      }
+    }
+    // The first significant candidate of plausible size is selected; the
+    // significant ones before it absorb something else.
+    int pick = -1;
+    for (std::size_t i = 0; i < sorted.size() && pick < 0; ++i) {
+      CandidateTest& t = sorted[i];
+      if (!t.refit || !(t.p_value < threshold)) break;
+      if (t.absorbs.empty()) {
+        pick = static_cast<int>(i);
+      } else {
+        res.absorbing.push_back(t);
+        candidates.erase(std::find(candidates.begin(), candidates.end(), t.effect));
+      }
+    }
+    const bool pass = pick >= 0;
+    if (pass) {
+      sorted[pick].selected = true;
+      const CandidateTest& s = sorted[pick];
+      for (std::size_t i = pick + 1; i < sorted.size(); ++i) {
+        const CandidateTest& t = sorted[i];
+        if (!t.refit || !(t.p_value < threshold) || !t.absorbs.empty()) continue;
+        if ((s.statistic - s.dof) - (t.statistic - t.dof) < 2.0 * std::log(10.0)) {
+          res.alternatives.push_back(t);
+          res.notes.push_back(
+              "round " + std::to_string(round) + ": " + GetEffectSpec(t.effect).name +
+              " explains the residual about as well as " + GetEffectSpec(s.effect).name +
+              " (chi2/dof " + FormatNumber(fit.chi2_per_dof) + " -> " +
+              FormatNumber(t.chi2_per_dof_after) + " against -> " +
+              FormatNumber(s.chi2_per_dof_after) + "; statistic " +
+              FormatNumber(t.statistic) + " against " + FormatNumber(s.statistic) +
+              "): the data do not tell them apart; " + GetEffectSpec(s.effect).name +
+              " was selected for its smaller p-value");
+        }
+      }
+    }
     if (round == 1) res.ranking = sorted;
     res.tests.insert(res.tests.end(), sorted.begin(), sorted.end());
     if (!pass) break;
-    const Effect chosen = sorted.front().effect;
+    const Effect chosen = sorted[pick].effect;
     res.selected.push_back(chosen);
     current.push_back(chosen);
     const ParameterLayout next(current);
     // The selected candidate's refit (with its covariance) is the new fit.
-    fit = std::move(refits[order.front()]);
+    fit = std::move(refits[order[pick]]);
     info_current = false;
     round_begin = round_end;
     round_end += 0.6 * (0.95 - round_end);
@@ -267,6 +391,7 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
       last_threshold = opt.alpha / static_cast<double>(candidates.size());
     }
     for (const CandidateInformation& c : info.candidates) {
+      if (std::find(candidates.begin(), candidates.end(), c.effect) == candidates.end()) continue;
       res.could_hide.push_back(MinimalDetectable(info, c, last_threshold, opt.power));
     }
     std::stable_sort(res.could_hide.begin(), res.could_hide.end(),
@@ -281,7 +406,8 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
   res.after_residuals = res.selected.empty()
                             ? res.before_residuals
                             : AnalyzeResiduals(run, data, res.after_layout, res.after);
-  res.unexplained = res.after_residuals.structure;
+  res.unexplained = res.after_residuals.structure || !res.absorbing.empty();
+  res.correlations = Correlations(res.after_layout, res.after, res.selected);
 
   std::ostringstream v;
   if (res.selected.empty()) {
@@ -290,8 +416,15 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
     v << "added";
     for (Effect e : res.selected) v << " " << GetEffectSpec(e).name;
   }
-  if (res.unexplained) {
+  for (const CandidateTest& t : res.absorbing) {
+    v << "; " << GetEffectSpec(t.effect).name << " fits the residual (p " << FormatNumber(t.p_value)
+      << ") only with " << t.absorbs << ": it ABSORBS SOMETHING ELSE, not reported as found";
+  }
+  if (res.after_residuals.structure) {
     v << "; STRUCTURE REMAINS that no candidate explains: " << res.after_residuals.structure_summary;
+  } else if (res.unexplained) {
+    v << "; the residual looks white (chi2/dof " << std::round(1000 * res.after.chi2_per_dof) / 1000
+      << ") but something outside the catalogue remains (above)";
   } else {
     v << "; the residual is consistent with the declared noise (white, chi2/dof "
       << std::round(1000 * res.after.chi2_per_dof) / 1000 << ")";

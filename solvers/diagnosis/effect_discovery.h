@@ -26,6 +26,16 @@
 // false selection in a round stays below alpha). Rounds stop when nothing
 // passes. Afterwards the residual is analysed again; structure that no
 // candidate explained is reported with what it correlates with.
+//
+// Plausibility (issue 12): a candidate that passes only with a parameter
+// beyond its plausible range (EffectSpec) absorbs something else: it is
+// reported as such (DiagnosisResult::absorbing, and the residual is called
+// unexplained), not selected, and not tested again; the next candidate of the
+// round may be selected. Components of an effect that only a base parameter's
+// prior or hold determine are held, not tested (effect_information.h).
+// Candidates that explain the residual about as well as the selected one are
+// listed as alternatives, and every selected effect's correlation with the
+// base parameters is reported.
 #pragma once
 
 #include <functional>
@@ -74,6 +84,19 @@ struct CandidateTest {
   bool refit = false;          // lr, statistic, p_value from a refit (else from the score)
   bool selected = false;
   std::string note;            // e.g. why it could not be tested
+  double chi2_per_dof_after = 0.0;  // of the refit with the effect added (refit only)
+  // Non-empty: the effect passes the test only with a size beyond its
+  // plausible range (EffectSpec), so it absorbs something else and is not a
+  // finding: which parameter, its value and the range.
+  std::string absorbs;
+};
+
+// How a selected effect's parameters correlate with the base parameters in
+// its fit: the base parameter each one correlates with most.
+struct EffectCorrelation {
+  std::string parameter;  // e.g. "angle_latency.tau"
+  std::string with;       // e.g. "dz2"
+  double rho = 0.0;
 };
 
 struct DiagnosisResult {
@@ -87,6 +110,13 @@ struct DiagnosisResult {
   // could be and go undetected, and what it would then do to the parameters
   // (largest max_shift_sigma first).
   std::vector<HideCase> could_hide;
+  // Significant candidates that fit only with an implausible size (absorbs).
+  std::vector<CandidateTest> absorbing;
+  // Candidates that explain the residual about as well as the one selected in
+  // their round (likelihood-ratio excess over dof within 2 ln 10, i.e. an
+  // evidence ratio below 10), with their refit's chi2/dof.
+  std::vector<CandidateTest> alternatives;
+  std::vector<EffectCorrelation> correlations;  // of every selected effect, at the final fit
   double base_gradient_sigma = 0.0;    // effect_information.h's check, first round
   bool unexplained = false;            // structure remains after the selection
   std::vector<std::string> notes;      // e.g. candidates merged or skipped, and why
@@ -95,5 +125,21 @@ struct DiagnosisResult {
 
 DiagnosisResult Diagnose(const RunDescription& run, const RunData& data,
                          const DiagnoseOptions& options);
+
+// The catalogue effects a run can carry (its data have what they need; a
+// drift in time is left out when temp_C is linear in time, with a note), less
+// those in `current`.
+std::vector<Effect> CatalogueCandidates(const RunData& data, const std::vector<Effect>& current,
+                                        std::vector<std::string>* notes);
+
+// The could-hide list of a planned profile (issue 12: observability and design
+// report it before any run): noise-free data of the profile fitted by the
+// declared model started at theta (the truth: the fit reproduces the data),
+// then Diagnose's reliability analysis of every candidate (options.candidates,
+// or CatalogueCandidates) at the first round's threshold alpha / m. Depends on
+// the profile and the declared noise, not on any noise draw.
+std::vector<HideCase> CouldHideOnProfile(const RunDescription& run, const RunData& noise_free,
+                                         const ParameterLayout& layout, const Eigen::VectorXd& theta,
+                                         const DiagnoseOptions& options);
 
 }  // namespace triadcal

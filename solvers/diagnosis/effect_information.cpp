@@ -4,6 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 
@@ -49,6 +50,66 @@ std::vector<int> Supported(Eigen::MatrixXd S, double min_info) {
   }
   std::sort(kept.begin(), kept.end());
   return kept;
+}
+
+// Leaning (issue 12): the conditional information of the columns `cols`
+// (prior units: scaled by prior_sigma, their own prior removed) given the base
+// parameters `anchored`, with the prior information of the anchored entries
+// listed in `only` (all when empty) loosened kLoosen times -- and the held
+// ones, which are free in I under their priors, released the same way. What
+// survives is what the data determine apart from the base parameters' priors
+// and holds; a component with (nearly) nothing left rides on a direction the
+// run does not determine.
+constexpr double kLoosen = 1e4;
+Eigen::MatrixXd LooseConditional(const Eigen::MatrixXd& I, const std::vector<int>& anchored,
+                                 const Eigen::VectorXd& anchored_prior_info,
+                                 const std::vector<int>& only, const std::vector<int>& cols,
+                                 const Eigen::VectorXd& prior_sigma) {
+  Eigen::MatrixXd Iaa = Rows(I, anchored, anchored);
+  const double keep = 1.0 / kLoosen;
+  if (only.empty()) {
+    Iaa.diagonal() -= (1.0 - keep) * anchored_prior_info;
+  } else {
+    for (int a : only) Iaa(a, a) -= (1.0 - keep) * anchored_prior_info[a];
+  }
+  const Eigen::MatrixXd Iac = Rows(I, anchored, cols);
+  Eigen::MatrixXd N = Rows(I, cols, cols) - Iac.transpose() * Iaa.ldlt().solve(Iac);
+  N.diagonal() -= prior_sigma.cwiseInverse().cwiseAbs2();
+  return prior_sigma.asDiagonal() * N * prior_sigma.asDiagonal();
+}
+
+// For an effect whose parameter i belongs to axis i and needs it reversed
+// (EffectNeeds::both_signs_per_axis): per parameter, why its axis does not
+// reverse, or "" when it does (or the effect has no such need). The reading
+// less the zero offset of the current fit must exceed 4 noise sigma on at
+// least 5 % of the samples each way: below that, the sign of u that |u|
+// needs is the noise's, and a one-signed axis makes |u| = +-u, the scale.
+std::vector<std::string> OneSidedAxes(const EffectSpec& spec, const RunData& data,
+                                      const Eigen::Vector3d& noise_mV,
+                                      const Eigen::VectorXd& theta) {
+  std::vector<std::string> why(spec.params.size());
+  if (!spec.needs.both_signs_per_axis) return why;
+  constexpr double kSigmas = 4.0, kShare = 0.05;
+  static const char* const kAxis[3] = {"x", "y", "z"};
+  for (std::size_t q = 0; q < spec.params.size() && q < 3; ++q) {
+    const double w0 = theta[kW0x + static_cast<int>(q)], band = kSigmas * noise_mV[q];
+    std::size_t pos = 0, neg = 0;
+    for (double w : data.w_mV[q]) {
+      pos += w - w0 > band ? 1 : 0;
+      neg += w - w0 < -band ? 1 : 0;
+    }
+    const double n = static_cast<double>(std::max<std::size_t>(1, data.size()));
+    if (pos < kShare * n || neg < kShare * n) {
+      char buf[200];
+      std::snprintf(buf, sizeof buf,
+                    "the %s axis does not reverse (its reading leaves the zero offset by more "
+                    "than %.0f noise sigma on %.1f %% of the samples upwards and %.1f %% "
+                    "downwards; %.0f %% needed each way)",
+                    kAxis[q], kSigmas, 100.0 * pos / n, 100.0 * neg / n, 100.0 * kShare);
+      why[q] = buf;
+    }
+  }
+  return why;
 }
 
 // The thinning that brings a run to about rate_hz (as the hold decision's).
@@ -120,10 +181,12 @@ EffectInformation AnalyseCandidates(const RunDescription& run, const RunData& da
     p = BuildRunProblem(run, data, full, options.epoch_s, options.derivatives);
   }
   p.noise_mV = pc.noise_mV;
+  // The fit's held parameters stay free in p, under their priors: they are
+  // not base parameters of the tests below (those hold them), only of the
+  // check that an effect does not ride on them (LooseConditional).
   std::vector<int> held;
   for (const std::string& h : fit.held) held.push_back(full.IndexOf(h));
   std::sort(held.begin(), held.end());
-  p.Hold(held);
   Eigen::VectorXd theta = Eigen::VectorXd::Zero(full.size());
   for (int i = 0; i < cur.size(); ++i)
     theta[full.IndexOf(cur.info(i).name)] = fit.estimate.theta[i];
@@ -174,10 +237,21 @@ EffectInformation AnalyseCandidates(const RunDescription& run, const RunData& da
   out.chi2_per_dof = fit.chi2_per_dof;
   std::vector<int> base;
   for (int i = 0; i < cur.size(); ++i) {
-    const int j = free_of[full.IndexOf(cur.info(i).name)];
-    if (j < 0) continue;
-    base.push_back(j);
+    const int f = full.IndexOf(cur.info(i).name);
+    if (std::binary_search(held.begin(), held.end(), f)) continue;
+    base.push_back(free_of[f]);
     out.base_names.push_back(cur.info(i).name);
+  }
+  // Every base parameter, free or held, with its prior's information (for LooseConditional).
+  std::vector<int> anchored = base;
+  std::vector<std::string> anchored_names = out.base_names;
+  for (int i : held) {
+    anchored.push_back(free_of[i]);
+    anchored_names.push_back(full.info(i).name);
+  }
+  Eigen::VectorXd anchored_prior_info(anchored.size());
+  for (std::size_t a = 0; a < anchored.size(); ++a) {
+    anchored_prior_info[a] = 1.0 / std::pow(p.prior.sigma[p.free[anchored[a]]], 2);
   }
   const Eigen::MatrixXd Ibb = Rows(I, base, base);
   const Eigen::LDLT<Eigen::MatrixXd> bb(Ibb);
@@ -201,11 +275,48 @@ EffectInformation AnalyseCandidates(const RunDescription& run, const RunData& da
     Eigen::MatrixXd N_all = Rows(I, cols, cols) - Ibe_all.transpose() * bb.solve(Ibe_all);
     N_all.diagonal() -= prior_sigma.cwiseInverse().cwiseAbs2();
     const Eigen::MatrixXd Np = prior_sigma.asDiagonal() * N_all * prior_sigma.asDiagonal();
-    c.supported = Supported(Np, options.holding.min_information_effects);
+    // Supported: by the data apart from what the base parameters' priors and
+    // holds supply (LooseConditional); a component that only those determine is
+    // held, with the base parameter it leans on named.
+    const std::vector<int> by_data = Supported(Np, options.holding.min_information_effects);
+    // Components whose axis never reverses are left out before the rest is
+    // decided (their information is that of the noise's sign, or of K u).
+    const std::vector<std::string> one_sided = OneSidedAxes(GetEffectSpec(e), data, pc.noise_mV,
+                                                            fit.estimate.theta);
+    std::vector<int> two_sided;
     for (int q = 0; q < k_all; ++q) {
-      if (std::find(c.supported.begin(), c.supported.end(), q) == c.supported.end()) {
-        c.unsupported.push_back(q);
+      if (one_sided[q].empty()) two_sided.push_back(q);
+    }
+    const Eigen::MatrixXd Nloose = LooseConditional(I, anchored, anchored_prior_info, {}, cols,
+                                                    prior_sigma);
+    for (int q : Supported(Rows(Nloose, two_sided, two_sided),
+                           options.holding.min_information_effects)) {
+      c.supported.push_back(two_sided[q]);
+    }
+    for (int q = 0; q < k_all; ++q) {
+      if (std::find(c.supported.begin(), c.supported.end(), q) != c.supported.end()) continue;
+      c.unsupported.push_back(q);
+      if (std::find(by_data.begin(), by_data.end(), q) == by_data.end()) continue;
+      if (!one_sided[q].empty()) {
+        c.held_because.emplace_back(q, one_sided[q]);
+        continue;
       }
+      // Which base parameter's prior or hold supplies what q needs: the one
+      // whose loosening alone removes the most of q's conditional information.
+      double least = std::numeric_limits<double>::infinity();
+      std::string on;
+      for (std::size_t a = 0; a < anchored.size(); ++a) {
+        const double left =
+            LooseConditional(I, anchored, anchored_prior_info, {static_cast<int>(a)}, {cols[q]},
+                             prior_sigma.segment(q, 1))(0, 0);
+        if (left < least) {
+          least = left;
+          on = anchored_names[a];
+        }
+      }
+      c.held_because.emplace_back(q, "this run determines it only through " + on +
+                                         "'s prior or hold (" + on +
+                                         " is not determined by this run)");
     }
     const int k = static_cast<int>(c.supported.size());
     if (k > 0) {

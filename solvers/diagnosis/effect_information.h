@@ -26,8 +26,11 @@
 // Which of an effect's parameters the run supports is decided as the batch
 // solver's hold policy does (pivoted Cholesky of the data information in prior
 // units, keeping each with at least HoldPolicy::min_information_effects),
-// here conditional on the free base parameters: the same degrees of freedom
-// the refit would test.
+// here conditional on the base parameters with their priors loosened 1e4
+// times and the held ones released the same way: a component that only a
+// base parameter's prior or hold determines (it rides on a direction the run
+// does not determine) is held in the refit, not tested, and named with that
+// parameter (leans_on).
 //
 // Reliability. An effect of size nabla (k_e-vector) makes the test statistic
 // noncentral with lambda = nabla^T N nabla, N = I_ee - I_eb I_bb^-1 I_be (the
@@ -58,6 +61,12 @@ struct CandidateInformation {
   Effect effect;
   std::vector<int> supported;    // indices into the effect's params the run supports
   std::vector<int> unsupported;  // the others (held in a refit)
+  // Why components are held although their information alone would let them
+  // be tested: the axis never reverses (EffectNeeds::both_signs_per_axis), or
+  // the data support them only through a base parameter's prior or hold
+  // (LooseConditional in effect_information.cpp; e.g. scale_asymmetry.dKx on
+  // Kx when the x axis only ever sees +g). Component index, reason.
+  std::vector<std::pair<int, std::string>> held_because;
   double score = 0.0;            // S (unscaled)
   double statistic = 0.0;        // S / max(1, predicted chi2/dof)
   double p_value = 1.0;
