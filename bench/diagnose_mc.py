@@ -12,8 +12,16 @@ declared in run.yaml), runs `triadcal diagnose --truth`, and reports:
   chosen  share of seeds where it is selected
   false   share of seeds where some other effect is selected
   within3 share of seeds where after the loop every parameter is within 3 sigma
+  honest  share of seeds where either the effect is selected and every parameter
+          ends within 3 sigma, or "could_hide" names the effect with a
+          max_shift_sigma at least as large as the worst |error/sigma| left
+          (issue 12's target: 100 %)
+  absorb  share of seeds where some candidate was reported as absorbing
+          something else (a significant fit of implausible size)
 The targets (issue 5): first >= 95 %, within3 >= 95 %; clean: nothing selected
-in >= 95 % of seeds.
+in >= 95 % of seeds. For the clean case it also prints the could-hide list's
+effects and the spread of their minimal detectable sizes over the seeds (a
+property of the profile: the same effects on every seed).
 """
 import argparse
 import concurrent.futures as cf
@@ -48,6 +56,10 @@ EFFECTS = {
     # a noise-free likelihood ratio of ~35-40, enough for 95 % detection.
     "scale_asymmetry~x2.8": "{dKx_mV_per_g: 0.84, dKy_mV_per_g: -0.84, dKz_mV_per_g: 0.84}",
     "size_effect~x1.3": "{ry_x_mm: 29.0, rz_y_mm: -29.0}",
+    # Issue 12's hide cases: a 6' first harmonic of the outer encoder (45 deg
+    # phase: its sine part is a reparametrisation of the base model, its
+    # cosine part nearly one), and the 4-sigma scale asymmetry above.
+    "encoder_harmonic~outer6": "{l1_sin_arcmin: 4.24, l1_cos_arcmin: 4.24}",
 }
 
 # Effects counted as the same finding: a temperature that is linear in time
@@ -84,7 +96,15 @@ def one(effect, seed, work):
     first = out["ranking"][0]["effect"] if out["ranking"] else ""
     errs = out["after"].get("error_vs_truth", {})
     worst = max((abs(v["error_in_sigma"]) for v in errs.values()), default=0.0)
-    return {"first": first, "selected": out["selected"], "worst_after": worst}
+    name = (effect or "").split("~")[0]
+    ok_names = SAME.get(name, {name})
+    hide = {h["effect"]: h for h in out.get("could_hide", [])}
+    named = any(n in hide and (hide[n]["max_shift_sigma"] or 0.0) >= worst for n in ok_names)
+    chosen = bool(ok_names & set(out["selected"]))
+    return {"first": first, "selected": out["selected"], "worst_after": worst,
+            "honest": (chosen and worst <= 3.0) or named or (not effect and worst <= 3.0),
+            "absorbing": bool(out.get("absorbing")),
+            "hide": {h["effect"]: h["minimal_detectable"] for h in out.get("could_hide", [])}}
 
 
 def bias(effect, work):
@@ -95,9 +115,19 @@ def bias(effect, work):
     run([BIN, "simulate", scen, "-o", d])
     run([BIN, "fit", os.path.join(d, "run.yaml"), "-o", os.path.join(d, "fit.json")])
     truth = json.load(open(os.path.join(d, "truth.json")))["parameters"]
-    fit = json.load(open(os.path.join(d, "fit.json")))["parameters"]
-    return max(abs(p["value"] - truth[n]) / p["sigma"] for n, p in fit.items()
-               if n in truth and p.get("estimable", True))
+    out = json.load(open(os.path.join(d, "fit.json")))
+    fit = out["parameters"]
+    # On noise-free data `fit` estimates the noise from the residual (the
+    # effect's misfit, ~0.1 mV) and its sigma shrink with it; the bias is
+    # meant in the sigma of a run with the declared noise, so they are scaled
+    # back by the ratio of the declared to the used noise (RMS over channels).
+    nz = out.get("noise", {})
+    ratio = 1.0
+    if nz.get("used_mV") and nz.get("declared_mV"):
+        rms = lambda v: (sum(x * x for x in v) / len(v)) ** 0.5
+        ratio = rms(nz["declared_mV"]) / rms(nz["used_mV"])
+    return max(abs(p["value"] - truth[n]) / (p["sigma"] * ratio) for n, p in fit.items()
+               if n in truth and p.get("estimable", True) and p.get("sigma"))
 
 
 def main():
@@ -109,7 +139,7 @@ def main():
     a = ap.parse_args()
     work = a.keep or tempfile.mkdtemp()
     cases = [e for e in a.effects.split(",") if e]
-    print(f"{'case':26s} {'bias':>6s} {'first':>6s} {'chosen':>7s} {'false':>6s} {'within3':>8s}  (N={a.seeds})")
+    print(f"{'case':26s} {'bias':>6s} {'first':>6s} {'chosen':>7s} {'false':>6s} {'within3':>8s} {'honest':>7s} {'absorb':>7s}  (N={a.seeds})")
     ok = True
     for case in cases:
         effect = "" if case == "clean" else case
@@ -123,7 +153,25 @@ def main():
         chosen = sum(bool(ok_names & set(r["selected"])) for r in res) / n if effect else float("nan")
         false = sum(any(s not in ok_names for s in r["selected"]) for r in res) / n
         within = sum(r["worst_after"] <= 3.0 for r in res) / n
-        print(f"{case:26s} {b:6.1f} {first:6.0%} {chosen:7.0%} {false:6.0%} {within:8.0%}")
+        honest = sum(r["honest"] for r in res) / n
+        absorb = sum(r["absorbing"] for r in res) / n
+        print(f"{case:26s} {b:6.1f} {first:6.0%} {chosen:7.0%} {false:6.0%} {within:8.0%} {honest:7.0%} {absorb:7.0%}")
+        if not effect:
+            # The list on the seeds where nothing was selected (a selection
+            # removes its effect from the list).
+            quiet = [r for r in res if not r["selected"]]
+            kinds = {tuple(sorted(r["hide"])) for r in quiet}
+            common = max(kinds, key=lambda k: sum(tuple(sorted(r["hide"])) == k for r in quiet))
+            print(f"  could_hide on the {len(quiet)} seeds with nothing selected: {len(common)} "
+                  f"effects; the same list on every one of them: {len(kinds) == 1}")
+            for e in common:
+                v = [r["hide"][e] for r in quiet if r["hide"].get(e) is not None]
+                if v:
+                    m = sum(v) / len(v)
+                    sd = (sum((x - m) ** 2 for x in v) / max(1, len(v) - 1)) ** 0.5
+                    print(f"    {e:26s} minimal detectable {m:10.4g} (sd over seeds {sd / m:.1%})")
+                else:
+                    print(f"    {e:26s} not detectable on this profile")
         sys.stdout.flush()
         if effect:
             ok &= first >= 0.95 and within >= 0.95
