@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
 #include <sstream>
 #include <unistd.h>
 
@@ -18,7 +19,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// Readers note their files from several threads at once (`batch` loads its
+// units in parallel: ASan found the race on `inputs`), so every access holds
+// the mutex.
 struct OutputGuard {
+  std::mutex mutex;
   bool on = false;
   std::vector<std::string> inputs, outputs;
 };
@@ -41,14 +46,28 @@ bool SameFile(const std::string& a, const std::string& b) {
 
 }  // namespace
 
-void EnableOutputGuard() { Guard().on = true; }
+void EnableOutputGuard() {
+  const std::lock_guard<std::mutex> lock(Guard().mutex);
+  Guard().on = true;
+}
+
+void DisableOutputGuard() {
+  OutputGuard& g = Guard();
+  const std::lock_guard<std::mutex> lock(g.mutex);
+  g.on = false;
+  g.inputs.clear();
+  g.outputs.clear();
+}
 
 void NoteInputFile(const std::string& path) {
-  if (Guard().on) Guard().inputs.push_back(path);
+  OutputGuard& g = Guard();
+  const std::lock_guard<std::mutex> lock(g.mutex);
+  if (g.on) g.inputs.push_back(path);
 }
 
 void NoteOutputFile(const std::string& path) {
   OutputGuard& g = Guard();
+  const std::lock_guard<std::mutex> lock(g.mutex);
   if (!g.on) return;
   for (const std::string& out : g.outputs) {
     if (SameFile(out, path)) {
@@ -59,7 +78,8 @@ void NoteOutputFile(const std::string& path) {
 }
 
 void CheckOutputsAreNotInputs(const std::string& path) {
-  const OutputGuard& g = Guard();
+  OutputGuard& g = Guard();
+  const std::lock_guard<std::mutex> lock(g.mutex);
   if (!g.on) return;
   std::vector<std::string> outs = g.outputs;
   outs.push_back(path);

@@ -14,7 +14,10 @@ void WriteFileAtomically(const std::string& path, const std::string& content);
 // rewrite what they read): once on, every file read is noted as an input and
 // every output is checked before anything is written, so an output never
 // replaces an input and two outputs never share a file.
+// Thread-safe: readers note their files from several threads (`batch`).
 void EnableOutputGuard();
+// Switches the guard off and forgets what it noted (tests).
+void DisableOutputGuard();
 // Notes a file read (readers call it; a no-op while the guard is off).
 void NoteInputFile(const std::string& path);
 // Notes an output before the work starts; throws InputError("PATH: given for
