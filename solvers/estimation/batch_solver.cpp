@@ -333,9 +333,15 @@ void Relinearise(const RunProblem& p, const StateSpaceModel& model, const Eigen:
   double predicted_change = 0.0;
   bool linearisation_off = false;
   int halvings = 0;
+  // Set when Gauss-Newton on the exact increments has converged: that is the
+  // minimum of the exact problem, so the next pass only solves the trajectory
+  // at it (the linearised increments, whose gradient differs from the exact
+  // one by the weights' dependence on theta, would step a fraction of a sigma
+  // away and back without end: the real roll runs, 0.4-0.9 sigma a pass).
+  bool at_exact_minimum = false;
   res->converged = false;
   BatchOptions o = opt;
-  for (int outer = 0; outer < opt.max_outer_iterations + halvings; ++outer) {
+  for (int outer = 0; outer < opt.max_outer_iterations + halvings || at_exact_minimum; ++outer) {
     o.exact_increments = opt.exact_increments || st->exact;
     say(o.exact_increments && !opt.exact_increments
             ? "solving with exact increments (pass " + std::to_string(outer + 1) + ")"
@@ -352,6 +358,20 @@ void Relinearise(const RunProblem& p, const StateSpaceModel& model, const Eigen:
                              nullptr);
     if (std::isfinite(predicted_cost) && predicted_change > 0.0) {
       linearisation_off = std::abs(cost_here - predicted_cost) > kMissRatio * predicted_change;
+    }
+    if (at_exact_minimum) {
+      // The trajectory for this theta (a linear problem), then stop.
+      st->lp.problem->SetParameterBlockConstant(theta_free.data());
+      ceres::Solver::Summary summary;
+      ceres::Solve(so, st->lp.problem.get(), &summary);
+      st->lp.problem->SetParameterBlockVariable(theta_free.data());
+      res->outer_iterations += 1;
+      res->ceres_iterations += static_cast<int>(summary.iterations.size()) - 1;
+      res->final_cost = summary.final_cost;
+      res->converged = summary.termination_type != ceres::FAILURE;
+      say("  converged: the minimum of the exact problem (Gauss-Newton), trajectory solved "
+          "at it");
+      break;
     }
     if (cost_here > cost_prev * (1.0 + 1e-9) && halvings < 20 && !o.exact_increments) {
       ++halvings;
@@ -392,6 +412,14 @@ void Relinearise(const RunProblem& p, const StateSpaceModel& model, const Eigen:
     const bool slow = outer >= kPassesBeforeExact && last_step > 0.0 &&
                       step > kSlowRatio * last_step;
     last_step = step;
+    {
+      char line[200];
+      std::snprintf(line, sizeof(line),
+                    "  pass %d: cost %.6g -> %.6g, step %.3g sigma, %d Ceres iterations", outer + 1,
+                    summary.initial_cost, summary.final_cost, step,
+                    static_cast<int>(summary.iterations.size()) - 1);
+      say(line);
+    }
     if (o.exact_increments || small || predicted_small) {
       res->converged = summary.termination_type == ceres::CONVERGENCE || small || predicted_small;
       break;
@@ -418,7 +446,11 @@ void Relinearise(const RunProblem& p, const StateSpaceModel& model, const Eigen:
       cost_prev = std::numeric_limits<double>::infinity();
       predicted_cost = std::numeric_limits<double>::quiet_NaN();
       last_step = 0.0;
-      if (!gn_converged) st->exact = true;  // the slow but sure way for the rest
+      if (gn_converged) {
+        at_exact_minimum = true;
+      } else {
+        st->exact = true;  // the slow but sure way for the rest
+      }
     }
   }
 }
@@ -580,12 +612,16 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   res.noise_declared_mV = run.ChannelNoise_mV();
   res.noise_source = "declared";
   res.noise_check = EstimateChannelNoise(model, st.lin, res.process_residual,
-                                         res.degrees_of_freedom);
+                                         res.degrees_of_freedom, res.process_whitened);
   if (opt.estimate_noise) {
+    // Per channel when the residual is noise, one factor when it is not; the
+    // choice is made once, on the first fit's residual (noise_estimation.h).
+    bool per_channel = true;
     for (int pass = 0; pass < 4; ++pass) {
-      const NoiseEstimate ne = EstimateChannelNoise(model, st.lin, res.process_residual,
-                                                    res.degrees_of_freedom);
+      NoiseEstimate ne = EstimateChannelNoise(model, st.lin, res.process_residual,
+                                              res.degrees_of_freedom, res.process_whitened);
       if (pass == 0) {
+        per_channel = ne.PerChannel();
         res.noise_check = ne;
         if (run.noise_auto && ne.dof.minCoeff() < kMinNoiseDof) {
           throw InputError(run.yaml_path + ": triad.noise_mV: auto needs a longer run: " +
@@ -596,14 +632,42 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
         }
         if (!run.noise_auto && ne.consistent) break;
       }
+      if (!per_channel) ne.white = false;  // the choice made on the first fit holds
       res.noise_estimate = ne;
-      const double change =
-          (ne.estimated_mV - p.noise_mV).cwiseQuotient(p.noise_mV).cwiseAbs().maxCoeff();
+      const Eigen::Vector3d next = ne.ToUse();
+      const double change = (next - p.noise_mV).cwiseQuotient(p.noise_mV).cwiseAbs().maxCoeff();
       if (pass > 0 && change < 0.01) break;
-      p.noise_mV = ne.estimated_mV;
-      res.noise_source = "estimated";
-      say("refitting with the noise estimated from the residuals");
+      p.noise_mV = next;
+      res.noise_source = per_channel ? "estimated" : "estimated_common";
+      char figures[160];
+      std::snprintf(figures, sizeof(figures), " (%.3g %.3g %.3g mV; worst lag-1 %.2f)", next[0],
+                    next[1], next[2], ne.lag1.cwiseAbs().maxCoeff());
+      say(std::string(per_channel ? "refitting with the noise estimated from the residuals"
+                                  : "refitting with one noise factor for all channels (the "
+                                    "residual is not white or its channels differ beyond 3x, "
+                                    "so its split between channels is misfit, not noise)") +
+          figures);
+      const Eigen::VectorXd theta_before = st.theta_free;
+      const std::vector<double> x_before = st.x;
+      const bool exact_before = st.exact;
       Relinearise(p, model, A, b, opt, threads, say, &st, &res);
+      if (!res.converged && per_channel) {
+        // Channels weighted very unequally can leave the solver crawling (the
+        // real medium roll run: 3 against 20 mV); one factor keeps the
+        // declared ratios, with which the first fit converged.
+        per_channel = false;
+        st.theta_free = theta_before;
+        st.x = x_before;
+        st.exact = exact_before;
+        NoiseEstimate common = ne;
+        common.white = false;  // ToUse: the one factor
+        res.noise_estimate = common;
+        p.noise_mV = common.ToUse();
+        res.noise_source = "estimated_common";
+        say("the fit with per-channel noise did not converge: refitting with one factor for "
+            "all channels");
+        Relinearise(p, model, A, b, opt, threads, say, &st, &res);
+      }
       CollectResiduals(p, data, st.lin, st.lp, st.x, st.theta_free, &res);
     }
   }

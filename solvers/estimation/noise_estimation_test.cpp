@@ -56,6 +56,38 @@ TEST(NoiseEstimation, SigmaRestsOnTheNoiseTheRunHas) {
   }
 }
 
+// A model that lacks an effect leaves its mark unequally on the channels;
+// the per-channel split of such a residual is misfit, not noise. An undeclared
+// 20-ms angle latency on the paper's profile: the residual is far from white,
+// so one factor rescales the declared noise of all channels (their ratios
+// kept), chi2/dof comes to 1, and the fit converges.
+TEST(NoiseEstimation, MisfitIsNotSplitBetweenChannels) {
+  Scenario s = testing_fixtures::WithEffect(2, Effect::kAngleLatency, {{"angle_latency.tau", 20.0}});
+  const RunData data = Simulate(s);
+  const BatchResult r = SolveBatch(s.run, data, ParameterLayout(), BatchOptions());
+  ASSERT_TRUE(r.converged);
+  EXPECT_FALSE(r.noise_check.PerChannel());
+  EXPECT_EQ(r.noise_source, "estimated_common");
+  EXPECT_GT(r.noise_check.lag1.cwiseAbs().maxCoeff(), r.noise_check.white_bound);
+  EXPECT_NEAR(r.noise_used_mV[0], r.noise_used_mV[1], 1e-9);
+  EXPECT_NEAR(r.noise_used_mV[0], r.noise_used_mV[2], 1e-9);
+  EXPECT_GT(r.noise_used_mV[0], 2.0 * 1.5);  // the misfit counts: well above the 2-mV noise
+  EXPECT_NEAR(r.chi2_per_dof, 1.0, 0.1);
+}
+
+// Channels alike and residual white: the split is used (the clean run above
+// is one); the estimate records why.
+TEST(NoiseEstimation, CleanRunIsSplitPerChannel) {
+  Scenario s = PaperScenario(50.0, 60.0, 2.0, 15.0, 4);
+  s.run.noise_mV = 0.5;
+  const RunData data = Simulate(s);
+  const BatchResult r = SolveBatch(s.run, data, ParameterLayout(), BatchOptions());
+  EXPECT_TRUE(r.noise_check.white);
+  EXPECT_TRUE(r.noise_check.channels_alike);
+  EXPECT_EQ(r.noise_source, "estimated");
+  EXPECT_LT(r.noise_check.lag1.cwiseAbs().maxCoeff(), 0.2);
+}
+
 TEST(NoiseEstimation, AutoFindsTheNoise) {
   Scenario s = PaperScenario(50.0, 60.0, 3.0, 15.0, 5);
   s.run.noise_auto = true;

@@ -56,6 +56,14 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
     std::snprintf(noise, sizeof(noise), " (declared %.3g %.3g %.3g: sigma rest on the estimate)",
                   nd[0], nd[1], nd[2]);
     v << noise;
+  } else if (r.noise_source == "estimated_common") {
+    const Eigen::Vector3d& nu = r.noise_used_mV;
+    std::snprintf(noise, sizeof(noise),
+                  " (declared %.3g %.3g %.3g; the residual is not white or its channels differ "
+                  "beyond 3x, so its split between channels is misfit: sigma rest on one factor "
+                  "for all channels, %.3g %.3g %.3g mV)",
+                  nd[0], nd[1], nd[2], nu[0], nu[1], nu[2]);
+    v << noise;
   }
   v << (rep.residual_white ? "; residuals white" : "; RESIDUALS NOT WHITE (sigma may be optimistic)");
   if (rep.at_prior_bound.empty()) {
@@ -123,7 +131,11 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
                   {"estimated_sd_mV", vec(r.noise_check.sd_mV)},
                   {"estimated_dof", vec(r.noise_check.dof)},
                   {"used_mV", vec(r.noise_used_mV)},
-                  {"source", r.noise_source}};
+                  {"source", r.noise_source},
+                  {"residual_lag1", std::vector<double>(r.noise_check.lag1.data(),
+                                                        r.noise_check.lag1.data() + 6)},
+                  {"residual_white_for_noise", r.noise_check.white},
+                  {"channels_alike", r.noise_check.channels_alike}};
   out["final_cost"] = r.final_cost;
   out["residual_count"] = r.residual_count;
   out["iterations"] = {{"relinearisations", r.outer_iterations}, {"ceres", r.ceres_iterations}};
