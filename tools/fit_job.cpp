@@ -27,15 +27,12 @@ std::string NoiseWarning(const std::string& run_yaml, const LoadedRun& run, cons
   const Eigen::Vector3d& sd = r.noise_check.sd_mV;
   char w[600];
   if (!r.noise_check.PerChannel()) {
-    const Eigen::Vector3d& c = r.noise_check.common_mV;
     std::snprintf(w, sizeof(w),
-                  "%s: triad.noise_mV: declared %.3g %.3g %.3g mV, the residuals hold %.3g %.3g "
-                  "%.3g mV (+- %.2g) with one factor for all channels; per channel it holds "
-                  "%.3g %.3g %.3g mV with worst lag-1 %.2f, too unequal or not white to be "
-                  "noise alone: sigma use the one factor (run diagnose to find what the model "
-                  "lacks)",
-                  run_yaml.c_str(), d[0], d[1], d[2], c[0], c[1], c[2],
-                  r.noise_check.common_sd_mV[0], e[0], e[1], e[2],
+                  "%s: triad.noise_mV: declared %.3g %.3g %.3g mV, chi2/dof %.3g; per channel the "
+                  "residuals hold %.3g %.3g %.3g mV with worst lag-1 %.2f, too unequal or not "
+                  "white to be noise alone: sigma scaled by chi2/dof (run diagnose to find what "
+                  "the model lacks)",
+                  run_yaml.c_str(), d[0], d[1], d[2], r.chi2_per_dof, e[0], e[1], e[2],
                   r.noise_check.lag1.cwiseAbs().maxCoeff());
     return w;
   }

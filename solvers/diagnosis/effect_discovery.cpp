@@ -188,8 +188,11 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
     noise_opt.estimate_noise = true;
     noise_opt.fraction = nullptr;
     const BatchResult base = SolveBatch(run, data, ParameterLayout(), noise_opt);
-    run.noise_channel_mV = base.noise_used_mV;
-    run.noise_mV = std::sqrt(base.noise_used_mV.squaredNorm() / 3.0);
+    // With a variance factor (noise split judged misfit) every channel's
+    // declared noise times its root.
+    const Eigen::Vector3d noise = base.noise_used_mV * std::sqrt(base.variance_factor);
+    run.noise_channel_mV = noise;
+    run.noise_mV = std::sqrt(noise.squaredNorm() / 3.0);
     run.noise_auto = false;
   }
   auto say = [&](const std::string& s) {

@@ -614,14 +614,15 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   res.noise_check = EstimateChannelNoise(model, st.lin, res.process_residual,
                                          res.degrees_of_freedom, res.process_whitened);
   if (opt.estimate_noise) {
-    // Per channel when the residual is noise, one factor when it is not; the
-    // choice is made once, on the first fit's residual (noise_estimation.h).
-    bool per_channel = true;
+    // Per channel when the residual is noise: refit with it. When it is not
+    // (not white, or channels unalike: noise_estimation.h), its split between
+    // channels, and between readings and angles, is misfit; then the weights
+    // stay and one a-posteriori variance factor, chi2/dof, scales the
+    // covariance (no refit: the estimate is the declared weights' one).
     for (int pass = 0; pass < 4; ++pass) {
-      NoiseEstimate ne = EstimateChannelNoise(model, st.lin, res.process_residual,
-                                              res.degrees_of_freedom, res.process_whitened);
+      const NoiseEstimate ne = EstimateChannelNoise(model, st.lin, res.process_residual,
+                                                    res.degrees_of_freedom, res.process_whitened);
       if (pass == 0) {
-        per_channel = ne.PerChannel();
         res.noise_check = ne;
         if (run.noise_auto && ne.dof.minCoeff() < kMinNoiseDof) {
           throw InputError(run.yaml_path + ": triad.noise_mV: auto needs a longer run: " +
@@ -630,44 +631,36 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
                            std::to_string(static_cast<int>(kMinNoiseDof)) +
                            " (declare the noise instead)");
         }
+        if (!ne.PerChannel()) {
+          const double f = res.chi2_per_dof;
+          const double sd = std::sqrt(2.0 / std::max(1, res.degrees_of_freedom));
+          res.noise_check.consistent = std::abs(f - 1.0) <= 3.0 * sd;
+          if (run.noise_auto || !res.noise_check.consistent) {
+            res.variance_factor = f;
+            res.noise_source = "estimated_common";
+            char figures[120];
+            std::snprintf(figures, sizeof(figures), " (chi2/dof %.3g; worst lag-1 %.2f)", f,
+                          ne.lag1.cwiseAbs().maxCoeff());
+            say(std::string("one variance factor for the whole run: the residual is not white "
+                            "or its channels differ beyond 3x, so its split between channels "
+                            "is misfit, not noise") +
+                figures);
+          }
+          break;
+        }
         if (!run.noise_auto && ne.consistent) break;
       }
-      if (!per_channel) ne.white = false;  // the choice made on the first fit holds
       res.noise_estimate = ne;
-      const Eigen::Vector3d next = ne.ToUse();
+      const Eigen::Vector3d next = ne.estimated_mV;
       const double change = (next - p.noise_mV).cwiseQuotient(p.noise_mV).cwiseAbs().maxCoeff();
       if (pass > 0 && change < 0.01) break;
       p.noise_mV = next;
-      res.noise_source = per_channel ? "estimated" : "estimated_common";
-      char figures[160];
+      res.noise_source = "estimated";
+      char figures[120];
       std::snprintf(figures, sizeof(figures), " (%.3g %.3g %.3g mV; worst lag-1 %.2f)", next[0],
                     next[1], next[2], ne.lag1.cwiseAbs().maxCoeff());
-      say(std::string(per_channel ? "refitting with the noise estimated from the residuals"
-                                  : "refitting with one noise factor for all channels (the "
-                                    "residual is not white or its channels differ beyond 3x, "
-                                    "so its split between channels is misfit, not noise)") +
-          figures);
-      const Eigen::VectorXd theta_before = st.theta_free;
-      const std::vector<double> x_before = st.x;
-      const bool exact_before = st.exact;
+      say(std::string("refitting with the noise estimated from the residuals") + figures);
       Relinearise(p, model, A, b, opt, threads, say, &st, &res);
-      if (!res.converged && per_channel) {
-        // Channels weighted very unequally can leave the solver crawling (the
-        // real medium roll run: 3 against 20 mV); one factor keeps the
-        // declared ratios, with which the first fit converged.
-        per_channel = false;
-        st.theta_free = theta_before;
-        st.x = x_before;
-        st.exact = exact_before;
-        NoiseEstimate common = ne;
-        common.white = false;  // ToUse: the one factor
-        res.noise_estimate = common;
-        p.noise_mV = common.ToUse();
-        res.noise_source = "estimated_common";
-        say("the fit with per-channel noise did not converge: refitting with one factor for "
-            "all channels");
-        Relinearise(p, model, A, b, opt, threads, say, &st, &res);
-      }
       CollectResiduals(p, data, st.lin, st.lp, st.x, st.theta_free, &res);
     }
   }
@@ -687,6 +680,8 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
         FreeCovariance(p, st.lin, st.lp, theta, &st.theta_free, &st.x, A, opt, threads, &C);
     res.estimate.cov = ExpandCovariance(p, cov_free);
     res.process_whitened_expected_acf = ExpectedProcessAutocorrelation(C, cov_free, 20);
+    // The a-posteriori variance factor (1 unless the noise was judged misfit).
+    res.estimate.cov *= res.variance_factor;
     res.covariance_seconds = Seconds(t_cov);
   }
   if (opt.fraction) opt.fraction(1.0);

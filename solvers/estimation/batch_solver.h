@@ -139,11 +139,15 @@ struct BatchResult {
   ResidualStats residuals;
   // The reading noise per channel [mV]: as declared in run.yaml, as used for
   // the final fit and its sigma, and where that came from ("declared" |
-  // "estimated"); noise_check compares the declared noise with the residuals
+  // "estimated" | "estimated_common"); noise_check compares the declared noise with the residuals
   // of the first fit, noise_estimate is the last estimate made.
   Eigen::Vector3d noise_declared_mV = Eigen::Vector3d::Zero();
   Eigen::Vector3d noise_used_mV = Eigen::Vector3d::Zero();
   std::string noise_source = "declared";
+  // The covariance's a-posteriori variance factor: chi2/dof when the noise
+  // source is "estimated_common" (every noise of the run taken as
+  // sqrt(factor) times the declared one, the estimate unchanged), else 1.
+  double variance_factor = 1.0;
   NoiseEstimate noise_check, noise_estimate;
   // Per epoch, for diagnosis: times, measurement and process residuals (raw,
   // V m/s then S m; the process residual of the interval ending at the epoch,

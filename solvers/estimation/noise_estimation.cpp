@@ -26,7 +26,7 @@ NoiseEstimate EstimateChannelNoise(const StateSpaceModel& model, const BatchLine
   const double rho = std::max(0.1, std::min(1.0, dof / (6.0 * (E - 1))));
   NoiseEstimate out;
   out.assumed_mV = model.problem().noise_mV;
-  bool consistent = true;  // per channel; replaced by the one factor's when not white
+  bool consistent = true;
   for (int i = 0; i < 3; ++i) {
     const double f = tr[i] > 0 ? num[i] / (rho * tr[i]) : 1.0;
     out.dof[i] = tr2[i] > 0 ? rho * tr[i] * tr[i] / tr2[i] : 0.0;
@@ -36,13 +36,6 @@ NoiseEstimate EstimateChannelNoise(const StateSpaceModel& model, const BatchLine
     if (diff > 3.0 * out.sd_mV[i] && diff > 0.02 * out.assumed_mV[i]) consistent = false;
   }
   out.consistent = consistent;
-
-  // One factor for all channels.
-  const double f_all = tr.sum() > 0 ? num.sum() / (rho * tr.sum()) : 1.0;
-  const double dof_all = tr2.sum() > 0 ? rho * tr.sum() * tr.sum() / tr2.sum() : 0.0;
-  out.common_mV = out.assumed_mV * std::sqrt(std::max(f_all, 0.0));
-  out.common_sd_mV = dof_all > 0 ? Eigen::Vector3d(out.common_mV * std::sqrt(0.5 / dof_all))
-                                 : Eigen::Vector3d::Zero();
 
   // Whiteness: lag-1 of each whitened component over the intervals (index 0
   // is the first epoch, which ends no interval).
@@ -66,11 +59,6 @@ NoiseEstimate EstimateChannelNoise(const StateSpaceModel& model, const BatchLine
   }
   out.channels_alike =
       out.estimated_mV.maxCoeff() <= kMaxChannelRatio * out.estimated_mV.minCoeff();
-  if (!out.PerChannel()) {
-    // The per-channel split is not used; judge the one factor instead.
-    const double diff = std::abs(out.common_mV[0] - out.assumed_mV[0]);
-    out.consistent = !(diff > 3.0 * out.common_sd_mV[0] && diff > 0.02 * out.assumed_mV[0]);
-  }
   return out;
 }
 

@@ -27,15 +27,13 @@
 // figures hands the fit to the y channel (1000x the weight of the others),
 // drives y's parameters beyond their priors and stops the solver converging.
 // So the per-channel split is used only when the channels are alike (below)
-// and the whitened residual is white
-// enough to be noise (lag-1 autocorrelation within kWhiteLag1 of zero in every
-// component, or 4/sqrt(E) on short runs, where the fit's own -p/E and the
-// sampling error 1/sqrt(E) are larger); otherwise one common factor
-//
-//   f = sum_i num_i / (rho sum_i tr_i)
-//
-// rescales the declared noise of all channels (their ratios kept), so that
-// chi2/dof is 1 and sigma carry the misfit, as when the noise is declared.
+// and the whitened residual is white enough to be noise (lag-1 autocorrelation
+// within kWhiteLag1 of zero in every component, or 4/sqrt(E) on short runs,
+// where the fit's own -p/E and the sampling error 1/sqrt(E) are larger);
+// otherwise the batch solver keeps the declared weights and scales the
+// covariance by one a-posteriori variance factor, chi2/dof (batch_solver.h):
+// the misfit is then spread over the channels and the angles as the declared
+// noise spreads it, and sigma carry it.
 #pragma once
 
 #include <string>
@@ -53,23 +51,19 @@ struct NoiseEstimate {
   Eigen::Vector3d estimated_mV = Eigen::Vector3d::Zero();  // from its residuals
   Eigen::Vector3d sd_mV = Eigen::Vector3d::Zero();         // sampling error of the estimate
   Eigen::Vector3d dof = Eigen::Vector3d::Zero();           // effective degrees of freedom
-  // |estimated - assumed| within 3 sd in every channel (or within 2 %).
+  // |estimated - assumed| within 3 sd in every channel (or within 2 %); the
+  // batch solver replaces it by the variance factor's test when the split is
+  // not used.
   bool consistent = true;
   // Lag-1 autocorrelation of each whitened process residual component (V
   // then S), and whether all are within the white bound (see above).
   Eigen::Matrix<double, 6, 1> lag1 = Eigen::Matrix<double, 6, 1>::Zero();
   bool white = true;
   double white_bound = 0.0;
-  // One factor for all channels (the assumed noise times sqrt(f)), with its
-  // sampling error, for when the residual is not white.
-  Eigen::Vector3d common_mV = Eigen::Vector3d::Zero();
-  Eigen::Vector3d common_sd_mV = Eigen::Vector3d::Zero();
   // The per-channel figures are within kMaxChannelRatio of each other.
   bool channels_alike = true;
   // Whether the per-channel split is used: white and alike.
   bool PerChannel() const { return white && channels_alike; }
-  // What to refit with: estimated_mV per channel, else common_mV.
-  Eigen::Vector3d ToUse() const { return PerChannel() ? estimated_mV : common_mV; }
 };
 
 // The channels of one triad share their noise density to within a small

@@ -59,20 +59,32 @@ TEST(NoiseEstimation, SigmaRestsOnTheNoiseTheRunHas) {
 // A model that lacks an effect leaves its mark unequally on the channels;
 // the per-channel split of such a residual is misfit, not noise. An undeclared
 // 20-ms angle latency on the paper's profile: the residual is far from white,
-// so one factor rescales the declared noise of all channels (their ratios
-// kept), chi2/dof comes to 1, and the fit converges.
+// so the fit keeps the declared weights (the estimate is the one without noise
+// estimation) and scales the covariance by chi2/dof.
 TEST(NoiseEstimation, MisfitIsNotSplitBetweenChannels) {
   Scenario s = testing_fixtures::WithEffect(2, Effect::kAngleLatency, {{"angle_latency.tau", 20.0}});
   const RunData data = Simulate(s);
-  const BatchResult r = SolveBatch(s.run, data, ParameterLayout(), BatchOptions());
+  const ParameterLayout layout;
+  BatchOptions declared_opt;
+  declared_opt.estimate_noise = false;
+  const BatchResult d = SolveBatch(s.run, data, layout, declared_opt);
+  const BatchResult r = SolveBatch(s.run, data, layout, BatchOptions());
   ASSERT_TRUE(r.converged);
   EXPECT_FALSE(r.noise_check.PerChannel());
-  EXPECT_EQ(r.noise_source, "estimated_common");
   EXPECT_GT(r.noise_check.lag1.cwiseAbs().maxCoeff(), r.noise_check.white_bound);
-  EXPECT_NEAR(r.noise_used_mV[0], r.noise_used_mV[1], 1e-9);
-  EXPECT_NEAR(r.noise_used_mV[0], r.noise_used_mV[2], 1e-9);
-  EXPECT_GT(r.noise_used_mV[0], 2.0 * 1.5);  // the misfit counts: well above the 2-mV noise
-  EXPECT_NEAR(r.chi2_per_dof, 1.0, 0.1);
+  EXPECT_FALSE(r.noise_check.consistent);
+  EXPECT_EQ(r.noise_source, "estimated_common");
+  EXPECT_GT(r.chi2_per_dof, 1.5);  // the misfit counts
+  EXPECT_DOUBLE_EQ(r.variance_factor, r.chi2_per_dof);
+  for (int c = 0; c < 3; ++c) EXPECT_DOUBLE_EQ(r.noise_used_mV[c], 2.0);
+  EXPECT_EQ(d.variance_factor, 1.0);
+  for (int i = 0; i < kNumBaseParams; ++i) {
+    if (d.estimate.cov(i, i) <= 0.0) continue;  // held
+    const double sd = std::sqrt(d.estimate.cov(i, i));
+    EXPECT_NEAR(r.estimate.theta[i], d.estimate.theta[i], 1e-6 * sd) << layout.info(i).name;
+    EXPECT_NEAR(std::sqrt(r.estimate.cov(i, i)) / sd, std::sqrt(r.chi2_per_dof), 1e-6)
+        << layout.info(i).name;
+  }
 }
 
 // Channels alike and residual white: the split is used (the clean run above

@@ -1,6 +1,7 @@
 #include "solvers/estimation/run_problem.h"
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 
 #include "core/model/errors.h"
@@ -97,6 +98,14 @@ RunProblem BuildRunProblem(const RunDescription& run, const RunData& data,
       (data.t_s.back() - data.t_s.front()) / std::max<std::size_t>(1, data.size() - 1);
   p.sigma_rate = data.has_rates() ? 0.0 : RateNoiseGain(dt, derivatives) * p.sigma_angle;
   return p;
+}
+
+void RunProblem::ScaleNoise(double variance_factor) {
+  const double s = std::sqrt(variance_factor);
+  noise_mV *= s;
+  isotropic_var *= variance_factor;
+  sigma_angle *= s;
+  sigma_rate *= s;
 }
 
 void RunProblem::Hold(const std::vector<int>& indices) {

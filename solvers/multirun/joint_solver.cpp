@@ -359,10 +359,13 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
     bo.fraction = nullptr;
     if (fraction) bo.fraction = [fraction, r, R](double x) { fraction((r + x) / (R + 1.0)); };
     rr.alone = SolveBatch(runs[r].run, runs[r].data, layout, bo);
-    rr.noise_mV = rr.alone.noise_used_mV;
     RunProblem p = BuildRunProblem(runs[r].run, runs[r].data, layout, opt.batch.epoch_s,
                                    opt.batch.derivatives);
-    p.noise_mV = rr.noise_mV;
+    p.noise_mV = rr.alone.noise_used_mV;
+    // A run whose residual split is misfit enters with its variance factor
+    // on every noise (its information divided by it), as its own sigma.
+    p.ScaleNoise(rr.alone.variance_factor);
+    rr.noise_mV = p.noise_mV;
     problems.push_back(std::move(p));
   }
   res.seconds_alone = Seconds(t_alone);

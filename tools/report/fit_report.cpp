@@ -57,12 +57,11 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
                   nd[0], nd[1], nd[2]);
     v << noise;
   } else if (r.noise_source == "estimated_common") {
-    const Eigen::Vector3d& nu = r.noise_used_mV;
     std::snprintf(noise, sizeof(noise),
                   " (declared %.3g %.3g %.3g; the residual is not white or its channels differ "
-                  "beyond 3x, so its split between channels is misfit: sigma rest on one factor "
-                  "for all channels, %.3g %.3g %.3g mV)",
-                  nd[0], nd[1], nd[2], nu[0], nu[1], nu[2]);
+                  "beyond 3x, so its split is misfit: sigma scaled by one variance factor, "
+                  "chi2/dof %.3g)",
+                  nd[0], nd[1], nd[2], r.variance_factor);
     v << noise;
   }
   v << (rep.residual_white ? "; residuals white" : "; RESIDUALS NOT WHITE (sigma may be optimistic)");
@@ -132,6 +131,7 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
                   {"estimated_dof", vec(r.noise_check.dof)},
                   {"used_mV", vec(r.noise_used_mV)},
                   {"source", r.noise_source},
+                  {"variance_factor", r.variance_factor},
                   {"residual_lag1", std::vector<double>(r.noise_check.lag1.data(),
                                                         r.noise_check.lag1.data() + 6)},
                   {"residual_white_for_noise", r.noise_check.white},
