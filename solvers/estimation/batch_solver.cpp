@@ -632,6 +632,14 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
                            " (declare the noise instead)");
         }
         if (!ne.PerChannel()) {
+          if (run.noise_auto) {
+            // No figure declared to keep: the readings at the residual's
+            // common level first (the start is arbitrary), then the factor.
+            p.noise_mV = Eigen::Vector3d::Constant(std::sqrt(ne.estimated_mV.squaredNorm() / 3));
+            say("refitting with the readings' noise at the residual's common level");
+            Relinearise(p, model, A, b, opt, threads, say, &st, &res);
+            CollectResiduals(p, data, st.lin, st.lp, st.x, st.theta_free, &res);
+          }
           const double f = res.chi2_per_dof;
           const double sd = std::sqrt(2.0 / std::max(1, res.degrees_of_freedom));
           res.noise_check.consistent = std::abs(f - 1.0) <= 3.0 * sd;

@@ -87,6 +87,24 @@ TEST(NoiseEstimation, MisfitIsNotSplitBetweenChannels) {
   }
 }
 
+// The same with noise_mV: auto: no figure to keep, so the readings' noise is
+// first set to the residual's common level (all channels alike), then the
+// variance factor applies on top.
+TEST(NoiseEstimation, AutoOnMisfitTakesTheCommonLevelThenTheFactor) {
+  Scenario s = testing_fixtures::WithEffect(2, Effect::kAngleLatency, {{"angle_latency.tau", 20.0}});
+  s.run.noise_auto = true;
+  s.run.noise_mV = 0.3;  // only the start
+  const RunData data = Simulate(s);
+  const BatchResult r = SolveBatch(s.run, data, ParameterLayout(), BatchOptions());
+  ASSERT_TRUE(r.converged);
+  EXPECT_EQ(r.noise_source, "estimated_common");
+  const Eigen::Vector3d& e = r.noise_check.estimated_mV;
+  const double level = std::sqrt(e.squaredNorm() / 3.0);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(r.noise_used_mV[c], level, 1e-9 * level) << c;
+  EXPECT_GT(level, 2.0);  // the misfit counts
+  EXPECT_DOUBLE_EQ(r.variance_factor, r.chi2_per_dof);
+}
+
 // Channels alike and residual white: the split is used (the clean run above
 // is one); the estimate records why.
 TEST(NoiseEstimation, CleanRunIsSplitPerChannel) {
