@@ -2,7 +2,7 @@
 """Wall time of `triadcal diagnose` against one `triadcal fit` of the same run.
 
 usage: diagnose_speed.py [--repeats N] [--keep DIR] [--rate HZ]
-       diagnose_speed.py --real [--repeats N] [--keep DIR]
+       diagnose_speed.py --real [--runs slow,medium,fast] [--repeats N] [--keep DIR]
 
 Simulates the paper's 90-s run (examples/paper-experiment3/scenario.yaml), clean
 and with one undeclared effect added under `effects:`, and times `fit` and
@@ -54,7 +54,7 @@ def real(a, work):
     print(f"{'run':8s} {'fit s':>7s} {'conv':>5s} {'diag s':>7s} {'ratio':>6s} {'refits':>6s}"
           f"  {'tau ms':>14s}  selected")
     ratios = []
-    for name in ("slow", "medium", "fast"):
+    for name in a.runs.split(","):
         run = os.path.join(REAL, name + ".yaml")
         fit_out = os.path.join(work, name + "_fit.json")
         diag_out = os.path.join(work, name + "_diagnose.json")
@@ -89,6 +89,7 @@ def main():
     ap.add_argument("--keep")
     ap.add_argument("--rate", type=float, help="sampling rate [Hz] instead of the example's")
     ap.add_argument("--real", action="store_true", help="the three real roll runs instead")
+    ap.add_argument("--runs", default="slow,medium,fast", help="with --real: which of them")
     a = ap.parse_args()
     work = a.keep or tempfile.mkdtemp(prefix="diagnose_speed_")
     os.makedirs(work, exist_ok=True)
