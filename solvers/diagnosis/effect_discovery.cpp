@@ -385,7 +385,11 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
     int pick = -1;
     for (std::size_t i = 0; i < sorted.size() && pick < 0; ++i) {
       CandidateTest& t = sorted[i];
-      if (!t.refit || !(t.p_value < threshold)) break;
+      // A score-only candidate cannot be selected, but a refitted one behind
+      // it in this order can (p underflows to 0 for strong effects, and the
+      // tie is broken by statistics of two kinds, score and LR).
+      if (!t.refit) continue;
+      if (!(t.p_value < threshold)) break;
       if (t.absorbs.empty()) {
         pick = static_cast<int>(i);
       } else {
