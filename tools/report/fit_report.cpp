@@ -48,7 +48,7 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
   v << "; chi2/dof " << std::round(1000 * r.chi2_per_dof) / 1000 << " (1 expected)";
   const Eigen::Vector3d& nd = r.noise_declared_mV;
   const Eigen::Vector3d& ne = r.noise_check.estimated_mV;
-  char noise[200];
+  char noise[320];
   std::snprintf(noise, sizeof(noise), "; reading noise from the residuals %.3g %.3g %.3g mV",
                 ne[0], ne[1], ne[2]);
   v << noise;
