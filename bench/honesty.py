@@ -26,9 +26,14 @@ Sections (all by default):
             (standard error of each mean: 1/sqrt(N)).
   vertical  bench/scenarios/vertical-shaft.yaml, 5 seeds: converged,
             (K - nominal) / sigma, sigma / prior sigma, what the output names.
+  coloured  bench/scenarios/paper-coloured.yaml (reading noise correlated in
+            time, 0.5 s), N seeds (20) through `fit`: RMS (estimate - truth) /
+            sigma per group with the reported sigma, the model's white sigma
+            and the HAC sigma; which one was reported; the bandwidth.
   real      the real roll runs (needs the shared data folder; skipped without
             it): each run fitted whole and in halves (time_range_s) with the
-            noise estimated (noise_mV: auto); the halves' estimates compared,
+            noise estimated (noise_mV: auto) and the loop's effects
+            (--real-effects, angle_latency,thermal_drift); the halves' estimates compared,
             chi2 = (a - b)^2 / (sigma_a^2 + sigma_b^2) per parameter determined by
             both, median over parameters; then the three speeds compared.
 """
@@ -216,6 +221,39 @@ def vertical(work, a):
               f"{[n for n in f['not_estimable'] if n[0] in 'KW' and len(n) <= 3]}")
 
 
+def coloured(work, a):
+    print("\n## reading noise correlated in time (bench/scenarios/paper-coloured.yaml)\n")
+    scen = os.path.join(HERE, "scenarios", "paper-coloured.yaml")
+    z = {m: {g: [] for g in GROUPS} for m in ("sigma", "sigma_white", "sigma_hac")}
+    methods, bands = [], []
+    for seed in range(1, a.seeds + 1):
+        d = os.path.join(work, f"col_{seed}")
+        run([BIN, "simulate", scen, "-o", d, "-q", "--seed", str(seed), "--force"])
+        run([BIN, "fit", os.path.join(d, "run.yaml"), "-o", os.path.join(d, "fit.json"), "-q",
+             "--force"])
+        f = json.load(open(os.path.join(d, "fit.json")))
+        t = json.load(open(os.path.join(d, "truth.json")))["parameters"]
+        methods.append(f["sigma_method"])
+        bands.append(f["hac"]["bandwidth_epochs"])
+        for g, names in GROUPS.items():
+            for n in names:
+                p = f["parameters"][n]
+                if p["sigma"] is None or not p["estimable"]:
+                    continue
+                tv = t[n]["value"] if isinstance(t[n], dict) else t[n]
+                for m in z:
+                    z[m][g].append((p["value"] - tv) / p[m])
+    print(f"{a.seeds} seeds: sigma reported from {methods.count('hac')} HAC / "
+          f"{methods.count('white')} white fits; bandwidth {min(bands):.1f}-{max(bands):.1f} epochs")
+    print(f"  {'RMS z':18s} {'reported':>9s} {'white':>9s} {'HAC':>9s}")
+    for g in GROUPS:
+        cells = [math.sqrt(statistics.mean(v * v for v in z[m][g])) if z[m][g] else float("nan")
+                 for m in z]
+        print(f"  {g:18s} " + " ".join(f"{c:9.3f}" for c in cells))
+    allz = [math.sqrt(statistics.mean(v * v for g in GROUPS for v in z[m][g])) for m in z]
+    print(f"  {'all':18s} " + " ".join(f"{c:9.3f}" for c in allz))
+
+
 def shared_folder():
     for c in (os.environ.get("TRIADCAL_SHARED", ""), os.path.join(ROOT, "..", "shared")):
         if c and os.path.isdir(os.path.join(c, "data", "real", "single-axis-encoder")):
@@ -244,12 +282,19 @@ def real(work, a):
             y = os.path.join(ex, f".honesty_{speed}_{label.replace(' ', '_')}.yaml")
             open(y, "w").write(t)
             out = os.path.join(work, f"real_{speed}_{label.replace(' ', '_')}.json")
+            cmd = [BIN, "fit", y, "-o", out, "-q", "--force", "--residuals",
+                   out.replace(".json", ".csv")]
+            if a.real_effects:
+                cmd += ["--effects", a.real_effects]
             try:
-                p = run([BIN, "fit", y, "-o", out, "-q", "--force", "--residuals",
-                         out.replace(".json", ".csv")], check=False)
+                p = subprocess.run(cmd, capture_output=True, text=True, timeout=a.real_timeout)
                 if p.returncode not in (0, 4):  # 4: written, but not converged
                     sys.exit(f"honesty: fit of {speed} {label} exited {p.returncode}: "
                              f"{p.stderr.strip()[-300:]}")
+            except subprocess.TimeoutExpired:
+                print(f"{speed} {label}: fit stopped after {a.real_timeout} s")
+                fits = None
+                break
             finally:
                 os.remove(y)
             f = json.load(open(out))
@@ -259,6 +304,8 @@ def real(work, a):
                 f["span"] = (ts[0], ts[-1])
                 whole[speed] = f
             fits.append(f)
+        if fits is None:
+            continue
         a_, b_ = fits[1]["parameters"], fits[2]["parameters"]
         chi = {n: (a_[n]["value"] - b_[n]["value"]) ** 2 / (a_[n]["sigma"] ** 2 + b_[n]["sigma"] ** 2)
                for n in a_ if a_[n]["estimable"] and b_[n]["estimable"] and a_[n]["sigma"]
@@ -266,11 +313,20 @@ def real(work, a):
         worst = sorted(chi.items(), key=lambda kv: -kv[1])[:3]
         conv = ", ".join(f"{l} {'converged' if f['converged'] else 'NOT converged'}"
                          for l, f in zip(("whole", "first half", "second half"), fits))
-        print(f"{speed}: {conv}")
+        print(f"{speed}: {conv}; sigma {', '.join(f['sigma_method'] for f in fits)}")
+        if a.real_effects:
+            for l, f in zip(("whole", "first half", "second half"), fits):
+                tau = f["parameters"].get("angle_latency.tau")
+                if tau:
+                    print(f"  {l}: angle_latency.tau {tau['value']:.3f} +- {tau['sigma']:.3f} "
+                          f"{tau['unit']}; Kx Ky Kz " + " ".join(
+                              f"{f['parameters'][k]['value']:.1f}" for k in ("Kx", "Ky", "Kz")))
         print(f"{speed}: noise estimated {[round(x, 1) for x in whole[speed]['noise']['used_mV']]} mV; "
               f"halves agree at median chi2/dof {statistics.median(chi.values()):.2f} over "
               f"{len(chi)} parameters (largest: "
               + ", ".join(f"{n} {c:.1f}" for n, c in worst) + ")")
+    if len(whole) < 3:
+        return
     names = [n for n in whole["slow"]["parameters"]
              if all(whole[s]["parameters"][n]["estimable"] and whole[s]["parameters"][n]["sigma"]
                     for s in whole)]
@@ -291,16 +347,22 @@ def real(work, a):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--only", default="short,noise,unconstrained,diagnose,bias,vertical,real")
+    ap.add_argument("--only",
+                    default="short,noise,unconstrained,diagnose,bias,vertical,coloured,real")
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--diagnose-seeds", type=int, default=100)
     ap.add_argument("--bias-seeds", type=int, default=400)
     ap.add_argument("--workdir", default="")
+    ap.add_argument("--real-effects", default="angle_latency,thermal_drift",
+                    help="effects fitted on the real runs (what the loop finds there; '' none)")
+    ap.add_argument("--real-timeout", type=float, default=1200.0,
+                    help="seconds one real fit may take before that speed is skipped")
     a = ap.parse_args()
     work = a.workdir or tempfile.mkdtemp(prefix="triadcal_honesty_")
     os.makedirs(work, exist_ok=True)
     sections = {"short": short, "noise": noise, "unconstrained": unconstrained,
-                "diagnose": diagnose, "bias": bias, "vertical": vertical, "real": real}
+                "diagnose": diagnose, "bias": bias, "vertical": vertical, "coloured": coloured,
+                "real": real}
     for name in a.only.split(","):
         if name not in sections:
             sys.exit(f"honesty: --only: unknown section '{name}' ({', '.join(sections)})")

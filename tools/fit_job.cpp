@@ -30,10 +30,12 @@ std::string NoiseWarning(const std::string& run_yaml, const LoadedRun& run, cons
     std::snprintf(w, sizeof(w),
                   "%s: triad.noise_mV: declared %.3g %.3g %.3g mV, chi2/dof %.3g; per channel the "
                   "residuals hold %.3g %.3g %.3g mV with worst lag-1 %.2f, too unequal or not "
-                  "white to be noise alone: sigma scaled by chi2/dof (run diagnose to find what "
-                  "the model lacks)",
+                  "white to be noise alone: %s (run diagnose to find what the model lacks)",
                   run_yaml.c_str(), d[0], d[1], d[2], r.chi2_per_dof, e[0], e[1], e[2],
-                  r.noise_check.lag1.cwiseAbs().maxCoeff());
+                  r.noise_check.lag1.cwiseAbs().maxCoeff(),
+                  r.sigma_method == "hac"
+                      ? "sigma from the HAC covariance, at least the model's scaled by chi2/dof"
+                      : "sigma scaled by chi2/dof");
     return w;
   }
   std::snprintf(w, sizeof(w),
@@ -77,6 +79,7 @@ BatchOptions MakeBatchOptions(const FitSettings& a) {
   opt.robust_scale = a.robust_scale;
   opt.threads = a.threads;
   opt.covariance_method = a.covariance;
+  opt.sigma = a.sigma;
   opt.holding.auto_hold = !a.no_auto_hold;
   opt.holding.hold = SplitList(a.hold);
   opt.holding.free = SplitList(a.free);
@@ -125,6 +128,11 @@ void AddFitOptions(CLI::App* app, FitSettings* a) {
   app->add_option("--covariance", a->covariance,
                   "schur (Schur complement on theta) or ceres (SuiteSparse QR)")
       ->capture_default_str();
+  app->add_option("--sigma", a->sigma,
+                  "which covariance gives sigma: auto (HAC when the residuals are not white), "
+                  "white (the model's) or hac (sandwich robust to residuals correlated in time)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "white", "hac"}));
   app->add_option("--epoch-s", a->epoch_s, "interval between trajectory epochs [s]")
       ->capture_default_str()
       ->check(kEpochRange);

@@ -85,7 +85,8 @@ int main(int argc, char** argv) {
     static const std::map<std::string, std::string> kFlags = {
         {"epoch_s", "--epoch-s"},           {"robust_loss", "--robust"},
         {"linear_solver", "--linear-solver"}, {"covariance_method", "--covariance"},
-        {"hold_free", "--hold/--free"},       {"effects", "--effects"}};
+        {"hold_free", "--hold/--free"},       {"effects", "--effects"},
+        {"sigma", "--sigma"}};
     const auto it = kFlags.find(e.option());
     if (triadcal::MpiRoot()) {
       std::cerr << "triadcal: error: "

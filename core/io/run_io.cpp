@@ -12,6 +12,7 @@
 #include "core/io/column_mapping.h"
 #include "core/io/data_table.h"
 #include "core/model/errors.h"
+#include "core/model/sample_noise.h"
 #include "core/io/file_util.h"
 #include "core/io/plausibility.h"
 #include "core/io/run_validation.h"
@@ -236,7 +237,12 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
   // or by gravity only): there is nothing to judge the angle unit by.
   if (!SourceOf(run, "lambda1").constant || !SourceOf(run, "lambda2").constant) {
     CheckAnglesInDegrees(table, lambda, w, scale_of_imu_axis);
-    CheckAnglesNotRadiansWindowed(table, lambda, w, scale_of_imu_axis, run.noise_mV);
+    // The noise allowed for: the declared one (none with noise_mV: auto) or
+    // the readings' own, whichever is larger (a vibrating run is not one in
+    // radians).
+    double noise_mV = run.noise_auto ? 0.0 : run.ChannelNoise_mV().maxCoeff();
+    for (const ChannelValues& c : w) noise_mV = std::max(noise_mV, SecondDifferenceNoise(c.values));
+    CheckAnglesNotRadiansWindowed(table, lambda, w, scale_of_imu_axis, noise_mV);
   }
   for (const ChannelValues& c : w) Warn(warnings, SaturationWarning(c));
 

@@ -215,9 +215,13 @@ Scenario LoadScenario(const std::string& yaml_path) {
 
   const YAML::Node noise = section("noise");
   const YamlPlace noise_at = top.Child("noise");
-  CheckSection(noise, noise_at, {"accel_mV", "angle_arcsec"});
+  CheckSection(noise, noise_at, {"accel_mV", "angle_arcsec", "accel_correlation_s"});
   if (!noise.IsNull() && noise["accel_mV"]) {
     s.accel_noise_mV = ReadNonNegative(noise["accel_mV"], noise_at.Child("accel_mV"));
+  }
+  if (!noise.IsNull() && noise["accel_correlation_s"]) {
+    s.accel_correlation_s =
+        ReadNonNegative(noise["accel_correlation_s"], noise_at.Child("accel_correlation_s"));
   }
   if (!noise.IsNull() && noise["angle_arcsec"]) {
     s.angle_noise_rad =

@@ -60,6 +60,12 @@ RunData Simulate(const Scenario& s) {
   for (int i = 0; i < 3; ++i) d.w_mV[i].reserve(n);
   if (s.write_temp) d.temp_C.reserve(n);
 
+  // Reading noise: white, or first-order Gauss-Markov with correlation time
+  // accel_correlation_s (same per-sample sigma, the same unit draws).
+  const double phi =
+      s.accel_correlation_s > 0.0 ? std::exp(-1.0 / (s.profile.rate_hz * s.accel_correlation_s))
+                                  : 0.0;
+  double colour[3] = {0.0, 0.0, 0.0};
   for (std::size_t k = 0; k < n; ++k) {
     const double t_s = s.profile.SampleTime_s(k);
     const SampleContext ctx{t_s, ScenarioTemperature_C(s, t_s)};
@@ -71,7 +77,11 @@ RunData Simulate(const Scenario& s) {
     // Draw order (documented in simulator.h): lambda1, lambda2, wx, wy, wz.
     double angle_noise[2], accel_noise[3];
     for (double& v : angle_noise) v = unit_normal(rng);
-    for (double& v : accel_noise) v = unit_normal(rng);
+    for (int i = 0; i < 3; ++i) {
+      const double w = unit_normal(rng);
+      colour[i] = k == 0 ? w : phi * colour[i] + std::sqrt(1.0 - phi * phi) * w;
+      accel_noise[i] = colour[i];
+    }
 
     d.t_s.push_back(t_s);
     for (int i = 0; i < 2; ++i) {

@@ -10,6 +10,8 @@
 //                                             # absent: nominal (Kx..Kz, W0x..W0z
 //                                             # from run.triad) or 0
 //   noise: {accel_mV: 2.0, angle_arcsec: 0}   # white, 1 sigma per sample
+//          # accel_correlation_s: 0.5 makes the reading noise first-order
+//          # Gauss-Markov (correlated in time) with the same sigma per sample
 //   effects: {angle_latency: {tau_ms: 2}}     # injected into the data, NOT declared
 //                                             # in run.yaml; a parameter is written
 //                                             # as its name or name_unit (tau or
@@ -90,6 +92,9 @@ struct Scenario {
   Eigen::VectorXd truth;         // SI, in truth_layout
   // noise, 1 sigma per sample
   double accel_noise_mV = 2.0;
+  // > 0: the reading noise is first-order Gauss-Markov with this correlation
+  // time (same sigma per sample): residuals correlated in time
+  double accel_correlation_s = 0.0;
   double angle_noise_rad = 0.0;
   // optional sensor imperfections of the recording chain
   double quantization_mV = 0.0;  // 0: none

@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "solvers/diagnosis/effect_discovery.h"
-#include "solvers/diagnosis/statistics.h"
+#include "solvers/statistics/statistics.h"
 #include "tests/sim_fixtures.h"
 
 namespace triadcal {

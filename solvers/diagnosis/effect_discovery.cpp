@@ -5,7 +5,7 @@
 #include <limits>
 #include <sstream>
 
-#include "solvers/diagnosis/statistics.h"
+#include "solvers/statistics/statistics.h"
 
 namespace triadcal {
 namespace {

@@ -8,7 +8,7 @@
 #include <limits>
 #include <stdexcept>
 
-#include "solvers/diagnosis/statistics.h"
+#include "solvers/statistics/statistics.h"
 #include "solvers/estimation/batch_linearization.h"
 #include "solvers/estimation/parallel.h"
 #include "solvers/estimation/schur_covariance.h"

@@ -11,7 +11,7 @@
 #include <limits>
 
 #include "solvers/diagnosis/effect_discovery.h"
-#include "solvers/diagnosis/statistics.h"
+#include "solvers/statistics/statistics.h"
 #include "tests/sim_fixtures.h"
 
 namespace triadcal {

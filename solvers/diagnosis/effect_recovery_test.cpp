@@ -18,7 +18,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "solvers/diagnosis/statistics.h"
+#include "solvers/statistics/statistics.h"
 #include "solvers/estimation/batch_solver.h"
 #include "tests/sim_fixtures.h"
 

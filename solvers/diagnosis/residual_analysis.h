@@ -19,7 +19,7 @@
 #include "core/model/run_data.h"
 #include "core/model/run_description.h"
 #include "solvers/estimation/batch_solver.h"
-#include "solvers/diagnosis/statistics.h"
+#include "solvers/statistics/statistics.h"
 
 namespace triadcal {
 

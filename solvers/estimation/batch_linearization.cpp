@@ -30,26 +30,34 @@ void ThetaRows(const RunProblem& p, bool with_constraints, Eigen::MatrixXd* A,
   StateSpaceModel(p).ThetaRows(with_constraints, A, b);
 }
 
+void SchurBlocks(const RunProblem& p, const BatchLinearization& lin, const Eigen::VectorXd& theta,
+                 int threads, const std::vector<Eigen::MatrixXd>* process_theta_jacobians,
+                 std::vector<ProcessBlock>* pb, std::vector<MeasurementBlock>* mb) {
+  const StateSpaceModel model(p);
+  const std::size_t E = p.epochs.size();
+  pb->assign(E - 1, ProcessBlock{});
+  mb->assign(E, MeasurementBlock{});
+  ParallelFor(E, threads, [&](std::size_t e) {
+    if (e + 1 < E) {
+      const ProcessStep& s = lin.process[e];
+      (*pb)[e].A = lin.LQ[e] * StateSpaceModel::ProcessJacobianXa(s);
+      (*pb)[e].B = lin.LQ[e];
+      (*pb)[e].C = process_theta_jacobians ? (*process_theta_jacobians)[e]
+                                           : Eigen::MatrixXd(-lin.LQ[e] * s.U);
+    }
+    const MeasurementStep m = model.Measurement(e, theta, true, false);
+    (*mb)[e].M = lin.LR[e];
+    (*mb)[e].N = -lin.LR[e] * m.H;
+  });
+}
+
 Eigen::MatrixXd ThetaCovariance(const RunProblem& p, const BatchLinearization& lin,
                                 const Eigen::VectorXd& theta, const Eigen::MatrixXd& A,
                                 int threads,
                                 const std::vector<Eigen::MatrixXd>* process_theta_jacobians) {
-  const StateSpaceModel model(p);
-  const std::size_t E = p.epochs.size();
-  std::vector<ProcessBlock> pb(E - 1);
-  std::vector<MeasurementBlock> mb(E);
-  ParallelFor(E, threads, [&](std::size_t e) {
-    if (e + 1 < E) {
-      const ProcessStep& s = lin.process[e];
-      pb[e].A = lin.LQ[e] * StateSpaceModel::ProcessJacobianXa(s);
-      pb[e].B = lin.LQ[e];
-      pb[e].C = process_theta_jacobians ? (*process_theta_jacobians)[e]
-                                        : Eigen::MatrixXd(-lin.LQ[e] * s.U);
-    }
-    const MeasurementStep m = model.Measurement(e, theta, true, false);
-    mb[e].M = lin.LR[e];
-    mb[e].N = -lin.LR[e] * m.H;
-  });
+  std::vector<ProcessBlock> pb;
+  std::vector<MeasurementBlock> mb;
+  SchurBlocks(p, lin, theta, threads, process_theta_jacobians, &pb, &mb);
   return ThetaCovarianceBySchur(pb, mb, A);
 }
 

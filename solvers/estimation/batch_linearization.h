@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 
 #include "solvers/estimation/run_problem.h"
+#include "solvers/estimation/schur_covariance.h"
 #include "solvers/estimation/state_space_model.h"
 
 namespace triadcal {
@@ -33,6 +34,13 @@ BatchLinearization Linearize(const RunProblem& p, const Eigen::VectorXd& theta,
 // the constraints; A theta_free - b is their residual.
 void ThetaRows(const RunProblem& p, bool with_constraints, Eigen::MatrixXd* A,
                Eigen::VectorXd* b);
+
+// The whitened Jacobian blocks of the linearisation (schur_covariance.h), with
+// the B2 Jacobians at theta; r0 is left zero. process_theta_jacobians: as in
+// ThetaCovariance below.
+void SchurBlocks(const RunProblem& p, const BatchLinearization& lin, const Eigen::VectorXd& theta,
+                 int threads, const std::vector<Eigen::MatrixXd>* process_theta_jacobians,
+                 std::vector<ProcessBlock>* pb, std::vector<MeasurementBlock>* mb);
 
 // Covariance of the free parameters (the inverse of the Fisher information
 // with the priors, and the constraints when they are in A) from the Jacobians

@@ -10,10 +10,12 @@
 #include <memory>
 
 #include "core/model/errors.h"
+#include "core/model/sample_noise.h"
 #include "solvers/estimation/batch_costs.h"
 #include "solvers/estimation/parallel.h"
 #include "solvers/estimation/run_problem.h"
 #include "solvers/estimation/batch_linearization.h"
+#include "solvers/estimation/hac_covariance.h"
 #include "solvers/estimation/noise_estimation.h"
 #include "solvers/estimation/state_space_model.h"
 #include "solvers/estimation/observability.h"
@@ -503,12 +505,14 @@ void CollectResiduals(const RunProblem& p, const RunData& data, const BatchLinea
   res->chi2_per_dof = 2.0 * res->final_cost / std::max(1, res->degrees_of_freedom);
 }
 
-// Covariance of the free parameters at the solution.
+// Covariance of the free parameters at the solution, and with the Schur
+// method its HAC sandwich (hac_covariance.h) when `hac` is given.
 Eigen::MatrixXd FreeCovariance(const RunProblem& p, const BatchLinearization& lin,
                                const LinearisedProblem& lp, const Eigen::VectorXd& theta,
                                Eigen::VectorXd* theta_free, const std::vector<double>* x,
                                const Eigen::MatrixXd& A, const BatchOptions& opt, int threads,
-                               std::vector<Eigen::MatrixXd>* process_jacobians) {
+                               std::vector<Eigen::MatrixXd>* process_jacobians,
+                               HacCovariance* hac) {
   const int nf = static_cast<int>(theta_free->size());
   const bool use_ceres = opt.covariance_method == "ceres" || !opt.robust_loss.empty();
   if (!use_ceres && opt.covariance_method != "schur") {
@@ -517,19 +521,37 @@ Eigen::MatrixXd FreeCovariance(const RunProblem& p, const BatchLinearization& li
   }
   if (!use_ceres) {
     // The process costs' own Jacobians by theta (with the derivative of
-    // their whitening), so that both paths factor the same Jacobian.
+    // their whitening), so that both paths factor the same Jacobian, and
+    // every whitened residual at the solution for the epoch scores.
     const std::size_t E = p.epochs.size();
     std::vector<Eigen::MatrixXd> C(E - 1);
-    ParallelFor(E - 1, threads, [&](std::size_t e) {
-      const ProcessCost* cost = lp.process[e];
-      Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::RowMajor> J(6, nf);
-      Vec6 r;
-      const double* params[3] = {&(*x)[6 * e], &(*x)[6 * (e + 1)], theta_free->data()};
-      double* jac[3] = {nullptr, nullptr, J.data()};
-      cost->Evaluate(params, r.data(), jac);
-      C[e] = J;
+    std::vector<Vec6> rp(E - 1), rm(E);
+    ParallelFor(E, threads, [&](std::size_t e) {
+      if (e + 1 < E) {
+        const ProcessCost* cost = lp.process[e];
+        Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::RowMajor> J(6, nf);
+        const double* params[3] = {&(*x)[6 * e], &(*x)[6 * (e + 1)], theta_free->data()};
+        double* jac[3] = {nullptr, nullptr, J.data()};
+        cost->Evaluate(params, rp[e].data(), jac);
+        C[e] = J;
+      }
+      const double* params[2] = {&(*x)[6 * e], theta_free->data()};
+      lp.measurement[e]->Evaluate(params, rm[e].data(), nullptr);
     });
-    Eigen::MatrixXd cov = ThetaCovariance(p, lin, theta, A, threads, &C);
+    std::vector<ProcessBlock> pb;
+    std::vector<MeasurementBlock> mb;
+    SchurBlocks(p, lin, theta, threads, &C, &pb, &mb);
+    for (std::size_t e = 0; e < E; ++e) {
+      if (e + 1 < E) pb[e].r0 = rp[e];
+      mb[e].r0 = rm[e];
+    }
+    const Eigen::MatrixXd info = ThetaInformationBySchur(pb, mb, A);
+    const Eigen::MatrixXd cov =
+        Eigen::LDLT<Eigen::MatrixXd>(info).solve(Eigen::MatrixXd::Identity(nf, nf));
+    if (hac) {
+      *hac = HacThetaCovariance(EpochScores(pb, mb), info, A.transpose() * A,
+                                opt.hac_bandwidth_epochs);
+    }
     if (process_jacobians) *process_jacobians = std::move(C);
     return cov;
   }
@@ -557,6 +579,12 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   const auto t_start = std::chrono::steady_clock::now();
   const int threads = opt.threads > 0 ? opt.threads : DefaultThreads();
   SolverType(opt.linear_solver);  // checks the name before the work
+  if (opt.sigma != "auto" && opt.sigma != "white" && opt.sigma != "hac") {
+    throw OptionError("sigma", "unknown '" + opt.sigma + "' (auto, white, hac)");
+  }
+  if (opt.sigma == "hac" && (opt.covariance_method != "schur" || !opt.robust_loss.empty())) {
+    throw OptionError("sigma", "hac needs the Schur covariance (not with a robust loss)");
+  }
   RunProblem p = BuildRunProblem(run, data, layout, opt.epoch_s, opt.derivatives);
   const std::size_t E = p.epochs.size();
   auto say = [&](const std::string& s) {
@@ -568,11 +596,38 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   res.epochs = static_cast<int>(E);
   res.linear_solver = opt.linear_solver;
 
+  RunDescription run_start = run;  // the noise the start (RTS) assumes
+  if (run.noise_auto) {
+    // noise_mV: auto starts from the readings' own white noise (second
+    // differences, sample_noise.h), one level for the three channels (their
+    // split is the residuals' to tell, below): the largest channel's. A
+    // start below the residual's level lets a weakly determined scale factor
+    // run (real medium roll run: at 46 mV Ky ran to its 1/5 bound, at 55 and
+    // 69 mV it stays): the cost lacks the log-det term of the noise, which
+    // follows the scale factors, so lowering a scale factor buys chi2.
+    Eigen::Vector3d sd;
+    for (int i = 0; i < 3; ++i) sd[i] = SecondDifferenceNoise(data.w_mV[i]);
+    const double level = sd.maxCoeff();
+    res.noise_auto = true;
+    if (level > 0.0) {
+      res.noise_start_mV = level;
+      p.noise_mV = Eigen::Vector3d::Constant(level);
+      run_start.noise_mV = level;
+      run_start.noise_channel_mV.reset();
+    }
+    char figures[160];
+    std::snprintf(figures, sizeof(figures),
+                  "noise_mV auto: starting from the readings' own noise, %.3g mV (second "
+                  "differences %.3g %.3g %.3g mV)",
+                  p.noise_mV[0], sd[0], sd[1], sd[2]);
+    say(figures);
+  }
+
   // 1. Which parameters are estimated: the held ones leave the problem.
   if (opt.holding.auto_hold || !opt.holding.hold.empty()) {
     say("choosing the parameters this run supports");
     if (opt.fraction) opt.fraction(0.0);
-    const HoldDecision hd = ChooseHeldParameters(run, data, layout, opt.holding, opt.epoch_s,
+    const HoldDecision hd = ChooseHeldParameters(run_start, data, layout, opt.holding, opt.epoch_s,
                                                  opt.derivatives, opt.init_decimation_hz, threads);
     res.unsupported_at_start = hd.unsupported;
     res.held = hd.held;
@@ -587,7 +642,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   say("initialising (" + std::string(opt.init == BatchInit::kRts ? "RTS smoother" : "nominal") +
       ")");
   if (opt.fraction) opt.fraction(0.1);
-  res.initial = Initialise(run, data, layout, p, opt, res.held);
+  res.initial = Initialise(run_start, data, layout, p, opt, res.held);
   res.init_seconds = Seconds(t_start);
   Eigen::VectorXd theta_free = model.Free(res.initial.theta);
   // The trajectory starts on the B2 reference motion.
@@ -677,19 +732,43 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   const Eigen::VectorXd theta = model.Expand(st.theta_free);
   res.estimate.theta = theta;
 
-  // 5. Covariance at the solution.
+  // 5. Covariance at the solution: the model's (white) and the HAC sandwich;
+  // sigma is the HAC one when the residual is not white.
   res.estimate.cov = Eigen::MatrixXd::Zero(p.n, p.n);
   if (opt.compute_covariance) {
     say("covariance");
     if (opt.fraction) opt.fraction(0.95);
     const auto t_cov = std::chrono::steady_clock::now();
     std::vector<Eigen::MatrixXd> C;
-    const Eigen::MatrixXd cov_free =
-        FreeCovariance(p, st.lin, st.lp, theta, &st.theta_free, &st.x, A, opt, threads, &C);
-    res.estimate.cov = ExpandCovariance(p, cov_free);
+    HacCovariance hac;
+    const bool with_hac = opt.covariance_method == "schur" && opt.robust_loss.empty();
+    const Eigen::MatrixXd cov_free = FreeCovariance(p, st.lin, st.lp, theta, &st.theta_free,
+                                                    &st.x, A, opt, threads, &C,
+                                                    with_hac ? &hac : nullptr);
     res.process_whitened_expected_acf = ExpectedProcessAutocorrelation(C, cov_free, 20);
+    const WhitenessSummary w =
+        ProcessWhiteness(res.process_whitened, res.process_whitened_expected_acf);
+    res.whiteness_p_value = w.p_value;
+    res.residual_white = w.white;
     // The a-posteriori variance factor (1 unless the noise was judged misfit).
-    res.estimate.cov *= res.variance_factor;
+    res.cov_white = ExpandCovariance(p, cov_free) * res.variance_factor;
+    res.estimate.cov = res.cov_white;
+    if (with_hac) {
+      res.hac_bandwidth_epochs = hac.bandwidth;
+      res.cov_hac = ExpandCovariance(p, hac.cov);
+      if (opt.sigma == "hac" || (opt.sigma == "auto" && !res.residual_white)) {
+        res.sigma_method = "hac";
+        res.estimate.cov = FloorVariances(res.cov_hac, res.cov_white);
+        if (opt.sigma == "auto") {
+          char figures[160];
+          std::snprintf(figures, sizeof(figures),
+                        " (whiteness p %.2g; Bartlett bandwidth %.1f epochs)", w.p_value,
+                        hac.bandwidth);
+          say(std::string("sigma from the HAC covariance: the residual is correlated in time") +
+              figures);
+        }
+      }
+    }
     res.covariance_seconds = Seconds(t_cov);
   }
   if (opt.fraction) opt.fraction(1.0);

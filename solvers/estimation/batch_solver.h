@@ -94,6 +94,11 @@ struct BatchOptions {
   bool exact_increments = false;  // recompute B1 in every evaluation (slow; tests)
   bool compute_covariance = true;
   std::string covariance_method = "schur";  // | ceres (sparse QR; used with a robust loss)
+  // Which covariance is the reported sigma (BatchResult::sigma_method):
+  // "auto" (HAC when the whitened process residual is not white), "white"
+  // or "hac". HAC needs the Schur covariance (not with a robust loss).
+  std::string sigma = "auto";
+  double hac_bandwidth_epochs = -1.0;  // < 0: Andrews's plug-in (hac_covariance.h)
   int threads = 0;                // 0: all cores
   HoldPolicy holding;            // which parameters to hold at nominal
   // Estimate the reading noise from the residuals (noise_estimation.h) and
@@ -142,6 +147,10 @@ struct BatchResult {
   // "estimated" | "estimated_common"); noise_check compares the declared noise with the residuals
   // of the first fit, noise_estimate is the last estimate made.
   Eigen::Vector3d noise_declared_mV = Eigen::Vector3d::Zero();
+  // noise_mV: auto (noise_declared_mV is then run.yaml's default) and the
+  // level it started from (the readings' second differences, sample_noise.h).
+  bool noise_auto = false;
+  double noise_start_mV = 0.0;
   Eigen::Vector3d noise_used_mV = Eigen::Vector3d::Zero();
   std::string noise_source = "declared";
   // The covariance's a-posteriori variance factor: chi2/dof when the noise
@@ -161,6 +170,22 @@ struct BatchResult {
   // without the covariance or with a robust loss. The whiteness tests
   // subtract it.
   std::array<std::vector<double>, 6> process_whitened_expected_acf;
+  // Ljung-Box on process_whitened (lags min(20, E/5), the expected
+  // autocorrelation subtracted), Bonferroni over its 6 components; white when
+  // p >= 0.01.
+  double whiteness_p_value = 1.0;
+  bool residual_white = true;
+  // The two covariances of theta (n x n, SI), both at the solution: "white",
+  // the inverse Fisher information of the model times variance_factor, and
+  // "hac", the sandwich over the epoch scores (hac_covariance.h), which stays
+  // honest when the residuals are correlated in time. estimate.cov is the one
+  // named by sigma_method: "white" when the residual is white, else "hac",
+  // each parameter's variance then at least its white one (the rows and
+  // columns scaled, so the matrix stays positive semi-definite). cov_hac is
+  // empty with the Ceres covariance (robust loss).
+  std::string sigma_method = "white";
+  Eigen::MatrixXd cov_white, cov_hac;
+  double hac_bandwidth_epochs = 0.0;  // the Bartlett bandwidth used, epochs
   double init_seconds = 0.0, solve_seconds = 0.0, covariance_seconds = 0.0;
   int epochs = 0;
 };

@@ -1,8 +1,12 @@
 #include "solvers/estimation/noise_estimation.h"
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include <Eigen/Cholesky>
+
+#include "solvers/statistics/statistics.h"
 
 namespace triadcal {
 
@@ -44,21 +48,33 @@ NoiseEstimate EstimateChannelNoise(const StateSpaceModel& model, const BatchLine
                           : kWhiteLag1;
   if (n > 2) {
     for (int c = 0; c < 6; ++c) {
-      double mean = 0.0;
-      for (std::size_t e = 1; e <= n; ++e) mean += process_whitened[e][c];
-      mean /= n;
-      double c0 = 0.0, c1 = 0.0;
-      for (std::size_t e = 1; e <= n; ++e) {
-        const double d = process_whitened[e][c] - mean;
-        c0 += d * d;
-        if (e > 1) c1 += d * (process_whitened[e - 1][c] - mean);
-      }
-      out.lag1[c] = c0 > 0 ? c1 / c0 : 0.0;
+      std::vector<double> x(n);
+      for (std::size_t e = 1; e <= n; ++e) x[e - 1] = process_whitened[e][c];
+      out.lag1[c] = Autocorrelation(x, 1);
       if (std::abs(out.lag1[c]) > out.white_bound) out.white = false;
     }
   }
   out.channels_alike =
       out.estimated_mV.maxCoeff() <= kMaxChannelRatio * out.estimated_mV.minCoeff();
+  return out;
+}
+
+WhitenessSummary ProcessWhiteness(const std::vector<Vec6>& process_whitened,
+                                  const std::array<std::vector<double>, 6>& expected_acf) {
+  WhitenessSummary out;
+  const std::size_t E = process_whitened.size();
+  if (E <= 20) return out;
+  double p_min = 1.0;
+  const int lags = static_cast<int>(std::min<std::size_t>(20, E / 5));
+  for (int c = 0; c < 6; ++c) {
+    std::vector<double> x;
+    x.reserve(E - 1);
+    for (std::size_t e = 1; e < E; ++e) x.push_back(process_whitened[e][c]);
+    const std::vector<double>& expected = expected_acf[c];
+    p_min = std::min(p_min, LjungBox(x, lags, expected.empty() ? nullptr : &expected).p_value);
+  }
+  out.p_value = std::min(1.0, 6.0 * p_min);
+  out.white = out.p_value >= 0.01;
   return out;
 }
 

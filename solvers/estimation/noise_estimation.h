@@ -36,6 +36,7 @@
 // noise spreads it, and sigma carry it.
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -89,5 +90,16 @@ NoiseEstimate EstimateChannelNoise(const StateSpaceModel& model, const BatchLine
 // The fewest effective degrees of freedom per channel that an estimated noise
 // needs (sd of sigma <= 13 %).
 constexpr double kMinNoiseDof = 30.0;
+
+// Whiteness of the whitened process residual (index 0, the first epoch, ends
+// no interval): Ljung-Box per component over lags min(20, E/5) with the
+// autocorrelation the fit leaves subtracted (expected_acf, lags 1..; may be
+// empty), Bonferroni over the 6 components; white when p >= 0.01.
+struct WhitenessSummary {
+  double p_value = 1.0;
+  bool white = true;
+};
+WhitenessSummary ProcessWhiteness(const std::vector<Vec6>& process_whitened,
+                                  const std::array<std::vector<double>, 6>& expected_acf);
 
 }  // namespace triadcal

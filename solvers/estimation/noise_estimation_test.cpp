@@ -60,7 +60,8 @@ TEST(NoiseEstimation, SigmaRestsOnTheNoiseTheRunHas) {
 // the per-channel split of such a residual is misfit, not noise. An undeclared
 // 20-ms angle latency on the paper's profile: the residual is far from white,
 // so the fit keeps the declared weights (the estimate is the one without noise
-// estimation) and scales the covariance by chi2/dof.
+// estimation) and scales the model's covariance by chi2/dof; the residual is
+// not white, so the reported sigma is the HAC one, never below that.
 TEST(NoiseEstimation, MisfitIsNotSplitBetweenChannels) {
   Scenario s = testing_fixtures::WithEffect(2, Effect::kAngleLatency, {{"angle_latency.tau", 20.0}});
   const RunData data = Simulate(s);
@@ -79,12 +80,16 @@ TEST(NoiseEstimation, MisfitIsNotSplitBetweenChannels) {
   for (int c = 0; c < 3; ++c) EXPECT_DOUBLE_EQ(r.noise_used_mV[c], 2.0);
   EXPECT_EQ(d.variance_factor, 1.0);
   for (int i = 0; i < kNumBaseParams; ++i) {
-    if (d.estimate.cov(i, i) <= 0.0) continue;  // held
-    const double sd = std::sqrt(d.estimate.cov(i, i));
+    if (d.cov_white(i, i) <= 0.0) continue;  // held
+    const double sd = std::sqrt(d.cov_white(i, i));  // the model's sigma of the declared noise
     EXPECT_NEAR(r.estimate.theta[i], d.estimate.theta[i], 1e-6 * sd) << layout.info(i).name;
-    EXPECT_NEAR(std::sqrt(r.estimate.cov(i, i)) / sd, std::sqrt(r.chi2_per_dof), 1e-6)
+    EXPECT_NEAR(std::sqrt(r.cov_white(i, i)) / sd, std::sqrt(r.chi2_per_dof), 1e-6)
         << layout.info(i).name;
+    // The residual is not white either: sigma is the HAC one, never below
+    // the model's scaled by the factor.
+    EXPECT_GE(r.estimate.cov(i, i), r.cov_white(i, i) * (1 - 1e-12)) << layout.info(i).name;
   }
+  EXPECT_EQ(r.sigma_method, "hac");
 }
 
 // The same with noise_mV: auto: no figure to keep, so the readings' noise is

@@ -127,6 +127,49 @@ ReducedOverStates ReduceOverStates(const std::vector<ProcessBlock>& process,
   return out;
 }
 
+std::vector<Eigen::VectorXd> EpochScores(const std::vector<ProcessBlock>& process,
+                                         const std::vector<MeasurementBlock>& measurement) {
+  using Mat6 = Eigen::Matrix<double, 6, 6>;
+  using Vec6 = Eigen::Matrix<double, 6, 1>;
+  const std::size_t E = measurement.size();
+  std::vector<Eigen::VectorXd> scores(E);
+  if (E == 0) return scores;
+  // State x_e in T_e with x_0..x_{e-1} eliminated: its diagonal block S,
+  // theta coupling G and right-hand side h; `done` is b_theta of T_e less what
+  // the eliminated states took.
+  const MeasurementBlock& m0 = measurement[0];
+  Mat6 S = m0.M.transpose() * m0.M;
+  Eigen::MatrixXd G = m0.M.transpose() * m0.N;
+  Vec6 h = m0.M.transpose() * m0.r0;
+  Eigen::VectorXd done = m0.N.transpose() * m0.r0;
+  Eigen::VectorXd F_prev = Eigen::VectorXd::Zero(done.size());
+  for (std::size_t e = 0; e < E; ++e) {
+    // F_e: x_e solved for within T_e.
+    const Eigen::VectorXd F = done - G.transpose() * Eigen::LDLT<Mat6>(S).solve(h);
+    scores[e] = F - F_prev;
+    F_prev = F;
+    if (e + 1 == E) break;
+    // Interval e joins (T_{e+1}); x_e is eliminated with it, then epoch e+1's
+    // measurement joins.
+    const ProcessBlock& p = process[e];
+    done.noalias() += p.C.transpose() * p.r0;
+    const Mat6 Sf = S + p.A.transpose() * p.A;
+    const Eigen::MatrixXd Gf = G + p.A.transpose() * p.C;
+    const Vec6 hf = h + p.A.transpose() * p.r0;
+    const Eigen::LDLT<Mat6> ldlt(Sf);
+    const Eigen::MatrixXd SiG = ldlt.solve(Gf);
+    const Vec6 Sih = ldlt.solve(hf);
+    done.noalias() -= Gf.transpose() * Sih;
+    const Mat6 U = p.A.transpose() * p.B;
+    const MeasurementBlock& m = measurement[e + 1];
+    S = p.B.transpose() * p.B + m.M.transpose() * m.M - U.transpose() * ldlt.solve(U);
+    G = p.B.transpose() * p.C + m.M.transpose() * m.N - U.transpose() * SiG;
+    h = p.B.transpose() * p.r0 + m.M.transpose() * m.r0 - U.transpose() * Sih;
+    done.noalias() += m.N.transpose() * m.r0;
+  }
+  return scores;
+}
+
 Eigen::MatrixXd ThetaCovarianceBySchur(const std::vector<ProcessBlock>& process,
                                        const std::vector<MeasurementBlock>& measurement,
                                        const Eigen::MatrixXd& theta_rows) {

@@ -65,4 +65,19 @@ ReducedOverStates ReduceOverStates(const std::vector<ProcessBlock>& process,
                                    const std::vector<MeasurementBlock>& measurement,
                                    bool with_states = false);
 
+// The reduced gradient split by epoch (the prediction-error decomposition of
+// a state-space model's likelihood). T_e is the problem truncated after epoch e
+// (measurements 0..e, intervals 0..e-1) and F_e the gradient by theta of its
+// cost with its states solved for; score e is F_e - F_{e-1} (F_{-1} = 0), the
+// gradient of what epoch e adds to the cost given the epochs before it. The
+// blocks' r0 are the residuals at the point (states and theta) where the
+// scores are wanted, e.g. the solution. Under the model, at the true theta,
+// the scores are martingale differences: uncorrelated between epochs, each of
+// covariance the information epoch e adds, so the sum of their outer
+// products estimates the information of theta from the data, and correlation
+// between epochs shows residuals correlated in time (hac_covariance.h). The
+// scores sum to ReduceOverStates's gradient. Cost O(E (6^3 + 6^2 n)).
+std::vector<Eigen::VectorXd> EpochScores(const std::vector<ProcessBlock>& process,
+                                         const std::vector<MeasurementBlock>& measurement);
+
 }  // namespace triadcal

@@ -8,7 +8,7 @@
 #include <limits>
 
 #include "core/model/errors.h"
-#include "solvers/diagnosis/statistics.h"
+#include "solvers/statistics/statistics.h"
 #include "solvers/estimation/levenberg_marquardt.h"
 #include "solvers/estimation/parallel.h"
 #include "solvers/estimation/reduced_run.h"

@@ -1,11 +1,11 @@
 #include "tools/report/fit_report.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
 
 #include "core/io/file_util.h"
-#include "solvers/diagnosis/statistics.h"
 #include "solvers/estimation/observability.h"
 #include "tools/report/estimate_json.h"
 #include "tools/report/value_format.h"
@@ -18,7 +18,10 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
   // The same analysis as `observability`, on the fit's own covariance. Held
   // parameters are pinned far below their (original) prior sigma, so they
   // come out determined and are reported as held instead.
-  rep.weak = UnsupportedDirections(layout, r.estimate.cov, r.prior.sigma);
+  // What the run determines is the model's information (the white
+  // covariance), not the HAC sigma's allowance for correlated residuals.
+  rep.weak = UnsupportedDirections(
+      layout, r.cov_white.rows() == layout.size() ? r.cov_white : r.estimate.cov, r.prior.sigma);
   for (const std::string& s : ParametersIn(rep.weak)) rep.not_estimable.insert(s);
   rep.not_estimable.insert(rep.held.begin(), rep.held.end());
   for (const auto& [name, anchors] : r.relative_to) rep.not_estimable.insert(name);
@@ -26,20 +29,9 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
     const double z = (r.estimate.theta[i] - r.prior.mean[i]) / r.prior.sigma[i];
     if (std::abs(z) > 3.0) rep.at_prior_bound.push_back(layout.info(i).name);
   }
-  // Whiteness of the whitened process residuals, channel by channel.
-  const std::size_t E = r.process_whitened.size();
-  if (E > 20) {
-    double p_min = 1.0;
-    const int lags = static_cast<int>(std::min<std::size_t>(20, E / 5));
-    for (int c = 0; c < 6; ++c) {
-      std::vector<double> x;
-      for (std::size_t e = 1; e < E; ++e) x.push_back(r.process_whitened[e][c]);
-      const std::vector<double>& expected = r.process_whitened_expected_acf[c];
-      p_min = std::min(p_min, LjungBox(x, lags, expected.empty() ? nullptr : &expected).p_value);
-    }
-    rep.whiteness_p_value = std::min(1.0, 6.0 * p_min);
-    rep.residual_white = rep.whiteness_p_value >= 0.01;
-  }
+  // Whiteness of the whitened process residuals (the solver's test).
+  rep.whiteness_p_value = r.whiteness_p_value;
+  rep.residual_white = r.residual_white;
   rep.noise_consistent = r.noise_check.consistent;
   rep.pass = r.converged && rep.residual_white;
   std::ostringstream v;
@@ -52,19 +44,35 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
   std::snprintf(noise, sizeof(noise), "; reading noise from the residuals %.3g %.3g %.3g mV",
                 ne[0], ne[1], ne[2]);
   v << noise;
+  // What run.yaml said: the figures, or auto (with the start it took).
+  char said[120];
+  if (r.noise_auto) {
+    std::snprintf(said, sizeof(said), "noise_mV auto, started at %.3g mV", r.noise_start_mV);
+  } else {
+    std::snprintf(said, sizeof(said), "declared %.3g %.3g %.3g", nd[0], nd[1], nd[2]);
+  }
   if (r.noise_source == "estimated") {
-    std::snprintf(noise, sizeof(noise), " (declared %.3g %.3g %.3g: sigma rest on the estimate)",
-                  nd[0], nd[1], nd[2]);
+    std::snprintf(noise, sizeof(noise), " (%s: sigma rest on the estimate)", said);
     v << noise;
   } else if (r.noise_source == "estimated_common") {
     std::snprintf(noise, sizeof(noise),
-                  " (declared %.3g %.3g %.3g; the residual is not white or its channels differ "
-                  "beyond 3x, so its split is misfit: sigma scaled by one variance factor, "
-                  "chi2/dof %.3g)",
-                  nd[0], nd[1], nd[2], r.variance_factor);
+                  " (%s; the residual is not white or its channels differ beyond 3x, so its "
+                  "split is misfit: sigma scaled by one variance factor, chi2/dof %.3g)",
+                  said, r.variance_factor);
     v << noise;
   }
-  v << (rep.residual_white ? "; residuals white" : "; RESIDUALS NOT WHITE (sigma may be optimistic)");
+  if (rep.residual_white) {
+    v << "; residuals white";
+  } else if (r.sigma_method == "hac") {
+    char hac[160];
+    std::snprintf(hac, sizeof(hac),
+                  "; RESIDUALS NOT WHITE: sigma from the HAC covariance (Bartlett, %.1f epochs), "
+                  "which allows for their correlation in time",
+                  r.hac_bandwidth_epochs);
+    v << hac;
+  } else {
+    v << "; RESIDUALS NOT WHITE (sigma may be optimistic)";
+  }
   if (rep.at_prior_bound.empty()) {
     v << "; no parameter at a prior bound";
   } else {
@@ -97,6 +105,24 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
   nlohmann::json out;
   out["parameters"] = ParametersJson(layout, r.estimate.theta, r.estimate.cov, rep.not_estimable);
   MarkRelative(r.relative_to, &out["parameters"]);
+  // Both sigma next to the reported one: the model's (white) and the HAC's.
+  for (int i = 0; i < layout.size(); ++i) {
+    const ParameterInfo& pi = layout.info(i);
+    nlohmann::json& pj = out["parameters"][pi.name];
+    if (pj["sigma"].is_null()) continue;
+    if (r.cov_white.rows() == layout.size()) {
+      pj["sigma_white"] = std::sqrt(std::max(0.0, r.cov_white(i, i))) / pi.si_per_unit;
+    }
+    if (r.cov_hac.rows() == layout.size()) {
+      pj["sigma_hac"] = std::sqrt(std::max(0.0, r.cov_hac(i, i))) / pi.si_per_unit;
+    }
+  }
+  out["sigma_method"] = r.sigma_method;
+  if (r.cov_hac.rows() > 0) {
+    out["hac"] = {{"kernel", "Bartlett"},
+                  {"bandwidth_epochs", r.hac_bandwidth_epochs},
+                  {"bandwidth_rule", "Andrews (1991) AR(1) plug-in over the epoch scores"}};
+  }
   out["initial"] = {{"parameters", ParametersJson(layout, r.initial.theta, r.initial.cov, {})}};
   if (correlations) out["correlation"] = CorrelationJson(layout, r.estimate.cov);
   // The directions the run cannot determine: those still weak in the fit's
@@ -125,7 +151,9 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
                     {"sentence", rep.verdict}};
   out["converged"] = r.converged;
   auto vec = [](const Eigen::Vector3d& v) { return std::vector<double>{v[0], v[1], v[2]}; };
-  out["noise"] = {{"declared_mV", vec(r.noise_declared_mV)},
+  out["noise"] = {{"declared_mV", r.noise_auto ? nlohmann::json(nullptr)
+                                                : nlohmann::json(vec(r.noise_declared_mV))},
+                  {"auto", r.noise_auto},
                   {"estimated_mV", vec(r.noise_check.estimated_mV)},
                   {"estimated_sd_mV", vec(r.noise_check.sd_mV)},
                   {"estimated_dof", vec(r.noise_check.dof)},
@@ -136,6 +164,7 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
                                                         r.noise_check.lag1.data() + 6)},
                   {"residual_white_for_noise", r.noise_check.white},
                   {"channels_alike", r.noise_check.channels_alike}};
+  if (r.noise_auto) out["noise"]["start_mV"] = r.noise_start_mV;
   out["final_cost"] = r.final_cost;
   out["residual_count"] = r.residual_count;
   out["iterations"] = {{"relinearisations", r.outer_iterations}, {"ceres", r.ceres_iterations}};

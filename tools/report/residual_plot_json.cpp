@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "solvers/diagnosis/statistics.h"
+#include "solvers/statistics/statistics.h"
 
 namespace triadcal {
 namespace {

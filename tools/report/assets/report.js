@@ -212,10 +212,14 @@
       return [name, f.value, f.sigma, p.unit || '', flags.join('; ')];
     });
   }
-  function paramTable(parent, params, extra, caption) {
+  function paramTable(parent, params, extra, caption, sigmaMethod) {
     if (!params) return;
-    var s = section(parent, caption || 'Parameters',
-                    'Each value is printed to the digit of its sigma (two significant digits of sigma).');
+    var note = 'Each value is printed to the digit of its sigma (two significant digits of sigma).';
+    if (sigmaMethod === 'hac') {
+      note += ' The residuals are correlated in time, so sigma is the HAC (sandwich) one, ' +
+              'never below the white-noise sigma.';
+    }
+    var s = section(parent, caption || 'Parameters', note);
     s.appendChild(table(['parameter', 'value', 'sigma', 'unit', 'note'], paramRows(params, extra)));
   }
   function fitFlags(out) {
@@ -352,7 +356,7 @@
 
   // ------------------------------------------------------ per command
   function renderFit(p, out) {
-    paramTable(p, out.parameters, fitFlags(out));
+    paramTable(p, out.parameters, fitFlags(out), null, out.sigma_method);
     residualCharts(p, out.residual_plot);
     residualStats(p, out.residual_analysis);
     correlationSection(p, out.correlation);

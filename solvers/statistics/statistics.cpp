@@ -1,4 +1,4 @@
-#include "solvers/diagnosis/statistics.h"
+#include "solvers/statistics/statistics.h"
 
 #include <unsupported/Eigen/FFT>
 #include <unsupported/Eigen/SpecialFunctions>

@@ -1,0 +1,18 @@
+// The white noise of a sampled series, without any model: the second
+// difference d_k = x_{k+1} - 2 x_k + x_{k-1} of white noise of sigma has
+// variance 6 sigma^2, while a smooth signal adds only (2 pi dt / T)^2 times
+// its amplitude (4e-4 of it for a 6-s swing sampled at 50 Hz). The largest
+// 2 % of |d| are left out (gaps, repeated stamps, spikes) and the Gaussian
+// truncation corrected. Used as the start of `noise_mV: auto` and as the
+// noise the unit checks allow for (time-stamp jitter and vibration count in
+// it, as they do in the residuals).
+#pragma once
+
+#include <vector>
+
+namespace triadcal {
+
+// sigma of the white part of x, in x's unit (0 for fewer than 10 samples).
+double SecondDifferenceNoise(const std::vector<double>& x);
+
+}  // namespace triadcal
