@@ -98,10 +98,12 @@ TEST(NoiseEstimation, MisfitIsNotSplitBetweenChannels) {
 TEST(NoiseEstimation, AutoOnMisfitTakesTheCommonLevelThenTheFactor) {
   Scenario s = testing_fixtures::WithEffect(2, Effect::kAngleLatency, {{"angle_latency.tau", 20.0}});
   s.run.noise_auto = true;
-  s.run.noise_mV = 0.3;  // only the start
+  s.run.noise_mV = 0.3;  // not used: auto starts from the readings' second differences
   const RunData data = Simulate(s);
   const BatchResult r = SolveBatch(s.run, data, ParameterLayout(), BatchOptions());
   ASSERT_TRUE(r.converged);
+  EXPECT_TRUE(r.noise_auto);
+  EXPECT_NEAR(r.noise_start_mV, 2.0, 0.1);  // the true 2 mV, the motion and latency aside
   EXPECT_EQ(r.noise_source, "estimated_common");
   const Eigen::Vector3d& e = r.noise_check.estimated_mV;
   const double level = std::sqrt(e.squaredNorm() / 3.0);

@@ -18,10 +18,11 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
   // The same analysis as `observability`, on the fit's own covariance. Held
   // parameters are pinned far below their (original) prior sigma, so they
   // come out determined and are reported as held instead.
-  // What the run determines is the model's information (the white
-  // covariance), not the HAC sigma's allowance for correlated residuals.
-  rep.weak = UnsupportedDirections(
-      layout, r.cov_white.rows() == layout.size() ? r.cov_white : r.estimate.cov, r.prior.sigma);
+  // Judged on the reported (honest) covariance: a parameter whose HAC sigma
+  // is as large as its prior's is not determined by this run, whatever the
+  // white-noise information says (real slow roll run: dpsi 4555' with white
+  // sigma 28' and HAC sigma 2237' against a prior of 180').
+  rep.weak = UnsupportedDirections(layout, r.estimate.cov, r.prior.sigma);
   for (const std::string& s : ParametersIn(rep.weak)) rep.not_estimable.insert(s);
   rep.not_estimable.insert(rep.held.begin(), rep.held.end());
   for (const auto& [name, anchors] : r.relative_to) rep.not_estimable.insert(name);
