@@ -27,7 +27,7 @@ Sections (all by default):
   vertical  bench/scenarios/vertical-shaft.yaml, 5 seeds: converged,
             (K - nominal) / sigma, sigma / prior sigma, what the output names.
   coloured  bench/scenarios/paper-coloured.yaml (reading noise correlated in
-            time, 0.5 s), N seeds (20) through `fit`: RMS (estimate - truth) /
+            time, 0.5 s), 90 s and 360 s, N seeds (20) each through `fit`: RMS (estimate - truth) /
             sigma per group with the reported sigma, the model's white sigma
             and the HAC sigma; which one was reported; the bandwidth.
   real      the real roll runs (needs the shared data folder; skipped without
@@ -223,35 +223,39 @@ def vertical(work, a):
 
 def coloured(work, a):
     print("\n## reading noise correlated in time (bench/scenarios/paper-coloured.yaml)\n")
-    scen = os.path.join(HERE, "scenarios", "paper-coloured.yaml")
-    z = {m: {g: [] for g in GROUPS} for m in ("sigma", "sigma_white", "sigma_hac")}
-    methods, bands = [], []
-    for seed in range(1, a.seeds + 1):
-        d = os.path.join(work, f"col_{seed}")
-        run([BIN, "simulate", scen, "-o", d, "-q", "--seed", str(seed), "--force"])
-        run([BIN, "fit", os.path.join(d, "run.yaml"), "-o", os.path.join(d, "fit.json"), "-q",
-             "--force"])
-        f = json.load(open(os.path.join(d, "fit.json")))
-        t = json.load(open(os.path.join(d, "truth.json")))["parameters"]
-        methods.append(f["sigma_method"])
-        bands.append(f["hac"]["bandwidth_epochs"])
-        for g, names in GROUPS.items():
-            for n in names:
-                p = f["parameters"][n]
-                if p["sigma"] is None or not p["estimable"]:
-                    continue
-                tv = t[n]["value"] if isinstance(t[n], dict) else t[n]
-                for m in z:
-                    z[m][g].append((p["value"] - tv) / p[m])
-    print(f"{a.seeds} seeds: sigma reported from {methods.count('hac')} HAC / "
-          f"{methods.count('white')} white fits; bandwidth {min(bands):.1f}-{max(bands):.1f} epochs")
-    print(f"  {'RMS z':18s} {'reported':>9s} {'white':>9s} {'HAC':>9s}")
-    for g in GROUPS:
-        cells = [math.sqrt(statistics.mean(v * v for v in z[m][g])) if z[m][g] else float("nan")
-                 for m in z]
-        print(f"  {g:18s} " + " ".join(f"{c:9.3f}" for c in cells))
-    allz = [math.sqrt(statistics.mean(v * v for g in GROUPS for v in z[m][g])) for m in z]
-    print(f"  {'all':18s} " + " ".join(f"{c:9.3f}" for c in allz))
+    base = open(os.path.join(HERE, "scenarios", "paper-coloured.yaml")).read()
+    for duration in (90, 360):
+        scen = os.path.join(work, f"coloured_{duration}.yaml")
+        open(scen, "w").write(re.sub(r"duration_s: \d+.*", f"duration_s: {duration}", base))
+        z = {m: {g: [] for g in GROUPS} for m in ("sigma", "sigma_white", "sigma_hac")}
+        methods, bands = [], []
+        for seed in range(1, a.seeds + 1):
+            d = os.path.join(work, f"col_{duration}_{seed}")
+            run([BIN, "simulate", scen, "-o", d, "-q", "--seed", str(seed), "--force"])
+            run([BIN, "fit", os.path.join(d, "run.yaml"), "-o", os.path.join(d, "fit.json"),
+                 "-q", "--force"])
+            f = json.load(open(os.path.join(d, "fit.json")))
+            t = json.load(open(os.path.join(d, "truth.json")))["parameters"]
+            methods.append(f["sigma_method"])
+            bands.append(f["hac"]["bandwidth_epochs"])
+            for g, names in GROUPS.items():
+                for n in names:
+                    p = f["parameters"][n]
+                    if p["sigma"] is None or not p["estimable"]:
+                        continue
+                    tv = t[n]["value"] if isinstance(t[n], dict) else t[n]
+                    for m in z:
+                        z[m][g].append((p["value"] - tv) / p[m])
+        print(f"{duration}-s runs, {a.seeds} seeds: sigma reported from "
+              f"{methods.count('hac')} HAC / {methods.count('white')} white fits; bandwidth "
+              f"{min(bands):.1f}-{max(bands):.1f} epochs")
+        print(f"  {'RMS z':18s} {'reported':>9s} {'white':>9s} {'HAC':>9s}")
+        for g in GROUPS:
+            cells = [math.sqrt(statistics.mean(v * v for v in z[m][g])) if z[m][g]
+                     else float("nan") for m in z]
+            print(f"  {g:18s} " + " ".join(f"{c:9.3f}" for c in cells))
+        allz = [math.sqrt(statistics.mean(v * v for g in GROUPS for v in z[m][g])) for m in z]
+        print(f"  {'all':18s} " + " ".join(f"{c:9.3f}" for c in allz))
 
 
 def shared_folder():
@@ -268,7 +272,7 @@ def real(work, a):
         return
     ex = os.path.join(ROOT, "examples", "single-axis-roll")
     whole = {}
-    for speed in ("slow", "medium", "fast"):
+    for speed in a.real_runs.split(","):
         text = open(os.path.join(ex, speed + ".yaml")).read()
         text = re.sub(r"noise_mV: \d+", "noise_mV: auto", text)
         fits = []
@@ -355,6 +359,8 @@ def main():
     ap.add_argument("--workdir", default="")
     ap.add_argument("--real-effects", default="angle_latency,thermal_drift",
                     help="effects fitted on the real runs (what the loop finds there; '' none)")
+    ap.add_argument("--real-runs", default="slow,medium,fast",
+                    help="which real roll runs (slow,medium,fast)")
     ap.add_argument("--real-timeout", type=float, default=1200.0,
                     help="seconds one real fit may take before that speed is skipped")
     a = ap.parse_args()

@@ -60,11 +60,8 @@ HacCovariance HacThetaCovariance(const std::vector<Eigen::VectorXd>& scores,
     const double data = total - theta_rows_information(a, a);
     if (total > 0.0 && data >= 0.5 * total) weight[a] = 1.0;
   }
-  // Prewhitening (Andrews and Monahan 1992), per parameter: u_e = s_e -
-  // rho s_{e-1}, the kernel estimate on u, recoloured by 1 / (1 - rho). The
-  // Bartlett estimate alone is biased low under strong correlation (RMS z
-  // 1.16 on bench/scenarios/paper-coloured.yaml); the filter takes most of
-  // the correlation out first.
+  // Prewhitening when asked (hac_covariance.h: why not by default): u_e =
+  // s_e - rho s_{e-1}, the kernel estimate on u, recoloured by 1 / (1 - rho).
   Eigen::VectorXd rho = Eigen::VectorXd::Zero(n);
   if (prewhiten) {
     for (Eigen::Index a = 0; a < n; ++a) {

@@ -20,16 +20,20 @@
 // information enters B as it is. B scales with the residuals, so a declared
 // noise that is wrong by a factor is corrected as well.
 //
-// Prewhitening (Andrews and Monahan 1992), per parameter: an AR(1) filter
-// u_e = s_e - rho_a s_{e-1} takes most of the correlation out, the kernel
-// estimate is made on u and recoloured by 1 / (1 - rho_a). Without it the
-// Bartlett estimate is biased low under strong correlation (RMS z 1.16
-// against 1.88 for the white sigma on bench/scenarios/paper-coloured.yaml).
+// Prewhitening (Andrews and Monahan 1992; off by default), per parameter: an
+// AR(1) filter u_e = s_e - rho_a s_{e-1}, the kernel estimate on u,
+// recoloured by 1 / (1 - rho_a). Measured both ways: on simulated runs with
+// Gauss-Markov reading noise (bench/honesty.py --only coloured, 181 epochs)
+// RMS z is 1.16 without and 0.91 with it; on the real medium roll run cut in
+// halves (--only real) the halves agree at a median chi2/dof of 1.05 without
+// and 0.29 with it: there the scores' lag-1 reaches 0.9 and the recolouring
+// 1 / (1 - rho)^2 (up to 1100 at the 0.97 cap) inflates sigma up to 15x. The
+// plain estimate is the default.
 //
 // The bandwidth S: Andrews's AR(1) plug-in for the Bartlett kernel,
 // S = 1.1447 (alpha N)^(1/3), alpha from an AR(1) fit to each parameter's
-// (prewhitened) score series (those the data determine), so white scores
-// give S of 1-3 epochs and strongly correlated ones tens of epochs.
+// score series (those the data determine), so white scores give S of 1-3
+// epochs and strongly correlated ones tens of epochs.
 #pragma once
 
 #include <vector>
@@ -54,7 +58,7 @@ struct HacCovariance {
 HacCovariance HacThetaCovariance(const std::vector<Eigen::VectorXd>& scores,
                                  const Eigen::MatrixXd& information,
                                  const Eigen::MatrixXd& theta_rows_information,
-                                 double bandwidth = -1.0, bool prewhiten = true);
+                                 double bandwidth = -1.0, bool prewhiten = false);
 
 // Andrews's AR(1) plug-in bandwidth for the Bartlett kernel over the given
 // series (one per column of `series`, E rows; columns with weight 0 ignored).
