@@ -770,6 +770,11 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
       }
     }
     res.covariance_seconds = Seconds(t_cov);
+  } else {
+    // Whiteness without the fit's own autocorrelation (it needs the covariance).
+    const WhitenessSummary w = ProcessWhiteness(res.process_whitened, {});
+    res.whiteness_p_value = w.p_value;
+    res.residual_white = w.white;
   }
   if (opt.fraction) opt.fraction(1.0);
   return res;

@@ -24,9 +24,10 @@
 // AR(1) filter u_e = s_e - rho_a s_{e-1}, the kernel estimate on u,
 // recoloured by 1 / (1 - rho_a). Measured both ways: on simulated runs with
 // Gauss-Markov reading noise (bench/honesty.py --only coloured, 181 epochs)
-// RMS z is 1.16 without and 0.91 with it; on the real medium roll run cut in
-// halves (--only real) the halves agree at a median chi2/dof of 1.05 without
-// and 0.29 with it: there the scores' lag-1 reaches 0.9 and the recolouring
+// RMS z is 1.16 without and 0.91 with it (1.04 without at 721 epochs); on the
+// real medium roll run cut in halves (--only real) the halves agree at a
+// median chi2/dof of 0.92 without and 0.29 with it: there the scores' lag-1
+// reaches 0.9 and the recolouring
 // 1 / (1 - rho)^2 (up to 1100 at the 0.97 cap) inflates sigma up to 15x. The
 // plain estimate is the default.
 //
