@@ -58,7 +58,8 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
   } else if (r.noise_source == "estimated_common") {
     std::snprintf(noise, sizeof(noise),
                   " (%s; the residual is not white or its channels differ beyond 3x, so its "
-                  "split is misfit: sigma scaled by one variance factor, chi2/dof %.3g)",
+                  "split is misfit: the model's sigma scaled by one variance factor, chi2/dof "
+                  "%.3g)",
                   said, r.variance_factor);
     v << noise;
   }
