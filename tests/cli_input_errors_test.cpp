@@ -216,6 +216,20 @@ TEST_F(CliInputErrors, AnglesInRadiansOverALongRun) {
   EXPECT_FALSE(fs::exists(Path("out.json")));
 }
 
+// The other side of the check above: a run in degrees whose readings are
+// noisy (vibration: 60 mV = 0.34 g per sample on 174 mV/g) swings by more
+// than 0.5 g in every window; it is judged against the readings' own noise
+// (second differences), so noise_mV: auto, which declares no figure, loads.
+TEST_F(CliInputErrors, NoisyRunInDegreesIsNotTakenForRadians) {
+  const Scenario s = testing_fixtures::PaperScenario(50.0, 20.0, 60.0, 15.0, 11);
+  WriteRunCsv(Simulate(s), Path("noisy.csv"), "");
+  WriteText("noisy.yaml", "data: noisy.csv\ntriad: {noise_mV: auto}\n");
+  const CliResult r = Run("fit " + Path("noisy.yaml") + " -o " + Path("out.json") + " -q");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("radians"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(Path("out.json")));
+}
+
 TEST_F(CliInputErrors, ReadingsInMillivoltsDeclaredAsG) {
   WriteText("g.yaml",
             "data: run.csv\ncolumns: {wx: {source: wx, unit: g}, wy: {source: wy, unit: g}, "

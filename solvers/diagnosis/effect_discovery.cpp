@@ -254,11 +254,10 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
     for (const CandidateInformation& c : info.candidates) to_refit += refit_it(c) ? 1 : 0;
     const double fit_share = (round_end - round_begin) / (to_refit + 1.0);
     const int planned_refits = to_refit;
-    // Refits candidate c with its effect added; fills t (its LR test) and
-    // refit_result.
-    BatchResult refit_result;
+    // Refits candidate c with its effect added, fills t (its LR test) and
+    // returns the refit.
     auto refit_candidate = [&](const CandidateInformation& c, CandidateTest* tp,
-                               int* count) {
+                               int* count) -> BatchResult {
       CandidateTest& t = *tp;
       const Effect e = c.effect;
       int& refit_count = *count;
@@ -303,7 +302,7 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
         t.p_value = ChiSquareSurvival(t.statistic, t.dof);
         t.absorbs = Implausible(run, aug, r, e);
       }
-      refit_result = std::move(r);
+      return r;
     };
     int refit_count = 0;
     for (const CandidateInformation& c : info.candidates) {
@@ -331,9 +330,9 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
         refits.emplace_back();
         continue;
       }
-      refit_candidate(c, &t, &refit_count);
+      BatchResult r = refit_candidate(c, &t, &refit_count);
       tests.push_back(t);
-      refits.push_back(std::move(refit_result));
+      refits.push_back(std::move(r));
     }
     // A refit that passes only beyond its plausible size absorbs something
     // else; the score ranking (a linearisation) can put such a candidate far
@@ -357,8 +356,7 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
         CandidateTest& t = tests[next];
         t.note.clear();
         ++to_refit;
-        refit_candidate(info.candidates[next], &t, &refit_count);
-        refits[next] = std::move(refit_result);
+        refits[next] = refit_candidate(info.candidates[next], &t, &refit_count);
         found = selectable(t);
       }
     }

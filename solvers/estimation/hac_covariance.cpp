@@ -108,7 +108,6 @@ Eigen::MatrixXd FloorVariances(const Eigen::MatrixXd& cov, const Eigen::MatrixXd
   Eigen::VectorXd d = Eigen::VectorXd::Ones(cov.rows());
   for (Eigen::Index i = 0; i < cov.rows(); ++i) {
     if (cov(i, i) > 0.0 && floor(i, i) > cov(i, i)) d[i] = std::sqrt(floor(i, i) / cov(i, i));
-    if (!(cov(i, i) > 0.0)) d[i] = 1.0;
   }
   Eigen::MatrixXd out = d.asDiagonal() * cov * d.asDiagonal();
   // A variance the sandwich leaves at zero (a held parameter) keeps the floor's.
