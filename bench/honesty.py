@@ -33,7 +33,8 @@ Sections (all by default):
   real      the real roll runs (needs the shared data folder; skipped without
             it): each run fitted whole and in halves (time_range_s) with the
             noise estimated (noise_mV: auto) and the loop's effects
-            (--real-effects, angle_latency,thermal_drift); the halves' estimates compared,
+            (--real-effects, angle_latency,thermal_drift), the shaft tilt held
+            (--real-hold, dpsi); the halves' estimates compared,
             chi2 = (a - b)^2 / (sigma_a^2 + sigma_b^2) per parameter determined by
             both, median over parameters; then the three speeds compared.
 """
@@ -155,6 +156,8 @@ def diagnose(work, a):
     excess, raw = {}, {}
     structure = 0
     selected = 0
+    alarms = []
+    pvalues = []
     procs = []
 
     def finish(seed, d, p):
@@ -164,9 +167,12 @@ def diagnose(work, a):
         j = json.load(open(os.path.join(d, "d.json")))
         r = j["after"]["residual"]
         structure += bool(r["structure"])
+        if r["structure"]:
+            alarms.append(f"seed {seed}: {r['structure_summary']}")
         selected += bool(j["selected"])
         for c in r["channels"]:
             if c.get("in_whiteness_test"):
+                pvalues.append(c["ljung_box_p"])
                 excess.setdefault(c["channel"], []).append(c["lag1_autocorrelation"])
                 raw.setdefault(c["channel"], []).append(
                     c["lag1_autocorrelation"] + c.get("lag1_expected_under_model", 0.0))
@@ -184,6 +190,12 @@ def diagnose(work, a):
     n = a.diagnose_seeds
     print(f"structure reported: {structure} of {n} ({100.0 * structure / n:.1f} %; stated alpha "
           f"1e-3 per channel, 6 channels: 0.6 %); an effect selected: {selected} of {n}")
+    for line in alarms:
+        print(f"  {line}")
+    # Under the model the channels' Ljung-Box p-values are uniform.
+    print(f"Ljung-Box p-values of the {len(pvalues)} tested channels: share below " + ", ".join(
+        f"{lvl:g}: {sum(p < lvl for p in pvalues) / len(pvalues):.4f}"
+        for lvl in (0.1, 0.05, 0.01, 0.001)))
     se = 1.0 / math.sqrt(n * 180)
     print(f"mean lag-1 autocorrelation per whitened channel (standard error ~{se:.3f}):")
     for ch in excess:
@@ -290,6 +302,8 @@ def real(work, a):
                    out.replace(".json", ".csv")]
             if a.real_effects:
                 cmd += ["--effects", a.real_effects]
+            if a.real_hold:
+                cmd += ["--hold", a.real_hold]
             try:
                 p = subprocess.run(cmd, capture_output=True, text=True, timeout=a.real_timeout)
                 if p.returncode not in (0, 4):  # 4: written, but not converged
@@ -359,6 +373,10 @@ def main():
     ap.add_argument("--workdir", default="")
     ap.add_argument("--real-effects", default="angle_latency,thermal_drift",
                     help="effects fitted on the real runs (what the loop finds there; '' none)")
+    ap.add_argument("--real-hold", default="dpsi",
+                    help="parameters held on the real runs ('' none): the shaft tilt dpsi, "
+                         "which a single-axis run ties to W0y and the y reading's cross terms "
+                         "(docs/method.md, the degenerate family of the slow roll run)")
     ap.add_argument("--real-runs", default="slow,medium,fast",
                     help="which real roll runs (slow,medium,fast)")
     ap.add_argument("--real-timeout", type=float, default=1200.0,

@@ -155,12 +155,16 @@ TEST_F(ExportTest, CMatchesApplyWithTheSensorStageEffects) {
   const std::string run =
       Simulate(Scenario("effects: {thermal_drift: {rate_x_mV_per_min: 0.5, rate_z: -0.25},\n"
                         "          thermal_drift_temp: {coef_y_mV_per_degC: 0.3, coef_z: -0.2},\n"
-                        "          scale_asymmetry: {dKx: 0.4, dKy: -0.3, dKz: 0.2}}\n"
+                        "          scale_asymmetry: {dKx: 0.4, dKy: -0.3, dKz: 0.2},\n"
+                        "          cross_quadratic: {x_yy_zz: 0.004, x_yz: -0.003, y_xx_zz: 0.005,\n"
+                        "                            y_xz: 0.002, z_xx_yy: -0.004, z_xy: 0.003}}\n"
                         "temperature: {start_C: 20, rate_C_per_h: 10}\n"));
   const Calibration cal = LoadCalibration(Path("sim/truth.json"));
   ASSERT_TRUE(cal.layout.has(Effect::kThermalDrift));
   ASSERT_TRUE(cal.layout.has(Effect::kThermalDriftTemp));
   ASSERT_TRUE(cal.layout.has(Effect::kScaleAsymmetry));
+  ASSERT_TRUE(cal.layout.has(Effect::kCrossQuadratic));
+  EXPECT_EQ(cal.theta[cal.layout.offset(Effect::kCrossQuadratic) + 2], 0.005);
   EXPECT_LE(LargestDifference(Path("sim/truth.json"), run), 1e-9);
 }
 

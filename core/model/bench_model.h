@@ -294,7 +294,7 @@ Mat3<T> SpecificForceAtAxes_g(const ModelConfig& cfg, const T* theta, const Benc
 // ---------------------------------------------------------------------------
 // Sensor stage: the readings model (paper eq. 1), in mV.
 //
-//   u_i   = sum_j M_ij W_j + W_i sum_j K_ij W_j
+//   u_i   = sum_j M_ij W_j + W_i sum_j K_ij W_j [+ Q_i(W): cross_quadratic]
 //   Wpr_i = K_i u_i + dK_i |u_i| + W0_i(t)            (dK_i: scale_asymmetry)
 //
 //   M = [[ 1,       -alpha_y,  beta_z ],
@@ -318,6 +318,27 @@ Mat3<T> MisalignmentMatrix(const T* theta) {
 template <typename T>
 Mat3<T> NonlinearityMatrix(const T* theta) {
   return Eigen::Map<const Eigen::Matrix<T, 3, 3, Eigen::RowMajor>>(theta + kKxx);
+}
+
+// cross_quadratic: reading i's cross axes j < k, and its two coefficients
+// (d_i, p_i) at theta[offset + 2 i ..]; the term is
+//   Q_i(W) = d_i (W_j^2 - W_k^2) + p_i W_j W_k.
+constexpr int kCrossAxes[3][2] = {{1, 2}, {0, 2}, {0, 1}};
+
+template <typename T>
+T CrossQuadraticTerm(const T* q, int i, const Vec3<T>& W) {
+  const int j = kCrossAxes[i][0], k = kCrossAxes[i][1];
+  return q[2 * i] * (W[j] * W[j] - W[k] * W[k]) + q[2 * i + 1] * W[j] * W[k];
+}
+
+// d Q_i / d W (row i of the term's Jacobian), values only.
+inline Eigen::RowVector3d CrossQuadraticGradient(const double* q, int i,
+                                                 const Vec3<double>& W) {
+  const int j = kCrossAxes[i][0], k = kCrossAxes[i][1];
+  Eigen::RowVector3d g = Eigen::RowVector3d::Zero();
+  g[j] = 2.0 * q[2 * i] * W[j] + q[2 * i + 1] * W[k];
+  g[k] = -2.0 * q[2 * i] * W[k] + q[2 * i + 1] * W[j];
+  return g;
 }
 
 // The signal x(sample) of a zero-offset effect (effects.h ZeroOffsetSignal):
@@ -353,10 +374,12 @@ Vec3<T> Readings_mV(const ModelConfig& cfg, const T* theta, const Mat3<T>& W_axe
   const Mat3<T> K = NonlinearityMatrix(theta);
   const Vec3<T> w0 = ZeroOffset_mV(cfg, theta, ctx);
   const int o_a = cfg.layout.offset(Effect::kScaleAsymmetry);
+  const int o_q = cfg.layout.offset(Effect::kCrossQuadratic);
   Vec3<T> out;
   for (int i = 0; i < 3; ++i) {
     const Vec3<T> W = W_axes.col(i);
-    const T u = M.row(i).dot(W) + W[i] * K.row(i).dot(W);
+    T u = M.row(i).dot(W) + W[i] * K.row(i).dot(W);
+    if (o_q >= 0) u += CrossQuadraticTerm(theta + o_q, i, W);
     out[i] = theta[kKx + i] * u + w0[i];
     if (o_a >= 0) out[i] += theta[o_a + i] * abs(u);
   }
@@ -381,8 +404,9 @@ double ScalarPart(const J& x) {
 
 // Exact inverse of the common-point readings model: readings [mV] -> W [g].
 //   u_i = (Wpr_i - W0_i) / (K_i + dK_i sgn)   (sgn(u_i) = sgn(Wpr_i - W0_i))
-//   solve F(W) = M W + diag(W) K W - u = 0 by Newton from W = M^-1 u,
-//   J = M + diag(K W) + diag(W) K; converged to rounding for |K_ij| << 1.
+//   solve F(W) = M W + diag(W) K W + Q(W) - u = 0 by Newton from W = M^-1 u,
+//   J = M + diag(K W) + diag(W) K + dQ/dW; converged to rounding for |K_ij| << 1
+//   (Q: cross_quadratic, zero without it).
 // The iterations run on the values only; one last Newton step in T with the
 // value Jacobian J0 gives the derivatives exactly (implicit function theorem:
 // dW = -J0^-1 dF), at a fraction of the cost of iterating in Jets.
@@ -393,6 +417,7 @@ Vec3<T> SpecificForceFromReadings_g(const ModelConfig& cfg, const T* theta,
   const Mat3<T> K = NonlinearityMatrix(theta);
   const Vec3<T> w0 = ZeroOffset_mV(cfg, theta, ctx);
   const int o_a = cfg.layout.offset(Effect::kScaleAsymmetry);
+  const int o_q = cfg.layout.offset(Effect::kCrossQuadratic);
   Vec3<T> u;
   for (int i = 0; i < 3; ++i) {
     const T v = readings_mV[i] - w0[i];
@@ -409,21 +434,38 @@ Vec3<T> SpecificForceFromReadings_g(const ModelConfig& cfg, const T* theta,
       K0(r, c) = ScalarPart(K(r, c));
     }
   }
+  double q0[6] = {0, 0, 0, 0, 0, 0};
+  if (o_q >= 0) {
+    for (int c = 0; c < 6; ++c) q0[c] = ScalarPart(theta[o_q + c]);
+  }
+  auto cross = [&](const Vec3<double>& W) {
+    Vec3<double> q = Vec3<double>::Zero();
+    if (o_q >= 0) {
+      for (int i = 0; i < 3; ++i) q[i] = CrossQuadraticTerm(q0, i, W);
+    }
+    return q;
+  };
   auto jacobian = [&](const Vec3<double>& W) {
     Mat3<double> J = M0;
     J.diagonal() += K0 * W;
     J += W.asDiagonal() * K0;
+    if (o_q >= 0) {
+      for (int i = 0; i < 3; ++i) J.row(i) += CrossQuadraticGradient(q0, i, W);
+    }
     return J;
   };
   Vec3<double> W0 = M0.inverse() * u0;
   for (int it = 0; it < 8; ++it) {  // quadratic: 2-3 steps for |K_ij| ~ 1e-3
-    const Vec3<double> F = M0 * W0 + W0.cwiseProduct(K0 * W0) - u0;
+    const Vec3<double> F = M0 * W0 + W0.cwiseProduct(K0 * W0) + cross(W0) - u0;
     const Vec3<double> step = jacobian(W0).inverse() * F;
     W0 -= step;
     if (step.cwiseAbs().maxCoeff() <= 1e-15 * (1.0 + W0.cwiseAbs().maxCoeff())) break;
   }
   const Vec3<T> W = W0.template cast<T>();
-  const Vec3<T> F = M * W + W.cwiseProduct(K * W) - u;
+  Vec3<T> F = M * W + W.cwiseProduct(K * W) - u;
+  if (o_q >= 0) {
+    for (int i = 0; i < 3; ++i) F[i] += CrossQuadraticTerm(theta + o_q, i, W);
+  }
   const Mat3<double> J0_inv = jacobian(W0).inverse();
   const Mat3<T> J_inv = J0_inv.template cast<T>();
   return W - J_inv * F;

@@ -38,6 +38,10 @@ Eigen::VectorXd RandomTheta(const ParameterLayout& layout, std::mt19937_64& rng)
   for (int i = kDx2; i <= kDz2; ++i) th[i] = 0.01 * n(rng);
   for (int i = kNumBaseParams; i < layout.size(); ++i) {
     th[i] = 0.3 * n(rng) * layout.info(i).si_per_unit;  // 0.3 file units
+    // Second-order coefficients (cross_quadratic) at 1.5 prior sigma: 0.3 /g
+    // is three times their plausible bound, where the inverse's Newton from
+    // M^-1 u no longer converges in its 8 steps.
+    if (layout.info(i).unit == "1/g") th[i] = 0.03 * n(rng);
   }
   return th;
 }

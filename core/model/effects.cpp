@@ -141,6 +141,27 @@ const std::vector<EffectSpec>& EffectCatalogue() {
       e.needs.rates_at_every_sample = true;
       c.push_back(e);
     }
+    {
+      // Reading i, cross axes j < k (bench_model.h CrossQuadraticTerm). The sum
+      // W_j^2 + W_k^2 = |W|^2 - W_i^2 is the zero offset and K_ii at rest, so
+      // only the difference and the product are new.
+      EffectSpec e{Effect::kCrossQuadratic,
+                   "cross_quadratic",
+                   "second-order response of each reading to the two other axes: "
+                   "d_i (Wj^2 - Wk^2) + p_i Wj Wk",
+                   EffectStage::kSensor,
+                   {{"x_yy_zz", "1/g", 1.0, 0.02, -0.1, 0.1, 0.002},
+                    {"x_yz", "1/g", 1.0, 0.02, -0.1, 0.1, 0.002},
+                    {"y_xx_zz", "1/g", 1.0, 0.02, -0.1, 0.1, 0.002},
+                    {"y_xz", "1/g", 1.0, 0.02, -0.1, 0.1, 0.002},
+                    {"z_xx_yy", "1/g", 1.0, 0.02, -0.1, 0.1, 0.002},
+                    {"z_xy", "1/g", 1.0, 0.02, -0.1, 0.1, 0.002}}};
+      e.plausible_reason =
+          "the cross-axis nonlinearity of MEMS accelerometers is below 1 % of the reading at "
+          "1 g (0.01 /g); 0.1 /g is a tenth of the full response to a perpendicular g: a "
+          "damaged or saturating sensor";
+      c.push_back(e);
+    }
     return c;
   }();
   return catalogue;

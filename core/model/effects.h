@@ -41,6 +41,11 @@
 //   thermal_drift_temp W0_i(T) = W0_i + coef_i * (temp_C - T_ref)      [mV/degC]
 //   scale_asymmetry    Wpr_i = K_i u_i + dK_i |u_i| + W0_i: scale K_i + dK_i for
 //                      positive input, K_i - dK_i for negative        [mV/g]
+//   cross_quadratic    u_i += d_i (W_j^2 - W_k^2) + p_i W_j W_k, (j, k) the two other
+//                      axes (j < k): the second-order response to the cross axes
+//                      that the paper's K_ij (every term has W_i) lack (IEEE Std
+//                      1293's K_pp - K_oo and K_po; K_pp + K_oo is W0_i and K_ii
+//                      while |W| = 1 g)                                [1/g]
 #pragma once
 
 #include <string>
@@ -58,8 +63,9 @@ enum class Effect {
   kThermalDriftTemp,
   kScaleAsymmetry,
   kAngleScale,
+  kCrossQuadratic,
 };
-constexpr int kNumEffects = 9;
+constexpr int kNumEffects = 10;
 
 // Where in the measurement chain an effect acts (see the diagram above).
 enum class EffectStage { kAngle, kGeometry, kSensor };

@@ -1,5 +1,6 @@
 #include "core/model/mounting.h"
 
+#include "core/model/bench_model.h"
 #include "core/model/errors.h"
 
 namespace triadcal {
@@ -59,6 +60,23 @@ Eigen::MatrixXd MountingMap(const RunDescription& run, const ParameterLayout& la
   for (Effect e : layout.effects()) {
     const EffectSpec& spec = GetEffectSpec(e);
     if (spec.stage != EffectStage::kSensor) continue;
+    if (e == Effect::kCrossQuadratic) {
+      // Platform reading i is s_i times IMU reading a = source(i); IMU a's
+      // cross axes (j', k') are platform i's cross axes, possibly in the
+      // other order (then W_j^2 - W_k^2 changes sign), each with its sign.
+      const int o = layout.offset(e);
+      T.block<6, 6>(o, o).setZero();
+      int platform_of[3];
+      for (int i = 0; i < 3; ++i) platform_of[run.axis_source[i]] = i;
+      for (int i = 0; i < 3; ++i) {
+        const int a = run.axis_source[i];
+        const int j = platform_of[kCrossAxes[a][0]], k = platform_of[kCrossAxes[a][1]];
+        const double s = run.axis_sign[i];
+        T(o + 2 * i, o + 2 * a) = j < k ? s : -s;
+        T(o + 2 * i + 1, o + 2 * a + 1) = s * run.axis_sign[j] * run.axis_sign[k];
+      }
+      continue;
+    }
     if (spec.params.size() != 3) {
       throw InputError(run.yaml_path + ": mounting: the effect " + spec.name +
                        " has no per-axis form to carry through a mounting");

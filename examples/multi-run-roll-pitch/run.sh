@@ -22,5 +22,8 @@ if [ -z "$shared" ] || [ ! -f "$shared/data/real/single-axis-encoder/raw_pitch_m
   exit 0
 fi
 mkdir -p "$out"
-"$bin" fit "$here/runs.yaml" --effects angle_latency,thermal_drift -o "$out/joint.json" \
-  | tee "$out/joint.txt"
+# dpsi (the shaft's tilt) is held in every run: a single-axis run ties it to
+# the shaft reading's zero offset and cross terms, and the slow roll run's fit
+# alone slides along that family for ever (docs/method.md).
+"$bin" fit "$here/runs.yaml" --effects angle_latency,thermal_drift --hold dpsi \
+  -o "$out/joint.json" | tee "$out/joint.txt"

@@ -205,6 +205,29 @@ Eigen::MatrixXd InformationShare(const std::vector<Eigen::MatrixXd>& data_inform
   return share;
 }
 
+// The joint unknowns a --hold or --free name means: a joint parameter ("Kx",
+// "dpsi@roll_slow"), or a per-run parameter's name without "@RUN" ("dpsi"),
+// which means it in every run. Checked before any run is fitted.
+std::vector<int> JointIndicesOf(const JointLayout& jl, const std::string& name,
+                                const char* option) {
+  const int j = jl.IndexOf(name);
+  if (j >= 0) return {j};
+  std::vector<int> every_run;
+  for (int k = 0; k < jl.size(); ++k) {
+    const std::string& n = jl.param(k).name;
+    if (jl.param(k).run >= 0 && n.size() > name.size() && n.compare(0, name.size(), name) == 0 &&
+        n[name.size()] == '@') {
+      every_run.push_back(k);
+    }
+  }
+  if (every_run.empty()) {
+    throw OptionError(option, "unknown parameter '" + name +
+                                  "' in this joint fit (a shared parameter such as Kx, a "
+                                  "per-run one such as dpsi@RUN, or dpsi for every run)");
+  }
+  return every_run;
+}
+
 // The hold rule (SupportedByInformation, as a single run's fit) on the
 // combined information at the nominal values, with --hold/--free on top.
 // *ev_out, when given, gets that evaluation (over every unknown).
@@ -232,13 +255,12 @@ std::vector<bool> HeldByRule(const JointLayout& jl, const std::vector<RunProblem
     held.assign(m, true);
     for (int j : SupportedByInformation(info, min_info, priority)) held[j] = false;
   }
-  auto index_of = [&](const std::string& name) {
-    const int j = jl.IndexOf(name);
-    if (j < 0) throw OptionError("hold_free", "unknown joint parameter '" + name + "'");
-    return j;
-  };
-  for (const std::string& name : opt.batch.holding.hold) held[index_of(name)] = true;
-  for (const std::string& name : opt.batch.holding.free) held[index_of(name)] = false;
+  for (const std::string& name : opt.batch.holding.hold) {
+    for (int j : JointIndicesOf(jl, name, "hold")) held[j] = true;
+  }
+  for (const std::string& name : opt.batch.holding.free) {
+    for (int j : JointIndicesOf(jl, name, "free")) held[j] = false;
+  }
   if (ev_out) *ev_out = std::move(ev);
   return held;
 }
@@ -341,6 +363,24 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
   JointResult res;
   res.runs.resize(R);
 
+  // --hold/--free: checked now, not after the runs alone. A run's own
+  // parameters among them (dpsi@RUN, or dpsi for every run) are held or
+  // freed in its fit alone too; shared ones (IMU axes) only jointly.
+  std::vector<std::vector<std::string>> hold_alone(R), free_alone(R);
+  auto per_run_names = [&](const std::vector<std::string>& names, const char* option,
+                           std::vector<std::vector<std::string>>* out) {
+    for (const std::string& name : names) {
+      for (int j : JointIndicesOf(jl, name, option)) {
+        const JointParam& p = jl.param(j);
+        if (p.run >= 0 && p.base >= 0 && p.degree == 0) {
+          (*out)[p.run].push_back(layout.info(p.base).name);
+        }
+      }
+    }
+  };
+  per_run_names(opt.batch.holding.hold, "hold", &hold_alone);
+  per_run_names(opt.batch.holding.free, "free", &free_alone);
+
   // 1. Each run alone: its estimate, held set and noise.
   const auto t_alone = std::chrono::steady_clock::now();
   std::vector<RunProblem> problems;
@@ -348,8 +388,8 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
     JointRunResult& rr = res.runs[r];
     rr.name = jl.run_name(r);
     BatchOptions bo = opt.batch;
-    bo.holding.hold.clear();
-    bo.holding.free.clear();
+    bo.holding.hold = hold_alone[r];
+    bo.holding.free = free_alone[r];
     const auto progress = opt.batch.progress;
     bo.progress = [&, progress](const std::string& s) {
       if (progress) progress("run " + rr.name + " alone: " + s);

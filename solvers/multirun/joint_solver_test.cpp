@@ -4,7 +4,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <algorithm>
 #include <random>
+#include <set>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -29,7 +32,8 @@ void SetMounting(RunDescription* run, const int source[3], const double sign[3])
 // The platform readings of a mounted triad are the IMU's readings of the
 // specific force in its own axes, remapped: W_p = P^T-rotated, u_p = P u.
 TEST(MountingMap, ReadingsOfTheMappedParametersAreTheRemappedReadings) {
-  const ParameterLayout layout({Effect::kScaleAsymmetry, Effect::kThermalDrift});
+  const ParameterLayout layout(
+      {Effect::kScaleAsymmetry, Effect::kThermalDrift, Effect::kCrossQuadratic});
   std::mt19937_64 rng(7);
   std::normal_distribution<double> gauss;
   const int sources[3][3] = {{1, 0, 2}, {2, 1, 0}, {1, 2, 0}};
@@ -92,6 +96,45 @@ TEST(JointFit, OneRunGivesItsOwnFit) {
   }
   EXPECT_TRUE(r.runs[0].consistency.consistent);
   EXPECT_LT(r.runs[0].consistency.chi2, 1.0);
+}
+
+// --hold with a per-run parameter's bare name holds it in every run, jointly
+// and in each run's fit alone; "NAME@RUN" in that run only; an unknown name is
+// refused before any run is fitted (the runs alone of real 25-min runs take
+// minutes each).
+TEST(JointFit, HoldByBareNameHoldsInEveryRunAndInEachFitAlone) {
+  const std::vector<JointRun> runs = {MakeRun("a", PaperScenario(50.0, 20.0, 2.0, 15.0, 21)),
+                                      MakeRun("b", PaperScenario(50.0, 20.0, 2.0, 15.0, 22))};
+  const JointLayout jl(runs, ParameterLayout(), {}, "test");
+  JointOptions o = Options();
+  o.batch.holding.hold = {"dpsi", "dx2@b"};
+  const JointResult r = SolveJoint(runs, jl, o);
+  std::set<std::string> held;
+  for (int j : r.held) held.insert(jl.param(j).name);
+  EXPECT_TRUE(held.count("dpsi@a"));
+  EXPECT_TRUE(held.count("dpsi@b"));
+  EXPECT_TRUE(held.count("dx2@b"));
+  EXPECT_FALSE(held.count("dx2@a"));
+  auto has = [](const std::vector<std::string>& v, const std::string& n) {
+    return std::find(v.begin(), v.end(), n) != v.end();
+  };
+  EXPECT_TRUE(has(r.runs[0].alone.held, "dpsi"));
+  EXPECT_FALSE(has(r.runs[0].alone.held, "dx2"));
+  EXPECT_TRUE(has(r.runs[1].alone.held, "dpsi"));
+  EXPECT_TRUE(has(r.runs[1].alone.held, "dx2"));
+
+  o.batch.holding.hold = {"dpsy"};
+  int progress_lines = 0;
+  o.batch.progress = [&](const std::string&) { ++progress_lines; };
+  try {
+    SolveJoint(runs, jl, o);
+    ADD_FAILURE() << "an unknown --hold name was accepted";
+  } catch (const OptionError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "hold: unknown parameter 'dpsy' in this joint fit (a shared parameter such as "
+              "Kx, a per-run one such as dpsi@RUN, or dpsi for every run)");
+  }
+  EXPECT_EQ(progress_lines, 0) << "refused only after work on the runs had begun";
 }
 
 // A single-axis run: the outer axis (platform y) turns, the inner stays at 0.

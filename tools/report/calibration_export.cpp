@@ -64,6 +64,13 @@ nlohmann::ordered_json Rows(const Eigen::Matrix3d& m) {
 
 nlohmann::ordered_json Vec(const Eigen::Vector3d& v) { return {v[0], v[1], v[2]}; }
 
+// cross_quadratic's (d_i, p_i) per reading i (zeros when it is off).
+Eigen::Matrix<double, 6, 1> CrossQuadratic(const Calibration& cal) {
+  const int o = cal.layout.offset(Effect::kCrossQuadratic);
+  return o < 0 ? Eigen::Matrix<double, 6, 1>::Zero()
+               : Eigen::Matrix<double, 6, 1>(cal.theta.segment<6>(o));
+}
+
 }  // namespace
 
 CExport ExportC(const Calibration& cal, const std::string& name, const std::string& comment) {
@@ -73,6 +80,7 @@ CExport ExportC(const Calibration& cal, const std::string& name, const std::stri
   const Eigen::Vector3d drift_mV_per_s = EffectTriple(cal, Effect::kThermalDrift);
   const Eigen::Vector3d drift_mV_per_C = EffectTriple(cal, Effect::kThermalDriftTemp);
   const Eigen::Vector3d asym_mV_per_g = EffectTriple(cal, Effect::kScaleAsymmetry);
+  const Eigen::Matrix<double, 6, 1> cross = CrossQuadratic(cal);
   const std::string guard = [&] {
     std::string g;
     for (char c : name) g += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
@@ -91,7 +99,8 @@ CExport ExportC(const Calibration& cal, const std::string& name, const std::stri
                " * after the unit conversion and mounting of run.yaml) -> specific force W [g]\n"
                " * in the triad frame (an axis pointing up reads +1 g at rest): the exact\n"
                " * inverse of the readings model (paper eq. 1)\n"
-               " *   u_i = (z_i - W0_i(t, T)) / (K_i +- dK_i),   M W + diag(W) Kij W = u\n"
+               " *   u_i = (z_i - W0_i(t, T)) / (K_i +- dK_i),   M W + diag(W) Kij W + Q(W) = u\n"
+               " *   (Q_i = d_i (W_j^2 - W_k^2) + p_i W_j W_k, j < k the other axes: cross_quadratic)\n"
                " * solved by Newton's method as `triadcal apply` does.\n"
                " * t_s [s]: time of the sample, counted as in the run (thermal_drift);\n"
                " * temp_C, temp_ref_C [degC]: temperature and its reference, the run's first\n"
@@ -121,7 +130,13 @@ CExport ExportC(const Calibration& cal, const std::string& name, const std::stri
   s += "static const double kDriftPerC[3] = " + Array3(drift_mV_per_C.data()) + ";\n";
   s += "static const double kAsymmetry[3] = " + Array3(asym_mV_per_g.data()) + ";\n";
   s += std::string("static const int kHasAsymmetry = ") +
-       (cal.layout.has(Effect::kScaleAsymmetry) ? "1" : "0") + ";\n\n";
+       (cal.layout.has(Effect::kScaleAsymmetry) ? "1" : "0") + ";\n";
+  s += "/* Cross-axis quadratic response [1/g] (cross_quadratic; zero when absent): (d_i, p_i)\n"
+       " * of reading i, whose cross axes are j < k: Q_i = d_i (W_j^2 - W_k^2) + p_i W_j W_k. */\n";
+  s += "static const double kCross[6] = {" + Exact(cross[0]) + ", " + Exact(cross[1]) + ", " +
+       Exact(cross[2]) + ", " + Exact(cross[3]) + ", " + Exact(cross[4]) + ", " +
+       Exact(cross[5]) + "};\n";
+  s += "static const int kCrossAxes[3][2] = {{1, 2}, {0, 2}, {0, 1}};\n\n";
   s += R"(static double Abs(double x) { return x < 0.0 ? -x : x; }
 
 /* 3x3 matrices are stored row by row: a[3 * row + column]. */
@@ -150,16 +165,21 @@ static void MulVec(const double* m, const double* v, double* out) {
   for (r = 0; r < 3; ++r) out[r] = m[3 * r] * v[0] + m[3 * r + 1] * v[1] + m[3 * r + 2] * v[2];
 }
 
-/* F(W) = M W + diag(W) Kij W - u and its Jacobian J = M + diag(Kij W) + diag(W) Kij. */
+/* F(W) = M W + diag(W) Kij W + Q(W) - u and its Jacobian
+ * J = M + diag(Kij W) + diag(W) Kij + dQ/dW. */
 static void Residual(const double* W, const double* u, double* F, double* J) {
   double MW[3], KW[3];
   int r, k;
   MulVec(kM, W, MW);
   MulVec(kK, W, KW);
   for (r = 0; r < 3; ++r) {
-    F[r] = MW[r] + W[r] * KW[r] - u[r];
+    const int j = kCrossAxes[r][0], l = kCrossAxes[r][1];
+    const double d = kCross[2 * r], p = kCross[2 * r + 1];
+    F[r] = MW[r] + W[r] * KW[r] + d * (W[j] * W[j] - W[l] * W[l]) + p * W[j] * W[l] - u[r];
     for (k = 0; k < 3; ++k) J[3 * r + k] = kM[3 * r + k] + W[r] * kK[3 * r + k];
     J[3 * r + r] += KW[r];
+    J[3 * r + j] += 2.0 * d * W[j] + p * W[l];
+    J[3 * r + l] += -2.0 * d * W[l] + p * W[j];
   }
 }
 
@@ -236,6 +256,15 @@ nlohmann::ordered_json MatrixForm(const Calibration& cal) {
          "row i of S and N scaled by (K_i + dK_i sgn(u_i)) / K_i, u_i = (M a / g0 + "
          "diag(a) Kij a / g0^2)_i"},
         {"dK_mV_per_g", Vec(EffectTriple(cal, Effect::kScaleAsymmetry))}};
+  }
+  if (cal.layout.has(Effect::kCrossQuadratic)) {
+    const Eigen::Matrix<double, 6, 1> q = CrossQuadratic(cal);
+    effects["cross_quadratic"] = {
+        {"model",
+         "u_i += d_i (W_j^2 - W_k^2) + p_i W_j W_k, W = a / g0, (j, k) = (y, z), (x, z), (x, y) "
+         "for i = x, y, z; z_i = K_i u_i + b_i"},
+        {"d_per_g", {q[0], q[2], q[4]}},
+        {"p_per_g", {q[1], q[3], q[5]}}};
   }
   j["effects"] = effects;
   return j;

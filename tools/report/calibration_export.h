@@ -5,7 +5,7 @@
 //                inverse of the readings model (paper eq. 1) with the same
 //                Newton iteration as bench_model.h SpecificForceFromReadings_g,
 //                including the sensor-stage effects (thermal_drift,
-//                thermal_drift_temp, scale_asymmetry). Geometry and angle
+//                thermal_drift_temp, scale_asymmetry, cross_quadratic). Geometry and angle
 //                effects do not act on W and are left out, as in `apply`.
 //   yaml, json   the plain matrix form (MatrixForm below).
 #pragma once
