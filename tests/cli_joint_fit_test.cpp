@@ -142,6 +142,10 @@ TEST_F(JointFitCli, BadInputIsOneLineNamingTheRun) {
   ExpectError("fit " + twice + " -o " + Path("out.json"),
               twice + ": runs[1]: " + Path("a/run.yaml") + " is listed twice (also " + twice +
                   ": runs[0])");
+  // A --hold name that is no joint unknown (dpsi alone means dpsi@RUN of every run).
+  ExpectError("fit " + a + " " + b + " --hold dpsy -o " + Path("out.json"),
+              "--hold: unknown parameter 'dpsy' in this joint fit (a shared parameter such as "
+              "Kx, a per-run one such as dpsi@RUN, or dpsi for every run)");
 }
 
 }  // namespace

@@ -86,7 +86,8 @@ int main(int argc, char** argv) {
         {"epoch_s", "--epoch-s"},           {"robust_loss", "--robust"},
         {"linear_solver", "--linear-solver"}, {"covariance_method", "--covariance"},
         {"hold_free", "--hold/--free"},       {"effects", "--effects"},
-        {"sigma", "--sigma"}};
+        {"sigma", "--sigma"},               {"hold", "--hold"},
+        {"free", "--free"}};
     const auto it = kFlags.find(e.option());
     if (triadcal::MpiRoot()) {
       std::cerr << "triadcal: error: "
