@@ -18,7 +18,9 @@ Sections (all by default):
             "unobservable"?
   diagnose  N clean seeds (100) of the 50-Hz run through `diagnose`: share with
             "structure" (its stated alpha: 1e-3 per whitened channel, 6
-            channels), mean lag-1 autocorrelation of the whitened process
+            channels) with each alarm's summary, the share of the channels'
+            Ljung-Box p-values below 0.1 .. 0.001 (uniform under the model),
+            mean lag-1 autocorrelation of the whitened process
             residuals per channel, as tested (excess over what the fit itself
             leaves) and raw.
   bias      scale-factor bias: mean (estimate - truth) / CRB of Kx, Ky, Kz over
