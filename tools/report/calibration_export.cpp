@@ -136,7 +136,12 @@ CExport ExportC(const Calibration& cal, const std::string& name, const std::stri
   s += "static const double kCross[6] = {" + Exact(cross[0]) + ", " + Exact(cross[1]) + ", " +
        Exact(cross[2]) + ", " + Exact(cross[3]) + ", " + Exact(cross[4]) + ", " +
        Exact(cross[5]) + "};\n";
-  s += "static const int kCrossAxes[3][2] = {{1, 2}, {0, 2}, {0, 1}};\n\n";
+  s += "static const int kCrossAxes[3][2] = {";
+  for (int i = 0; i < 3; ++i) {
+    s += std::string(i ? ", " : "") + "{" + std::to_string(kCrossAxes[i][0]) + ", " +
+         std::to_string(kCrossAxes[i][1]) + "}";
+  }
+  s += "};\n\n";
   s += R"(static double Abs(double x) { return x < 0.0 ? -x : x; }
 
 /* 3x3 matrices are stored row by row: a[3 * row + column]. */
