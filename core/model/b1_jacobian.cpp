@@ -1,8 +1,93 @@
 #include "core/model/b1_jacobian.h"
 
+#include <ceres/jet.h>
+
 #include <Eigen/LU>
+#include <array>
 
 namespace triadcal {
+namespace {
+
+constexpr int kMaxParams = 64;
+
+// Jets for the few parameters whose columns are not written out.
+constexpr int kJetParams = 8;
+using SmallJet = ceres::Jet<double, kJetParams>;
+
+// Jets of the geometry behind the size effect: the six bench-angle
+// quantities (angle, rate, acceleration of both axes) and the geometric
+// parameters (dpsi, d, dR, r): at most 6 + 1 + 1 + 3 + 6 = 17.
+constexpr int kGeometryJet = 17;
+using GeoJet = ceres::Jet<double, kGeometryJet>;
+
+// theta as Jets with only the listed entries seeded (derivative slot q for
+// entry idx[q]).
+template <typename J>
+std::array<J, kMaxParams> SeededTheta(const double* th, int n, const std::vector<int>& idx) {
+  std::array<J, kMaxParams> t;
+  for (int i = 0; i < n; ++i) t[i] = J(th[i]);
+  for (std::size_t q = 0; q < idx.size(); ++q) t[idx[q]].v[q] = 1.0;
+  return t;
+}
+
+// The parameter indices of the layout's angle-stage effects (angle_stage) or
+// of its effects without written-out columns.
+std::vector<int> EffectParams(const ParameterLayout& layout, bool angle_stage) {
+  std::vector<int> idx;
+  for (Effect e : layout.effects()) {
+    const EffectSpec& s = GetEffectSpec(e);
+    const bool take = angle_stage ? s.stage == EffectStage::kAngle : !s.b1_analytic_jacobian;
+    if (!take) continue;
+    for (std::size_t q = 0; q < s.params.size(); ++q) idx.push_back(layout.offset(e) + q);
+  }
+  return idx;
+}
+
+// Misalignment angle at M(i, j), i != j, and its sign there (bench_model.h).
+struct MisalignmentEntry {
+  int param;
+  double sign;
+};
+constexpr MisalignmentEntry kMisalignment[3][3] = {{{-1, 0.0}, {kAlphaY, -1.0}, {kBetaZ, 1.0}},
+                                                   {{kAlphaX, 1.0}, {-1, 0.0}, {kGammaZ, -1.0}},
+                                                   {{kBetaX, -1.0}, {kGammaY, 1.0}, {-1, 0.0}}};
+
+// Reading i of the readings model at W (bench_model.h Readings_mV) without
+// its zero offset, its gradient by W, and (added into row) its derivatives
+// by the sensor parameters times `weight`.
+double ReadingWithoutOffset(const ParameterLayout& layout, const double* th, int i,
+                            const Vec3<double>& W, Eigen::RowVector3d* grad_W, double weight,
+                            Eigen::Ref<Eigen::RowVectorXd> row) {
+  const Mat3<double> M = MisalignmentMatrix(th);
+  const Mat3<double> K = NonlinearityMatrix(th);
+  const int o_a = layout.offset(Effect::kScaleAsymmetry);
+  const int o_q = layout.offset(Effect::kCrossQuadratic);
+  double u = M.row(i).dot(W) + W[i] * K.row(i).dot(W);
+  Eigen::RowVector3d du = M.row(i) + W[i] * K.row(i);
+  du[i] += K.row(i).dot(W);
+  if (o_q >= 0) {
+    u += CrossQuadraticTerm(th + o_q, i, W);
+    du += CrossQuadraticGradient(th + o_q, i, W);
+  }
+  const double sgn = u < 0.0 ? -1.0 : 1.0;
+  const double s = th[kKx + i] + (o_a >= 0 ? sgn * th[o_a + i] : 0.0);
+  *grad_W = s * du;
+  row[kKx + i] += weight * u;
+  if (o_a >= 0) row[o_a + i] += weight * sgn * u;
+  for (int j = 0; j < 3; ++j) {
+    const MisalignmentEntry& m = kMisalignment[i][j];
+    if (m.param >= 0) row[m.param] += weight * s * m.sign * W[j];
+    row[kKxx + 3 * i + j] += weight * s * W[i] * W[j];
+  }
+  if (o_q >= 0) {
+    const int j = kCrossAxes[i][0], k = kCrossAxes[i][1];
+    row[o_q + 2 * i] += weight * s * (W[j] * W[j] - W[k] * W[k]);
+    row[o_q + 2 * i + 1] += weight * s * W[j] * W[k];
+  }
+  return s * u;
+}
+
+}  // namespace
 
 bool B1HasAnalyticJacobian(const ParameterLayout& layout) {
   for (Effect e : layout.effects()) {
@@ -11,28 +96,125 @@ bool B1HasAnalyticJacobian(const ParameterLayout& layout) {
   return true;
 }
 
+bool B1HasCheapJacobian(const ParameterLayout& layout, const double* theta) {
+  if (layout.size() > kMaxParams) return false;
+  const std::vector<int> jet = EffectParams(layout, false);
+  if (jet.size() > static_cast<std::size_t>(kJetParams)) return false;
+  for (int i : jet) {
+    if (theta[i] != 0.0) return false;
+  }
+  return true;
+}
+
 void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
-                              const BenchAngles<double>& rec, const Eigen::Vector3d& z,
+                              const BenchAngles<double>& rec, const Eigen::Vector3d& z_in,
                               const SampleContext& ctx, Eigen::Vector3d* a_out,
                               Eigen::Ref<Eigen::MatrixXd> J) {
+  const ParameterLayout& layout = cfg.layout;
+  const int n = layout.size();
   const double g = cfg.g_mps2;
+  J.setZero();
+
+  // Angle stage: the bench angles from the recorded ones, and the derivatives
+  // of their six quantities (angle, rate, acceleration of each axis) by the
+  // angle-stage parameters (Jets over those alone).
+  BenchAngles<double> b = rec;
+  const std::vector<int> angle_params =
+      layout.has_stage(EffectStage::kAngle) ? EffectParams(layout, true) : std::vector<int>();
+  Eigen::Matrix<double, 6, kJetParams> db = Eigen::Matrix<double, 6, kJetParams>::Zero();
+  if (!angle_params.empty()) {
+    const std::array<SmallJet, kMaxParams> t = SeededTheta<SmallJet>(th, n, angle_params);
+    const BenchAngles<SmallJet> bj = BenchAnglesFromRecorded<SmallJet>(cfg, t.data(), rec);
+    for (int i = 0; i < 2; ++i) {
+      const AxisState<SmallJet>& a = bj.axis[i];
+      b.axis[i] = AxisState<double>{a.angle.a, a.rate.a, a.accel.a};
+      db.row(3 * i) = a.angle.v.transpose();
+      db.row(3 * i + 1) = a.rate.v.transpose();
+      db.row(3 * i + 2) = a.accel.v.transpose();
+    }
+  }
+
+  // Size effect: accelerometer i senses W_i at its own point; B1 removes
+  // D_i = R_i(W_i) - R_i(W_O) from reading i first (AccelerationFromReadings_L).
+  // dD/dtheta: by W through Jets of the geometry (the bench-angle quantities
+  // and the geometric parameters), and by the sensor parameters written out.
+  Eigen::Vector3d z = z_in;
+  Eigen::MatrixXd dD;  // 3 x n, empty without the size effect
+  const int o_s = layout.offset(Effect::kSizeEffect);
+  if (o_s >= 0) {
+    std::vector<int> geo = {kDpsi, kDx2, kDy2, kDz2};
+    const int o_d = layout.offset(Effect::kAxisNonintersection);
+    if (o_d >= 0) geo.push_back(o_d);
+    for (int q = 0; q < 6; ++q) geo.push_back(o_s + q);
+    const std::array<GeoJet, kMaxParams> t = SeededTheta<GeoJet>(th, n, geo);
+    BenchAngles<GeoJet> bj;
+    const int slot0 = static_cast<int>(geo.size());  // b's six quantities after the parameters
+    for (int i = 0; i < 2; ++i) {
+      bj.axis[i].angle = GeoJet(b.axis[i].angle, slot0 + 3 * i);
+      bj.axis[i].rate = GeoJet(b.axis[i].rate, slot0 + 3 * i + 1);
+      bj.axis[i].accel = GeoJet(b.axis[i].accel, slot0 + 3 * i + 2);
+    }
+    const BenchMotion<GeoJet> m = ComputeBenchMotion(cfg, t.data(), bj);
+    const Mat3<GeoJet> Wj = SpecificForceAtAxes_g(cfg, t.data(), m);
+    Vec3<double> W_O;
+    Eigen::Matrix<double, 3, kGeometryJet> dW_O;
+    for (int r = 0; r < 3; ++r) {
+      W_O[r] = Wj(r, 0).a;
+      dW_O.row(r) = Wj(r, 0).v.transpose();
+    }
+    dD = Eigen::MatrixXd::Zero(3, n);
+    Eigen::RowVectorXd drow(n);
+    for (int i = 1; i < 3; ++i) {  // x senses at O: D_0 = 0
+      Vec3<double> W_i;
+      Eigen::Matrix<double, 3, kGeometryJet> dW_i;
+      for (int r = 0; r < 3; ++r) {
+        W_i[r] = Wj(r, i).a;
+        dW_i.row(r) = Wj(r, i).v.transpose();
+      }
+      drow.setZero();
+      Eigen::RowVector3d grad_i, grad_O;
+      const double d = ReadingWithoutOffset(layout, th, i, W_i, &grad_i, 1.0, drow) -
+                       ReadingWithoutOffset(layout, th, i, W_O, &grad_O, -1.0, drow);
+      z[i] -= d;
+      // By the geometry slots: grad R_i(W_i) dW_i - grad R_i(W_O) dW_O.
+      const Eigen::Matrix<double, 1, kGeometryJet> dx = grad_i * dW_i - grad_O * dW_O;
+      for (std::size_t q = 0; q < geo.size(); ++q) drow[geo[q]] += dx[q];
+      // The bench angles enter as the sums l1 + dtheta_c and l2 + dlambda2.
+      drow[kDthetaC] += dx[slot0];
+      drow[kDlambda2] += dx[slot0 + 3];
+      for (std::size_t q = 0; q < angle_params.size(); ++q) {
+        for (int c = 0; c < 6; ++c) drow[angle_params[q]] += dx[slot0 + c] * db(c, q);
+      }
+      dD.row(i) = drow;
+    }
+  }
+
   const Mat3<double> Rzp = Rz(th[kDpsi]);
-  const Mat3<double> Ryp = Ry(rec.axis[0].angle + th[kDthetaC]);
-  const Mat3<double> Rxp = Rx(rec.axis[1].angle + th[kDlambda2]);
+  const Mat3<double> Ryp = Ry(b.axis[0].angle + th[kDthetaC]);
+  const Mat3<double> Rxp = Rx(b.axis[1].angle + th[kDlambda2]);
   const Mat3<double> C = Rzp * Ryp * Rxp;
 
+  // Sensor stage: u_i = (z_i - W0_i(t)) / s_i with s_i = K_i (+- dK_i with the
+  // scale asymmetry, the sign of z_i - W0_i), and F(W) = M W + W o (K W) + Q(W) - u.
   const Vec3<double> W = SpecificForceFromReadings_g(cfg, th, Vec3<double>(z), ctx);
   const Mat3<double> M = MisalignmentMatrix(th);
   const Mat3<double> K = NonlinearityMatrix(th);
   const Vec3<double> w0 = ZeroOffset_mV(cfg, th, ctx);
-  Vec3<double> u, Ks;
+  const int o_a = layout.offset(Effect::kScaleAsymmetry);
+  const int o_q = layout.offset(Effect::kCrossQuadratic);
+  Vec3<double> u, s, sgn;
   for (int i = 0; i < 3; ++i) {
-    Ks[i] = th[kKx + i];
-    u[i] = (z[i] - w0[i]) / Ks[i];
+    const double v = z[i] - w0[i];
+    sgn[i] = v < 0.0 ? -1.0 : 1.0;
+    s[i] = th[kKx + i] + (o_a >= 0 ? sgn[i] * th[o_a + i] : 0.0);
+    u[i] = v / s[i];
   }
   Mat3<double> Jf = M;
   Jf.diagonal() += K * W;
   Jf += W.asDiagonal() * K;
+  if (o_q >= 0) {
+    for (int i = 0; i < 3; ++i) Jf.row(i) += CrossQuadraticGradient(th + o_q, i, W);
+  }
   // gC J^-1: each column of dF/dtheta maps to da by -gC J^-1.
   const Mat3<double> T = -g * C * Jf.inverse();
 
@@ -40,13 +222,12 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
   *a_out = g * CW;
   (*a_out).x() -= g;
 
-  J.setZero();
   J.col(kDpsi) = g * Vec3<double>::UnitZ().cross(CW);
   J.col(kDthetaC) = g * Rzp * Vec3<double>::UnitY().cross(Ryp * Rxp * W);
   J.col(kDlambda2) = g * C * Vec3<double>::UnitX().cross(W);
   for (int i = 0; i < 3; ++i) {
-    J.col(kKx + i) = T.col(i) * (u[i] / Ks[i]);
-    J.col(kW0x + i) = T.col(i) * (1.0 / Ks[i]);
+    J.col(kKx + i) = T.col(i) * (u[i] / s[i]);
+    J.col(kW0x + i) = T.col(i) * (1.0 / s[i]);
   }
   J.col(kAlphaX) = T.col(1) * W.x();
   J.col(kAlphaY) = -T.col(0) * W.y();
@@ -57,10 +238,43 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) J.col(kKxx + 3 * i + j) = T.col(i) * (W[i] * W[j]);
   }
-  // Zero-offset effects (catalogue): dF/d theta_e,i = x_e / K_i e_i.
-  for (const ParameterLayout::ZeroOffsetTerm& term : cfg.layout.zero_offset_terms()) {
+  // Zero-offset effects (catalogue): dF/d theta_e,i = x_e / s_i e_i.
+  for (const ParameterLayout::ZeroOffsetTerm& term : layout.zero_offset_terms()) {
     const double x = ZeroOffsetSignalValue(cfg, term.signal, ctx);
-    for (int i = 0; i < 3; ++i) J.col(term.offset + i) = T.col(i) * (x / Ks[i]);
+    for (int i = 0; i < 3; ++i) J.col(term.offset + i) = T.col(i) * (x / s[i]);
+  }
+  // scale_asymmetry: dF/d dK_i = sgn_i u_i / s_i e_i.
+  if (o_a >= 0) {
+    for (int i = 0; i < 3; ++i) J.col(o_a + i) = T.col(i) * (sgn[i] * u[i] / s[i]);
+  }
+  // cross_quadratic: dF/d d_i = (W_j^2 - W_k^2) e_i, dF/d p_i = W_j W_k e_i.
+  if (o_q >= 0) {
+    for (int i = 0; i < 3; ++i) {
+      const int j = kCrossAxes[i][0], k = kCrossAxes[i][1];
+      J.col(o_q + 2 * i) = T.col(i) * (W[j] * W[j] - W[k] * W[k]);
+      J.col(o_q + 2 * i + 1) = T.col(i) * (W[j] * W[k]);
+    }
+  }
+  // Angle-stage effects move C only through the two bench angles, as
+  // dtheta_c and dlambda2 do: chain rule.
+  for (std::size_t q = 0; q < angle_params.size(); ++q) {
+    J.col(angle_params[q]) = J.col(kDthetaC) * db(0, q) + J.col(kDlambda2) * db(3, q);
+  }
+  // The size effect's correction enters as u_i = (z_i - D_i - W0_i) / s_i:
+  // dF/dD_i = 1 / s_i e_i, so da/dD_i = T.col(i) / s_i.
+  if (dD.size() > 0) {
+    for (int i = 1; i < 3; ++i) J += (T.col(i) / s[i]) * dD.row(i);
+  }
+  // Effects without written-out columns (B1HasCheapJacobian: all at zero,
+  // where the model above is the whole model): their own columns by Jets.
+  const std::vector<int> jet_params =
+      B1HasAnalyticJacobian(layout) ? std::vector<int>() : EffectParams(layout, false);
+  if (!jet_params.empty()) {
+    const std::array<SmallJet, kMaxParams> t = SeededTheta<SmallJet>(th, n, jet_params);
+    const Vec3<SmallJet> aj = AccelerationFromReadings_L<SmallJet>(cfg, t.data(), rec, z_in, ctx);
+    for (std::size_t q = 0; q < jet_params.size(); ++q) {
+      for (int r = 0; r < 3; ++r) J(r, jet_params[q]) = aj[r].v[q];
+    }
   }
 }
 

@@ -2,9 +2,18 @@
 // respect to theta written out analytically, for the estimators' hot loop: an
 // order of magnitude faster than pushing Jets through the chain. It covers the
 // base model and the effects whose catalogue entry says b1_analytic_jacobian:
-// those that act on B1 through the zero offsets (zero_offset_signal: the
-// thermal drifts) and those that do not touch B1 (axis_nonintersection).
-// For other effects use the Jet path (B1HasAnalyticJacobian says which).
+// the angle stage (latency, encoder harmonic, angle scale: they move C only
+// through the two bench angles, so their columns are those of dtheta_c and
+// dlambda2 times the angles' derivatives, taken by small Jets of the angle
+// stage alone), the sensor stage (drifts through the zero offsets, scale
+// asymmetry through s_i, cross_quadratic through F and its Jacobian),
+// axis_nonintersection (B2 only) and the size effect (the correction D of
+// the readings, with its derivatives by W taken by Jets of the geometry
+// alone, 17 wide, and by the sensor parameters written out). The axis
+// non-perpendicularity is not written out: with its parameter at zero (where
+// the score tests of `diagnose` linearise) the model above is the whole
+// model, and its own column comes from a small Jet (B1HasCheapJacobian);
+// elsewhere use the Jet path.
 //
 //   a = g C W - g e_x,   C = Rz(dpsi) Ry(l1 + dtheta_c) Rx(l2 + dlambda2)
 //
@@ -13,14 +22,16 @@
 //   da/d dlambda2 = g C (e_x x W)
 //   da/d theta_W  = g C dW/d theta_W,   dW/d theta_W = -J^-1 dF/d theta_W
 //
-// with F(W) = M W + W o (K W) - u = 0, u_i = (z_i - W0_i(t)) / K_i,
-// J = M + diag(K W) + diag(W) K, and the columns of dF/d theta_W:
+// with F(W) = M W + W o (K W) + Q(W) - u = 0, u_i = (z_i - W0_i(t)) / s_i,
+// J = M + diag(K W) + diag(W) K + dQ/dW, and the columns of dF/d theta_W:
 //
-//   K_i: +u_i / K_i e_i        W0_i: +1 / K_i e_i
+//   K_i: +u_i / s_i e_i        W0_i: +1 / s_i e_i      (s_i = K_i [+- dK_i])
+//   dK_i: +sgn(z_i - W0_i) u_i / s_i e_i
+//   cross_quadratic d_i: (W_j^2 - W_k^2) e_i,   p_i: W_j W_k e_i
 //   alpha_x: W_x e_y   alpha_y: -W_y e_x   beta_x: -W_x e_z
 //   beta_z: W_z e_x    gamma_y: W_y e_z    gamma_z: -W_z e_y
 //   K_ij: W_i W_j e_i
-//   zero-offset effect theta_e,i: x_e / K_i e_i   (x = t for thermal_drift,
+//   zero-offset effect theta_e,i: x_e / s_i e_i   (x = t for thermal_drift,
 //                                               T - T_ref for thermal_drift_temp)
 #pragma once
 
@@ -32,6 +43,12 @@ namespace triadcal {
 
 bool B1HasAnalyticJacobian(const ParameterLayout& layout);
 
+// True when AccelerationWithJacobian is exact at theta: the layout's effects
+// without written-out columns have all their parameters at zero (at most 8
+// of them).
+bool B1HasCheapJacobian(const ParameterLayout& layout, const double* theta);
+
+// Requires B1HasCheapJacobian(cfg.layout, theta).
 // a [m/s^2] and da/dtheta (3 x layout.size(), written into *J which must have
 // that size; columns of parameters B1 does not depend on are set to zero).
 void AccelerationWithJacobian(const ModelConfig& cfg, const double* theta,

@@ -1,29 +1,37 @@
 // The analytic Jacobian of block B1 against automatic differentiation of the
 // templated model and against central differences.
-#include <random>
+#include "core/model/b1_jacobian.h"
 
 #include <ceres/jet.h>
 #include <gtest/gtest.h>
 
-#include "core/model/b1_jacobian.h"
+#include <random>
 
 namespace triadcal {
 namespace {
 
 TEST(B1Jacobian, AnalyticMatchesAutomaticAndNumeric) {
-  constexpr int N = 40;
+  constexpr int N = 64;
   using J = ceres::Jet<double, N>;
   std::mt19937_64 rng(17);
   std::normal_distribution<double> nrm(0.0, 1.0);
-  for (const bool effects : {false, true}) {
+  // Every effect with written-out columns at once; then the whole catalogue
+  // with the non-perpendicularity at zero (its column by small Jets), as the
+  // score tests of diagnose linearise.
+  const std::vector<Effect> analytic = {
+      Effect::kAngleLatency,   Effect::kEncoderHarmonic,     Effect::kAngleScale,
+      Effect::kThermalDrift,   Effect::kThermalDriftTemp,    Effect::kScaleAsymmetry,
+      Effect::kCrossQuadratic, Effect::kAxisNonintersection, Effect::kSizeEffect};
+  std::vector<Effect> all = analytic;
+  all.push_back(Effect::kAxisNonperpendicularity);
+  for (int variant = 0; variant < 3; ++variant) {
     ModelConfig cfg;
-    if (effects) {
-      cfg.layout = ParameterLayout(
-          {Effect::kThermalDrift, Effect::kAxisNonintersection, Effect::kThermalDriftTemp});
-    }
+    if (variant == 1) cfg.layout = ParameterLayout(analytic);
+    if (variant == 2) cfg.layout = ParameterLayout(all);
     cfg.temp_ref_C = 20.0;
-    ASSERT_TRUE(B1HasAnalyticJacobian(cfg.layout));
+    EXPECT_EQ(B1HasAnalyticJacobian(cfg.layout), variant < 2);
     const int n = cfg.layout.size();
+    ASSERT_LE(n, N);
     for (int trial = 0; trial < 20; ++trial) {
       Eigen::VectorXd th = Eigen::VectorXd::Zero(n);
       for (int i = 0; i < 3; ++i) th[kKx + i] = 174 + 5 * nrm(rng);
@@ -31,10 +39,21 @@ TEST(B1Jacobian, AnalyticMatchesAutomaticAndNumeric) {
       for (int i = kAlphaX; i <= kGammaZ; ++i) th[i] = 0.02 * nrm(rng);
       for (int i = kKxx; i <= kKzz; ++i) th[i] = 0.005 * nrm(rng);
       for (int i = kDpsi; i <= kDlambda2; ++i) th[i] = 0.02 * nrm(rng);
-      for (int i = kNumBaseParams; i < n; ++i) th[i] = 0.1 * nrm(rng);
+      for (Effect e : cfg.layout.effects()) {
+        const EffectSpec& spec = GetEffectSpec(e);
+        for (std::size_t q = 0; q < spec.params.size(); ++q) {
+          const ParamSpec& p = spec.params[q];
+          const double size = p.typical * p.si_per_unit * (spec.scale_relative ? th[kKx] : 1.0);
+          th[cfg.layout.offset(e) + q] = spec.b1_analytic_jacobian ? 2.0 * size * nrm(rng) : 0.0;
+        }
+      }
+      ASSERT_TRUE(B1HasCheapJacobian(cfg.layout, th.data()));
       BenchAngles<double> rec;
-      rec.axis[0].angle = 3 * nrm(rng);
-      rec.axis[1].angle = 2 * nrm(rng);
+      for (int i = 0; i < 2; ++i) {
+        rec.axis[i].angle = (3 - i) * nrm(rng);
+        rec.axis[i].rate = nrm(rng);
+        rec.axis[i].accel = nrm(rng);
+      }
       const Eigen::Vector3d z(1500 + 150 * nrm(rng), 1500 + 150 * nrm(rng), 1500 + 150 * nrm(rng));
       const SampleContext ctx{40.0 * std::abs(nrm(rng)), 20 + 5 * nrm(rng)};
 
@@ -67,11 +86,18 @@ TEST(B1Jacobian, AnalyticMatchesAutomaticAndNumeric) {
   }
 }
 
-TEST(B1Jacobian, EffectsOnTheAngleOrSensorStageUseJets) {
-  EXPECT_FALSE(B1HasAnalyticJacobian(ParameterLayout({Effect::kAngleLatency})));
-  EXPECT_FALSE(B1HasAnalyticJacobian(ParameterLayout({Effect::kSizeEffect})));
-  EXPECT_FALSE(B1HasAnalyticJacobian(ParameterLayout({Effect::kScaleAsymmetry})));
+TEST(B1Jacobian, NonperpendicularityUsesJetsAwayFromZero) {
+  EXPECT_TRUE(B1HasAnalyticJacobian(ParameterLayout({Effect::kAngleLatency})));
+  EXPECT_TRUE(B1HasAnalyticJacobian(ParameterLayout({Effect::kScaleAsymmetry})));
+  EXPECT_TRUE(B1HasAnalyticJacobian(ParameterLayout({Effect::kSizeEffect})));
+  EXPECT_FALSE(B1HasAnalyticJacobian(ParameterLayout({Effect::kAxisNonperpendicularity})));
   EXPECT_TRUE(B1HasAnalyticJacobian(ParameterLayout()));
+  const ParameterLayout layout({Effect::kSizeEffect, Effect::kAxisNonperpendicularity});
+  Eigen::VectorXd th = Eigen::VectorXd::Zero(layout.size());
+  th[layout.offset(Effect::kSizeEffect) + 4] = 0.01;
+  EXPECT_TRUE(B1HasCheapJacobian(layout, th.data()));
+  th[layout.offset(Effect::kAxisNonperpendicularity)] = 1e-4;
+  EXPECT_FALSE(B1HasCheapJacobian(layout, th.data()));
 }
 
 }  // namespace

@@ -26,6 +26,7 @@ const std::vector<EffectSpec>& EffectCatalogue() {
           "the angle and acceleration channels of a bench recorder agree to a few samples; a "
           "lag beyond 0.1 s is a broken time base, not a latency";
       e.needs.rates_at_every_sample = true;
+      e.b1_analytic_jacobian = true;
       c.push_back(e);
     }
     {
@@ -41,6 +42,7 @@ const std::vector<EffectSpec>& EffectCatalogue() {
           "encoder eccentricity on a calibration bench is arcseconds to a few arcmin; a degree "
           "would show on the bench's own dial";
       e.needs.rates_at_every_sample = true;
+      e.b1_analytic_jacobian = true;
       c.push_back(e);
     }
     {
@@ -79,6 +81,7 @@ const std::vector<EffectSpec>& EffectCatalogue() {
                     {"rz_z", "mm", kMmToM, 20.0, -50.0, 50.0, 3.0}}};
       e.plausible_reason = "the sensing points of a triad lie inside its housing, a few cm across";
       e.needs.rates_at_every_sample = true;  // per-axis kinematics in block B1
+      e.b1_analytic_jacobian = true;
       c.push_back(e);
     }
     {
@@ -125,6 +128,7 @@ const std::vector<EffectSpec>& EffectCatalogue() {
           "the scale asymmetry of MEMS accelerometers is below 1 % of the scale; 10 % is a "
           "damaged sensor";
       e.needs.both_signs_per_axis = true;
+      e.b1_analytic_jacobian = true;
       c.push_back(e);
     }
     {
@@ -139,6 +143,7 @@ const std::vector<EffectSpec>& EffectCatalogue() {
           "(0.1-0.3 %, e.g. 4000 for 4096 counts); beyond 1 % the angles would visibly miss "
           "the bench's stops";
       e.needs.rates_at_every_sample = true;
+      e.b1_analytic_jacobian = true;
       c.push_back(e);
     }
     {
@@ -160,6 +165,7 @@ const std::vector<EffectSpec>& EffectCatalogue() {
           "the cross-axis nonlinearity of MEMS accelerometers is below 1 % of the reading at "
           "1 g (0.01 /g); 0.1 /g is a tenth of the full response to a perpendicular g: a "
           "damaged or saturating sensor";
+      e.b1_analytic_jacobian = true;
       c.push_back(e);
     }
     return c;
