@@ -16,6 +16,7 @@ nlohmann::json StateJson(const ParameterLayout& layout, const BatchResult& r,
   j["effects"] = nlohmann::json::array();
   for (Effect e : layout.effects()) j["effects"].push_back(GetEffectSpec(e).name);
   j["parameters"] = ParametersJson(layout, r.estimate.theta, r.estimate.cov, rep.not_estimable);
+  MarkRelative(r.relative_to, &j["parameters"]);
   j["held"] = r.held;
   j["chi2_per_dof"] = r.chi2_per_dof;
   j["residual"] = ResidualReportJson(rr);
@@ -117,12 +118,9 @@ nlohmann::json DiagnoseJson(const std::string& run_yaml, double alpha, const Dia
   }
   out["tests"] = tests;
   auto brief = [](const CandidateTest& t) {
-    return nlohmann::json{{"round", t.round},
-                          {"effect", GetEffectSpec(t.effect).name},
-                          {"statistic", t.statistic},
-                          {"dof", t.dof},
-                          {"p_value", t.p_value},
-                          {"chi2_per_dof_after", t.chi2_per_dof_after}};
+    return nlohmann::json{{"round", t.round},         {"effect", GetEffectSpec(t.effect).name},
+                          {"statistic", t.statistic}, {"dof", t.dof},
+                          {"p_value", t.p_value},     {"chi2_per_dof_after", t.chi2_per_dof_after}};
   };
   out["absorbing"] = nlohmann::json::array();
   for (const CandidateTest& t : d.absorbing) {
@@ -133,8 +131,7 @@ nlohmann::json DiagnoseJson(const std::string& run_yaml, double alpha, const Dia
   for (const CandidateTest& t : d.alternatives) out["alternatives"].push_back(brief(t));
   out["correlations"] = nlohmann::json::array();
   for (const EffectCorrelation& c : d.correlations) {
-    out["correlations"].push_back(
-        {{"parameter", c.parameter}, {"with", c.with}, {"rho", c.rho}});
+    out["correlations"].push_back({{"parameter", c.parameter}, {"with", c.with}, {"rho", c.rho}});
   }
   out["selected"] = nlohmann::json::array();
   for (Effect e : d.selected) out["selected"].push_back(GetEffectSpec(e).name);

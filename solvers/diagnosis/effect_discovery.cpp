@@ -12,10 +12,10 @@ namespace {
 
 // The fit of a layout, started from `start` (SI, in that layout), with the
 // given parameters held and every other base/current parameter kept free.
-BatchResult FitLayout(const RunDescription& run, const RunData& data,
-                      const ParameterLayout& layout, const Eigen::VectorXd& start,
-                      const std::vector<std::string>& hold, const std::vector<std::string>& free,
-                      const BatchOptions& base, bool covariance) {
+BatchResult FitLayout(const RunDescription& run, const RunData& data, const ParameterLayout& layout,
+                      const Eigen::VectorXd& start, const std::vector<std::string>& hold,
+                      const std::vector<std::string>& free, const BatchOptions& base,
+                      bool covariance) {
   BatchOptions o = base;
   o.init = BatchInit::kGiven;
   o.init_theta = start;
@@ -147,7 +147,8 @@ std::vector<Effect> CatalogueCandidates(const RunData& data, const std::vector<E
 }
 
 std::vector<HideCase> CouldHideOnProfile(const RunDescription& run, const RunData& noise_free,
-                                         const ParameterLayout& layout, const Eigen::VectorXd& theta,
+                                         const ParameterLayout& layout,
+                                         const Eigen::VectorXd& theta,
                                          const DiagnoseOptions& options) {
   const std::vector<Effect> candidates =
       options.candidates.empty() ? CatalogueCandidates(noise_free, layout.effects(), nullptr)
@@ -220,12 +221,12 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
   ParameterLayout layout = res.before_layout;
   BatchResult fit = res.before;
   std::vector<std::string> held = fit.held;
-  EffectInformation info;          // the score analysis at the current fit
-  bool info_current = false;       // computed at `fit` for the remaining candidates
+  EffectInformation info;     // the score analysis at the current fit
+  bool info_current = false;  // computed at `fit` for the remaining candidates
   double last_threshold = opt.alpha / std::max<std::size_t>(1, candidates.size());
   for (int round = 1; round <= opt.max_effects && !candidates.empty(); ++round) {
-    say("round " + std::to_string(round) + ": score tests of " +
-        std::to_string(candidates.size()) + " candidates");
+    say("round " + std::to_string(round) + ": score tests of " + std::to_string(candidates.size()) +
+        " candidates");
     info = AnalyseCandidates(run, data, current, fit, candidates, fit_opt);
     info_current = true;
     if (round == 1) res.base_gradient_sigma = info.base_gradient_sigma;
@@ -285,6 +286,12 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
       for (int q : c.unsupported) hold.push_back(spec.name + "." + spec.params[q].name);
       for (int q : c.supported) free.push_back(spec.name + "." + spec.params[q].name);
       BatchResult r = FitLayout(run, data, aug, start, hold, free, fit_opt, true);
+      // The refit holds what the current fit held (no hold decision of its
+      // own): what those holds stand for carries over, so a parameter known
+      // only relative to a held one (beta_x to dtheta_c on a single-axis run)
+      // is not reported as estimable on its own after the loop either.
+      r.relative_to = fit.relative_to;
+      r.unsupported_at_start = fit.unsupported_at_start;
       const int k = static_cast<int>(GetEffectSpec(e).params.size());
       int held_new = 0;
       for (const std::string& h : r.held) {
@@ -378,6 +385,23 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
         }
       }
     }
+    // The weak components of every refitted candidate, once each.
+    for (std::size_t i = 0; i < info.candidates.size(); ++i) {
+      if (!tests[i].refit) continue;
+      const EffectSpec& spec = GetEffectSpec(info.candidates[i].effect);
+      for (const auto& [q, information] : info.candidates[i].weak) {
+        const std::string name = spec.name + "." + spec.params[q].name;
+        const std::string note =
+            name +
+            " leans on its prior in the refit: this run determines it only weakly (data "
+            "information " +
+            FormatNumber(information) + " times its prior's; below " +
+            FormatNumber(kMinInformationFound) + " the fit calls a parameter not estimable)";
+        bool seen = false;
+        for (const std::string& n : res.notes) seen = seen || n.rfind(name + " leans on", 0) == 0;
+        if (!seen) res.notes.push_back(note);
+      }
+    }
     // The first significant candidate of plausible size is selected; the
     // significant ones before it absorb something else.
     int pick = -1;
@@ -409,10 +433,9 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
               " explains the residual about as well as " + GetEffectSpec(s.effect).name +
               " (chi2/dof " + FormatNumber(fit.chi2_per_dof) + " -> " +
               FormatNumber(t.chi2_per_dof_after) + " against -> " +
-              FormatNumber(s.chi2_per_dof_after) + "; statistic " +
-              FormatNumber(t.statistic) + " against " + FormatNumber(s.statistic) +
-              "): the data do not tell them apart; " + GetEffectSpec(s.effect).name +
-              " was selected for its smaller p-value");
+              FormatNumber(s.chi2_per_dof_after) + "; statistic " + FormatNumber(t.statistic) +
+              " against " + FormatNumber(s.statistic) + "): the data do not tell them apart; " +
+              GetEffectSpec(s.effect).name + " was selected for its smaller p-value");
         }
       }
     }
@@ -443,10 +466,9 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
       if (std::find(candidates.begin(), candidates.end(), c.effect) == candidates.end()) continue;
       res.could_hide.push_back(MinimalDetectable(info, c, last_threshold, opt.power));
     }
-    std::stable_sort(res.could_hide.begin(), res.could_hide.end(),
-                     [](const HideCase& a, const HideCase& b) {
-                       return a.max_shift_sigma > b.max_shift_sigma;
-                     });
+    std::stable_sort(
+        res.could_hide.begin(), res.could_hide.end(),
+        [](const HideCase& a, const HideCase& b) { return a.max_shift_sigma > b.max_shift_sigma; });
   }
   say("analysing the residual");
   if (opt.fraction) opt.fraction(0.95);
@@ -470,7 +492,8 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
       << ") only with " << t.absorbs << ": it ABSORBS SOMETHING ELSE, not reported as found";
   }
   if (res.after_residuals.structure) {
-    v << "; STRUCTURE REMAINS that no candidate explains: " << res.after_residuals.structure_summary;
+    v << "; STRUCTURE REMAINS that no candidate explains: "
+      << res.after_residuals.structure_summary;
   } else if (res.unexplained) {
     v << "; the residual looks white (chi2/dof " << std::round(1000 * res.after.chi2_per_dof) / 1000
       << ") but something outside the catalogue remains (above)";
@@ -485,9 +508,10 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
       unseen.push_back(GetEffectSpec(h.effect).name);
     } else if (h.max_shift_sigma > 1.0) {
       hiding.push_back(GetEffectSpec(h.effect).name + " up to " +
-                       FormatNumber(h.minimal_detectable) + " " + h.unit + " would go undetected "
-                       "and move " + h.parameter + " by up to " +
-                       FormatNumber(h.max_shift_sigma) + " sigma");
+                       FormatNumber(h.minimal_detectable) + " " + h.unit +
+                       " would go undetected "
+                       "and move " +
+                       h.parameter + " by up to " + FormatNumber(h.max_shift_sigma) + " sigma");
     }
   }
   if (!hiding.empty()) {

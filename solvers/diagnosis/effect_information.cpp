@@ -8,11 +8,11 @@
 #include <limits>
 #include <stdexcept>
 
-#include "solvers/statistics/statistics.h"
 #include "solvers/estimation/batch_linearization.h"
 #include "solvers/estimation/parallel.h"
 #include "solvers/estimation/schur_covariance.h"
 #include "solvers/estimation/state_space_model.h"
+#include "solvers/statistics/statistics.h"
 
 namespace triadcal {
 namespace {
@@ -281,16 +281,16 @@ EffectInformation AnalyseCandidates(const RunDescription& run, const RunData& da
     const std::vector<int> by_data = Supported(Np, options.holding.min_information_effects);
     // Components whose axis never reverses are left out before the rest is
     // decided (their information is that of the noise's sign, or of K u).
-    const std::vector<std::string> one_sided = OneSidedAxes(GetEffectSpec(e), data, pc.noise_mV,
-                                                            fit.estimate.theta);
+    const std::vector<std::string> one_sided =
+        OneSidedAxes(GetEffectSpec(e), data, pc.noise_mV, fit.estimate.theta);
     std::vector<int> two_sided;
     for (int q = 0; q < k_all; ++q) {
       if (one_sided[q].empty()) two_sided.push_back(q);
     }
-    const Eigen::MatrixXd Nloose = LooseConditional(I, anchored, anchored_prior_info, {}, cols,
-                                                    prior_sigma);
-    for (int q : Supported(Rows(Nloose, two_sided, two_sided),
-                           options.holding.min_information_effects)) {
+    const Eigen::MatrixXd Nloose =
+        LooseConditional(I, anchored, anchored_prior_info, {}, cols, prior_sigma);
+    for (int q :
+         Supported(Rows(Nloose, two_sided, two_sided), options.holding.min_information_effects)) {
       c.supported.push_back(two_sided[q]);
     }
     for (int q = 0; q < k_all; ++q) {
@@ -317,6 +317,15 @@ EffectInformation AnalyseCandidates(const RunDescription& run, const RunData& da
       c.held_because.emplace_back(q, "this run determines it only through " + on +
                                          "'s prior or hold (" + on +
                                          " is not determined by this run)");
+    }
+    {
+      const Eigen::MatrixXd Ns = Rows(Nloose, c.supported, c.supported);
+      const std::vector<int> strong = Supported(Ns, kMinInformationFound);
+      for (std::size_t i = 0; i < c.supported.size(); ++i) {
+        if (std::find(strong.begin(), strong.end(), static_cast<int>(i)) == strong.end()) {
+          c.weak.emplace_back(c.supported[i], Ns(i, i));
+        }
+      }
     }
     const int k = static_cast<int>(c.supported.size());
     if (k > 0) {
