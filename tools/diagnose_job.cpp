@@ -106,6 +106,8 @@ nlohmann::json DiagnoseJson(const std::string& run_yaml, double alpha, const Dia
     tests.push_back({{"round", t.round},
                      {"effect", GetEffectSpec(t.effect).name},
                      {"statistic", t.statistic},
+                     {"likelihood_ratio", t.lr},
+                     {"note", t.note},
                      {"dof", t.dof},
                      {"p_value", t.p_value},
                      {"threshold", t.threshold},

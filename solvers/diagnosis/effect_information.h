@@ -78,7 +78,7 @@ struct CandidateInformation {
   // free in a refit, under their priors: held at zero they would leave
   // whatever they stand for in the base parameters with sigma that do not
   // know it (a 6' outer-encoder harmonic then left Kxx and W0x 3-5 sigma off
-  // in 18 of 20 seeds, against 2 of 20 with them free); diagnose names them
+  // in 18 of 20 seeds, against 4 of 20 with them free); diagnose names them
   // in a note. Index, information.
   std::vector<std::pair<int, double>> weak;
   double score = 0.0;      // S (unscaled)
