@@ -317,6 +317,20 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
       } else {
         t.p_value = ChiSquareSurvival(t.statistic, t.dof);
         t.absorbs = Implausible(run, aug, r, e);
+        // Significant, but not through the components the run determines
+        // well: what it finds rides on directions the run does not determine.
+        if (t.absorbs.empty() && !c.weak.empty() && t.p_value < threshold &&
+            !(c.p_value_strong < threshold)) {
+          std::string names;
+          for (const auto& w : c.weak) {
+            names += (names.empty() ? "" : ", ") + spec.name + "." + spec.params[w.first].name;
+          }
+          t.absorbs = names +
+                      ", which this run determines only weakly (the components it "
+                      "determines well score " +
+                      FormatNumber(c.statistic_strong) + ", p " + FormatNumber(c.p_value_strong) +
+                      ")";
+        }
       }
       return r;
     };

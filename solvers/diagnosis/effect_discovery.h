@@ -45,22 +45,22 @@
 #include "core/model/effects.h"
 #include "core/model/run_data.h"
 #include "core/model/run_description.h"
-#include "solvers/estimation/batch_solver.h"
 #include "solvers/diagnosis/effect_information.h"
 #include "solvers/diagnosis/residual_analysis.h"
+#include "solvers/estimation/batch_solver.h"
 
 namespace triadcal {
 
 struct DiagnoseOptions {
-  BatchOptions fit;            // for every fit (hold/free and the noise are managed here:
-                               // the declared noise throughout, estimate_noise off)
-  double alpha = 0.01;         // family-wise false-selection rate per round
+  BatchOptions fit;     // for every fit (hold/free and the noise are managed here:
+                        // the declared noise throughout, estimate_noise off)
+  double alpha = 0.01;  // family-wise false-selection rate per round
   int max_effects = 4;
   // Refit (likelihood ratio) the candidates whose score p-value is below
   // refit_factor x the round's threshold and close to the best (see above);
   // infinity refits every candidate.
   double refit_factor = 10.0;
-  double power = 0.8;          // of the minimal detectable effects (could_hide)
+  double power = 0.8;              // of the minimal detectable effects (could_hide)
   std::vector<Effect> candidates;  // empty: the whole catalogue (that the run can carry)
   std::function<void(const std::string&)> progress;
   // Estimated fraction done, 0..1: the first fit 0-0.15; each round (its
@@ -74,16 +74,16 @@ struct DiagnoseOptions {
 struct CandidateTest {
   Effect effect;
   int round = 0;
-  int dof = 0;                 // effect parameters the run supports
-  double lr = 0.0;             // 2 (cost_current - cost_with_effect)
-  double statistic = 0.0;      // lr / max(1, chi2/dof of the augmented fit)
-  double p_value = 1.0;        // of the LR when refit, else of the score statistic
-  double threshold = 0.0;      // alpha / candidates in the round
-  double score = 0.0;          // score (LM) statistic from the current fit, scaled as the LR
+  int dof = 0;             // effect parameters the run supports
+  double lr = 0.0;         // 2 (cost_current - cost_with_effect)
+  double statistic = 0.0;  // lr / max(1, chi2/dof of the augmented fit)
+  double p_value = 1.0;    // of the LR when refit, else of the score statistic
+  double threshold = 0.0;  // alpha / candidates in the round
+  double score = 0.0;      // score (LM) statistic from the current fit, scaled as the LR
   double score_p_value = 1.0;
-  bool refit = false;          // lr, statistic, p_value from a refit (else from the score)
+  bool refit = false;  // lr, statistic, p_value from a refit (else from the score)
   bool selected = false;
-  std::string note;            // e.g. why it could not be tested
+  std::string note;                 // e.g. why it could not be tested
   double chi2_per_dof_after = 0.0;  // of the refit with the effect added (refit only)
   // Non-empty: the effect passes the test only with a size beyond its
   // plausible range (EffectSpec), so it absorbs something else and is not a
@@ -117,9 +117,9 @@ struct DiagnosisResult {
   // evidence ratio below 10), with their refit's chi2/dof.
   std::vector<CandidateTest> alternatives;
   std::vector<EffectCorrelation> correlations;  // of every selected effect, at the final fit
-  double base_gradient_sigma = 0.0;    // effect_information.h's check, first round
-  bool unexplained = false;            // structure remains after the selection
-  std::vector<std::string> notes;      // e.g. candidates merged or skipped, and why
+  double base_gradient_sigma = 0.0;             // effect_information.h's check, first round
+  bool unexplained = false;                     // structure remains after the selection
+  std::vector<std::string> notes;               // e.g. candidates merged or skipped, and why
   std::string verdict;
 };
 
@@ -139,7 +139,8 @@ std::vector<Effect> CatalogueCandidates(const RunData& data, const std::vector<E
 // or CatalogueCandidates) at the first round's threshold alpha / m. Depends on
 // the profile and the declared noise, not on any noise draw.
 std::vector<HideCase> CouldHideOnProfile(const RunDescription& run, const RunData& noise_free,
-                                         const ParameterLayout& layout, const Eigen::VectorXd& theta,
+                                         const ParameterLayout& layout,
+                                         const Eigen::VectorXd& theta,
                                          const DiagnoseOptions& options);
 
 }  // namespace triadcal

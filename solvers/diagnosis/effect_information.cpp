@@ -348,6 +348,23 @@ EffectInformation AnalyseCandidates(const RunDescription& run, const RunData& da
           (2.0 * fit.final_cost - c.score) / std::max(1, fit.degrees_of_freedom - k);
       c.statistic = c.score / std::max(1.0, chi2_aug);
       c.p_value = ChiSquareSurvival(c.statistic, k);
+      std::vector<int> strong;
+      for (int q : c.supported) {
+        if (std::none_of(c.weak.begin(), c.weak.end(),
+                         [&](const std::pair<int, double>& w) { return w.first == q; })) {
+          strong.push_back(cols[q]);
+        }
+      }
+      if (strong.size() == sc.size()) {
+        c.statistic_strong = c.statistic;
+        c.p_value_strong = c.p_value;
+      } else if (!strong.empty()) {
+        const Eigen::MatrixXd Ibs = Rows(I, base, strong);
+        const Eigen::MatrixXd ws = Rows(I, strong, strong) - Ibs.transpose() * bb.solve(Ibs);
+        const Eigen::VectorXd gs = Entries(g, strong);
+        c.statistic_strong = std::max(0.0, gs.dot(ws.ldlt().solve(gs))) / std::max(1.0, chi2_aug);
+        c.p_value_strong = ChiSquareSurvival(c.statistic_strong, static_cast<int>(strong.size()));
+      }
     }
     out.candidates.push_back(c);
   }

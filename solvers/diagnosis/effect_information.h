@@ -81,6 +81,12 @@ struct CandidateInformation {
   // in 18 of 20 seeds, against 4 of 20 with them free); diagnose names them
   // in a note. Index, information.
   std::vector<std::pair<int, double>> weak;
+  // The score test of the components the run determines well (the supported
+  // ones not weak; weak ones left out) and its p-value, scaled as
+  // `statistic`: an effect significant only through its weak components is
+  // not a finding (diagnose reports it as absorbing something else).
+  double statistic_strong = 0.0;
+  double p_value_strong = 1.0;
   double score = 0.0;      // S (unscaled)
   double statistic = 0.0;  // S / max(1, predicted chi2/dof)
   double p_value = 1.0;

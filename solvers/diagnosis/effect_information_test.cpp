@@ -166,3 +166,42 @@ TEST(Reliability, CouldHideIsAPropertyOfTheProfile) {
 
 }  // namespace
 }  // namespace triadcal
+
+namespace triadcal {
+namespace {
+
+// The score of the well-determined components alone (statistic_strong) is
+// the score of a nested model: never above the full one, equal to it when no
+// component is weak. On a single-axis run cross_quadratic has both kinds
+// (its x_yy_zz and z_xx_yy are nearly W0 + K_ii there).
+TEST(ScoreTest, WellDeterminedComponentsAloneScoreNoMoreThanAll) {
+  Scenario s = testing_fixtures::PaperScenario(50.0, 90.0, 2.0, 15.0, 3);
+  s.profile.amplitude_rad[1] = 0.0;
+  const RunData data = Simulate(s);
+  BatchOptions o = DiagnoseOptions().fit;
+  o.estimate_noise = false;
+  const BatchResult fit = SolveBatch(s.run, data, ParameterLayout(), o);
+  const EffectInformation info =
+      AnalyseCandidates(s.run, data, {}, fit,
+                        {Effect::kCrossQuadratic, Effect::kAngleLatency, Effect::kThermalDrift,
+                         Effect::kSizeEffect},
+                        o);
+  int mixed = 0;
+  for (const CandidateInformation& c : info.candidates) {
+    SCOPED_TRACE(GetEffectSpec(c.effect).name);
+    if (c.supported.empty()) continue;
+    if (c.weak.empty()) {
+      EXPECT_EQ(c.statistic_strong, c.statistic);
+      EXPECT_EQ(c.p_value_strong, c.p_value);
+    } else if (c.weak.size() < c.supported.size()) {
+      ++mixed;
+      EXPECT_LE(c.statistic_strong, c.statistic * (1.0 + 1e-9) + 1e-9);
+      EXPECT_GE(c.p_value_strong, 0.0);
+    }
+    for (const auto& [q, information] : c.weak) EXPECT_LT(information, kMinInformationFound);
+  }
+  EXPECT_GE(mixed, 1);
+}
+
+}  // namespace
+}  // namespace triadcal

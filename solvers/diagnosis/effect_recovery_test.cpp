@@ -18,8 +18,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "solvers/statistics/statistics.h"
 #include "solvers/estimation/batch_solver.h"
+#include "solvers/statistics/statistics.h"
 #include "tests/sim_fixtures.h"
 
 namespace triadcal {

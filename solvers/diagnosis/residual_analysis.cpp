@@ -30,7 +30,8 @@ std::string CombinationLabel(double f, double f1, double f2, double bin_hz) {
         };
         best = term(a, "f1");
         const std::string tb = term(b, "f2");
-        if (!tb.empty()) best += best.empty() ? tb : (tb[0] == '-' ? " - " + tb.substr(1) : " + " + tb);
+        if (!tb.empty())
+          best += best.empty() ? tb : (tb[0] == '-' ? " - " + tb.substr(1) : " + " + tb);
       }
     }
   }
@@ -52,16 +53,28 @@ ResidualReport AnalyzeResiduals(const RunDescription& run, const RunData& data,
 
   // Interval midpoints and their kinematics.
   std::vector<std::size_t> mids;
-  for (std::size_t e = 1; e < E; ++e) mids.push_back((fit.epoch_samples[e - 1] + fit.epoch_samples[e]) / 2);
+  for (std::size_t e = 1; e < E; ++e)
+    mids.push_back((fit.epoch_samples[e - 1] + fit.epoch_samples[e]) / 2);
   const std::vector<BenchAngles<double>> rec = EstimateAngleDerivatives(data, {}, &mids);
 
   const std::size_t M = E - 1;
   std::vector<double> acc[3];
   std::vector<double> white[6];
   std::vector<std::pair<std::string, std::vector<double>>> signals;
-  const char* sig_names[] = {"lambda1",    "lambda2",    "sin lambda1", "cos lambda1", "sin lambda2",
-                             "cos lambda2", "lambda1 rate", "lambda2 rate", "lambda1 accel",
-                             "lambda2 accel", "time", "Wx", "Wy", "Wz"};
+  const char* sig_names[] = {"lambda1",
+                             "lambda2",
+                             "sin lambda1",
+                             "cos lambda1",
+                             "sin lambda2",
+                             "cos lambda2",
+                             "lambda1 rate",
+                             "lambda2 rate",
+                             "lambda1 accel",
+                             "lambda2 accel",
+                             "time",
+                             "Wx",
+                             "Wy",
+                             "Wz"};
   const int n_sig = 14;
   std::vector<std::vector<double>> sig(n_sig + 1);
   for (std::size_t j = 0; j < M; ++j) {
@@ -76,9 +89,20 @@ ResidualReport AnalyzeResiduals(const RunDescription& run, const RunData& data,
     for (int c = 0; c < 6; ++c) white[c].push_back(fit.process_whitened[e][c]);
     const Eigen::Vector3d W = SpecificForce_g(cfg, m.C_L2, Eigen::Vector3d::Zero().eval());
     const double l1 = r.axis[0].angle, l2 = r.axis[1].angle;
-    const double v[] = {l1,  l2,  std::sin(l1), std::cos(l1), std::sin(l2), std::cos(l2),
-                        r.axis[0].rate, r.axis[1].rate, r.axis[0].accel, r.axis[1].accel,
-                        data.t_s[mids[j]], W.x(), W.y(), W.z()};
+    const double v[] = {l1,
+                        l2,
+                        std::sin(l1),
+                        std::cos(l1),
+                        std::sin(l2),
+                        std::cos(l2),
+                        r.axis[0].rate,
+                        r.axis[1].rate,
+                        r.axis[0].accel,
+                        r.axis[1].accel,
+                        data.t_s[mids[j]],
+                        W.x(),
+                        W.y(),
+                        W.z()};
     for (int s = 0; s < n_sig; ++s) sig[s].push_back(v[s]);
     if (data.has_temp()) sig[n_sig].push_back(data.temp_C[mids[j]]);
     rep.t_s.push_back(data.t_s[mids[j]]);
@@ -94,9 +118,8 @@ ResidualReport AnalyzeResiduals(const RunDescription& run, const RunData& data,
   rep.f2_hz = span2 > 1e-3 ? DominantFrequency(sig[1], dt) : 0.0;
   const double bin = 1.0 / (M * dt);
 
-  auto analyse = [&](const std::string& name, const std::string& unit,
-                     const std::vector<double>& x, bool with_spectrum,
-                     const std::vector<double>* expected_acf) {
+  auto analyse = [&](const std::string& name, const std::string& unit, const std::vector<double>& x,
+                     bool with_spectrum, const std::vector<double>* expected_acf) {
     ChannelReport ch;
     ch.name = name;
     ch.unit = unit;
@@ -120,7 +143,8 @@ ResidualReport AnalyzeResiduals(const RunDescription& run, const RunData& data,
                                s.power[k] >= s.power[k - 1];
         if (local_max) idx.push_back(k);
       }
-      std::sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) { return s.power[a] > s.power[b]; });
+      std::sort(idx.begin(), idx.end(),
+                [&](std::size_t a, std::size_t b) { return s.power[a] > s.power[b]; });
       for (std::size_t i = 0; i < std::min<std::size_t>(3, idx.size()); ++i) {
         SpectralPeak p;
         p.freq_hz = s.freq_hz[idx[i]];
@@ -128,9 +152,11 @@ ResidualReport AnalyzeResiduals(const RunDescription& run, const RunData& data,
         p.combination = CombinationLabel(p.freq_hz, rep.f1_hz, rep.f2_hz, bin);
         ch.peaks.push_back(p);
       }
-      for (const auto& [sname, sv] : signals) ch.correlations.push_back({sname, Correlation(x, sv)});
-      std::sort(ch.correlations.begin(), ch.correlations.end(),
-                [](const auto& a, const auto& b) { return std::abs(a.second) > std::abs(b.second); });
+      for (const auto& [sname, sv] : signals)
+        ch.correlations.push_back({sname, Correlation(x, sv)});
+      std::sort(ch.correlations.begin(), ch.correlations.end(), [](const auto& a, const auto& b) {
+        return std::abs(a.second) > std::abs(b.second);
+      });
       ch.correlations.resize(std::min<std::size_t>(4, ch.correlations.size()));
     }
     rep.channels.push_back(ch);
@@ -169,7 +195,8 @@ ResidualReport AnalyzeResiduals(const RunDescription& run, const RunData& data,
       const ChannelReport* a = &rep.channels[0];
       for (int c = 0; c < 3; ++c) {
         if (!rep.channels[c].correlations.empty() && !a->correlations.empty() &&
-            std::abs(rep.channels[c].correlations[0].second) > std::abs(a->correlations[0].second)) {
+            std::abs(rep.channels[c].correlations[0].second) >
+                std::abs(a->correlations[0].second)) {
           a = &rep.channels[c];
         }
       }
@@ -177,15 +204,16 @@ ResidualReport AnalyzeResiduals(const RunDescription& run, const RunData& data,
                     "residual not white (%s: Ljung-Box p = %.2g, lag-1 autocorrelation %.2f); "
                     "%s correlates most with %s (r = %.2f)%s%s",
                     worst->name.c_str(), worst->whiteness.p_value, worst->whiteness.rho1,
-                    a->name.c_str(), a->correlations.empty() ? "-" : a->correlations[0].first.c_str(),
+                    a->name.c_str(),
+                    a->correlations.empty() ? "-" : a->correlations[0].first.c_str(),
                     a->correlations.empty() ? 0.0 : a->correlations[0].second,
                     a->peaks.empty() ? "" : ", strongest spectral peak at ",
-                    a->peaks.empty() ? ""
-                                     : (std::to_string(a->peaks[0].freq_hz).substr(0, 6) + " Hz" +
-                                        (a->peaks[0].combination.empty()
-                                             ? std::string()
-                                             : " (" + a->peaks[0].combination + ")"))
-                                           .c_str());
+                    a->peaks.empty()
+                        ? ""
+                        : (std::to_string(a->peaks[0].freq_hz).substr(0, 6) + " Hz" +
+                           (a->peaks[0].combination.empty() ? std::string()
+                                                            : " (" + a->peaks[0].combination + ")"))
+                              .c_str());
     } else {
       std::snprintf(buf, sizeof(buf), "chi2/dof = %.3f, %.1f standard deviations above 1",
                     rep.chi2_per_dof, chi2_excess);

@@ -10,11 +10,10 @@
 // process residuals in L (for whiteness against the declared noise).
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "core/model/run_data.h"
 #include "core/model/run_description.h"
@@ -34,9 +33,9 @@ struct ChannelReport {
   double rms = 0.0;
   double mean = 0.0;
   WhitenessTest whiteness;
-  bool tested = false;  // enters the whiteness decision (the whitened channels)
-  std::vector<SpectralPeak> peaks;                            // strongest first
-  std::vector<std::pair<std::string, double>> correlations;   // |r| largest first
+  bool tested = false;              // enters the whiteness decision (the whitened channels)
+  std::vector<SpectralPeak> peaks;  // strongest first
+  std::vector<std::pair<std::string, double>> correlations;  // |r| largest first
   std::vector<double> series;  // the channel per interval (ResidualReport::t_s), for plots
 };
 
