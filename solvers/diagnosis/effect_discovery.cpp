@@ -433,7 +433,7 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
             " leans on its prior in the refit: this run determines it only weakly (data "
             "information " +
             FormatNumber(information) + " times its prior's; below " +
-            FormatNumber(kMinInformationFound) + " the fit calls a parameter not estimable)";
+            FormatNumber(kMinInformationFound) + " the run knows it less than its prior does)";
         bool seen = false;
         for (const std::string& n : res.notes) seen = seen || n.rfind(name + " leans on", 0) == 0;
         if (!seen) res.notes.push_back(note);

@@ -181,11 +181,10 @@ TEST(ScoreTest, WellDeterminedComponentsAloneScoreNoMoreThanAll) {
   BatchOptions o = DiagnoseOptions().fit;
   o.estimate_noise = false;
   const BatchResult fit = SolveBatch(s.run, data, ParameterLayout(), o);
-  const EffectInformation info =
-      AnalyseCandidates(s.run, data, {}, fit,
-                        {Effect::kCrossQuadratic, Effect::kAngleLatency, Effect::kThermalDrift,
-                         Effect::kSizeEffect},
-                        o);
+  const EffectInformation info = AnalyseCandidates(
+      s.run, data, {}, fit,
+      {Effect::kCrossQuadratic, Effect::kAngleLatency, Effect::kThermalDrift, Effect::kSizeEffect},
+      o);
   int mixed = 0;
   for (const CandidateInformation& c : info.candidates) {
     SCOPED_TRACE(GetEffectSpec(c.effect).name);
