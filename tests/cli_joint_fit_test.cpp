@@ -48,7 +48,9 @@ run:
     const auto r = RunTriadcal(args, Path("stderr.txt"));
     EXPECT_EQ(r.status, 2) << args << "\n" << r.err;
     EXPECT_EQ(r.err, "triadcal: error: " + what + "\n") << args;
-    if (out_json) EXPECT_FALSE(fs::exists(Path("out.json"))) << args;
+    if (out_json) {
+      EXPECT_FALSE(fs::exists(Path("out.json"))) << args;
+    }
   }
 };
 

@@ -68,7 +68,9 @@ TEST_F(SigmaCli, CorrelatedResidualsGiveTheHacSigmaAndBoth) {
   const nlohmann::json white = Fit("--sigma white");
   EXPECT_EQ(white["sigma_method"], "white");
   for (const auto& [name, p] : white["parameters"].items()) {
-    if (!p["sigma"].is_null()) EXPECT_DOUBLE_EQ(p["sigma"], p["sigma_white"]) << name;
+    if (!p["sigma"].is_null()) {
+      EXPECT_DOUBLE_EQ(p["sigma"], p["sigma_white"]) << name;
+    }
   }
 }
 

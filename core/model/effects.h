@@ -112,8 +112,8 @@ struct EffectSpec {
   EffectStage stage;
   std::vector<ParamSpec> params;
   bool scale_relative = false;   // prior_sigma, plausible range, typical x nominal scale
-  std::string plausible_reason;  // why values outside the plausible range are implausible
-  EffectNeeds needs;
+  std::string plausible_reason{};  // why values outside the plausible range are implausible
+  EffectNeeds needs{};
   bool b1_analytic_jacobian = false;  // AccelerationWithJacobian covers it (b1_jacobian.h)
   ZeroOffsetSignal zero_offset_signal = ZeroOffsetSignal::kNone;
 };

@@ -739,7 +739,9 @@ TEST(Scenario, TruthSpreadIsPerSeedAndLeavesNoiseAlone) {
     SampleTruth(&c);
     draws.push_back(c.truth[kDlambda2]);
     for (int i = 0; i < s.truth_layout.size(); ++i) {
-      if (i != kDlambda2) EXPECT_EQ(c.truth[i], s.truth[i]);
+      if (i != kDlambda2) {
+        EXPECT_EQ(c.truth[i], s.truth[i]);
+      }
     }
   }
   EXPECT_NE(draws[0], draws[1]);

@@ -124,8 +124,12 @@ TEST(HacCovariance, WhiteScoresGiveTheInverseInformationCorrelatedOnesMore) {
       EXPECT_NEAR(h.score_lag1, rho, 0.05);
       // The bandwidth follows what correlation is left for the kernel: none
       // after the prewhitening filter, all of it without.
-      if (rho == 0.0 || prewhiten) EXPECT_LT(h.bandwidth, 4.0);
-      if (rho > 0.0 && !prewhiten) EXPECT_GT(h.bandwidth, 10.0);
+      if (rho == 0.0 || prewhiten) {
+        EXPECT_LT(h.bandwidth, 4.0);
+      }
+      if (rho > 0.0 && !prewhiten) {
+        EXPECT_GT(h.bandwidth, 10.0);
+      }
     }
   }
 }
