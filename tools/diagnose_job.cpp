@@ -149,6 +149,10 @@ nlohmann::json DiagnoseJson(const std::string& run_yaml, double alpha, const Dia
       "likelihood ratio only when its score p-value < refit_factor x threshold";
   out["could_hide"] = CouldHideJson(d.could_hide);
   out["unexplained_structure"] = d.unexplained;
+  out["beyond_prior"] = nlohmann::json::array();
+  for (const PriorExcursion& e : d.beyond_prior) {
+    out["beyond_prior"].push_back({{"parameter", e.name}, {"prior_sigmas", e.z}});
+  }
   out["notes"] = d.notes;
   out["verdict"] = d.verdict;
   return out;

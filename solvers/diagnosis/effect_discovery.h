@@ -47,6 +47,7 @@
 #include "core/model/run_description.h"
 #include "solvers/diagnosis/effect_information.h"
 #include "solvers/diagnosis/residual_analysis.h"
+#include "solvers/estimation/separability.h"
 #include "solvers/estimation/batch_solver.h"
 
 namespace triadcal {
@@ -119,6 +120,10 @@ struct DiagnosisResult {
   std::vector<EffectCorrelation> correlations;  // of every selected effect, at the final fit
   double base_gradient_sigma = 0.0;             // effect_information.h's check, first round
   bool unexplained = false;                     // structure remains after the selection
+  // Parameters of the final fit beyond 3 prior sigma from their nominal
+  // values (separability.h): what the loop leaves for a missing effect, or
+  // wrong nominal values, to explain; named in the verdict.
+  std::vector<PriorExcursion> beyond_prior;
   std::vector<std::string> notes;               // e.g. candidates merged or skipped, and why
   std::string verdict;
 };

@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <set>
 
 namespace triadcal {
@@ -185,6 +186,32 @@ std::vector<std::string> ParametersIn(const std::vector<WeakDirection>& dirs) {
     }
   }
   return out;
+}
+
+std::vector<PriorExcursion> BeyondPrior(const ParameterLayout& layout,
+                                        const Eigen::VectorXd& theta,
+                                        const Eigen::VectorXd& prior_mean,
+                                        const Eigen::VectorXd& prior_sigma, double n_sigma) {
+  std::vector<PriorExcursion> out;
+  for (int i = 0; i < layout.size(); ++i) {
+    if (!(prior_sigma[i] > 0.0)) continue;
+    const double z = (theta[i] - prior_mean[i]) / prior_sigma[i];
+    if (std::abs(z) > n_sigma) out.push_back({layout.info(i).name, z});
+  }
+  std::stable_sort(out.begin(), out.end(), [](const PriorExcursion& a, const PriorExcursion& b) {
+    return std::abs(a.z) > std::abs(b.z);
+  });
+  return out;
+}
+
+std::string DescribeExcursions(const std::vector<PriorExcursion>& excursions) {
+  std::string s;
+  for (const PriorExcursion& e : excursions) {
+    char z[32];
+    std::snprintf(z, sizeof(z), " (%+.1f)", e.z);
+    s += (s.empty() ? "" : " ") + e.name + z;
+  }
+  return s;
 }
 
 }  // namespace triadcal

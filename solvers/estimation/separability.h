@@ -39,4 +39,22 @@ std::vector<std::string> ParametersIn(const std::vector<WeakDirection>& dirs);
 // (also used by observability.h).
 std::string DescribeDirection(const std::vector<std::pair<std::string, double>>& weights);
 
+// A parameter the fit moved more than n_sigma of its prior sigma from the
+// prior mean (the nominal value). Either the nominal value or the prior is
+// wrong, or the model lacks an effect whose misfit this parameter absorbs
+// along a direction the data determine only weakly: on the real slow roll
+// run the 8.6-ms time offset, before `diagnose` finds it, tilts the shaft by
+// dpsi = 76 deg (25 prior sigma) and takes Kx, Kz and W0y with it.
+struct PriorExcursion {
+  std::string name;
+  double z = 0.0;  // (value - prior mean) / prior sigma
+};
+std::vector<PriorExcursion> BeyondPrior(const ParameterLayout& layout,
+                                        const Eigen::VectorXd& theta,
+                                        const Eigen::VectorXd& prior_mean,
+                                        const Eigen::VectorXd& prior_sigma,
+                                        double n_sigma = 3.0);
+// "dpsi (+25.3) Kx (+9.5)": names with their z, largest |z| first.
+std::string DescribeExcursions(const std::vector<PriorExcursion>& excursions);
+
 }  // namespace triadcal

@@ -26,10 +26,8 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
   for (const std::string& s : ParametersIn(rep.weak)) rep.not_estimable.insert(s);
   rep.not_estimable.insert(rep.held.begin(), rep.held.end());
   for (const auto& [name, anchors] : r.relative_to) rep.not_estimable.insert(name);
-  for (int i = 0; i < layout.size(); ++i) {
-    const double z = (r.estimate.theta[i] - r.prior.mean[i]) / r.prior.sigma[i];
-    if (std::abs(z) > 3.0) rep.at_prior_bound.push_back(layout.info(i).name);
-  }
+  rep.beyond_prior = BeyondPrior(layout, r.estimate.theta, r.prior.mean, r.prior.sigma);
+  for (const PriorExcursion& e : rep.beyond_prior) rep.at_prior_bound.push_back(e.name);
   // Whiteness of the whitened process residuals (the solver's test).
   rep.whiteness_p_value = r.whiteness_p_value;
   rep.residual_white = r.residual_white;
@@ -78,8 +76,10 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
   if (rep.at_prior_bound.empty()) {
     v << "; no parameter at a prior bound";
   } else {
-    v << "; beyond 3 prior sigma (check the nominal values or priors):";
-    for (const std::string& s : rep.at_prior_bound) v << " " << s;
+    v << "; BEYOND 3 PRIOR SIGMA (value - nominal in prior sigma): "
+      << DescribeExcursions(rep.beyond_prior)
+      << ": the nominal values or priors are wrong, or the model lacks an effect whose misfit "
+         "they absorb (diagnose looks for one, --hold pins them)";
   }
   if (!rep.held.empty()) {
     v << "; held at nominal (this run's motion does not determine them):";
@@ -95,8 +95,23 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
   if (rep.weak.empty()) {
     v << "; every other parameter estimable";
   } else {
-    v << "; NOT SEPARABLE in this run (values are the prior's):";
-    for (const std::string& s : ParametersIn(rep.weak)) v << " " << s;
+    // A parameter the data do not determine that still ended far from its
+    // prior mean was moved there by the misfit through its correlations: its
+    // value is neither the prior's nor an estimate.
+    const std::set<std::string> beyond(rep.at_prior_bound.begin(), rep.at_prior_bound.end());
+    std::vector<std::string> at_prior, moved;
+    for (const std::string& s : ParametersIn(rep.weak)) {
+      (beyond.count(s) ? moved : at_prior).push_back(s);
+    }
+    if (!at_prior.empty()) {
+      v << "; NOT SEPARABLE in this run (values are the prior's):";
+      for (const std::string& s : at_prior) v << " " << s;
+    }
+    if (!moved.empty()) {
+      v << "; NOT SEPARABLE in this run and MOVED beyond 3 prior sigma by the misfit (values "
+           "neither the prior's nor estimates):";
+      for (const std::string& s : moved) v << " " << s;
+    }
   }
   rep.verdict = v.str();
   return rep;
@@ -149,6 +164,7 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
                     {"residual_white", rep.residual_white},
                     {"whiteness_p_value", rep.whiteness_p_value},
                     {"held", r.held},
+                    {"beyond_prior", rep.at_prior_bound},
                     {"pass", rep.pass},
                     {"sentence", rep.verdict}};
   out["converged"] = r.converged;
@@ -199,11 +215,21 @@ void PrintParameterTable(const ParameterLayout& layout, const BatchResult& r,
     const double sigma =
         rep.held.count(pi.name) ? 0.0 : std::sqrt(std::max(0.0, r.estimate.cov(i, i))) / f;
     const ValueText v = FormatWithSigma(r.estimate.theta[i] / f, sigma);
+    std::string label;
+    if (rep.held.count(pi.name)) {
+      label = "  (held at nominal)";
+    } else if (rep.not_estimable.count(pi.name)) {
+      label = "  (not estimable: prior value)";
+      for (const PriorExcursion& e : rep.beyond_prior) {
+        if (e.name != pi.name) continue;
+        char moved[80];
+        std::snprintf(moved, sizeof(moved), "  (not estimable, moved %+.1f prior sigma by misfit)",
+                      e.z);
+        label = moved;
+      }
+    }
     std::printf("%-26s %16s %10s %10.5g  %s%s\n", pi.name.c_str(), v.value.c_str(),
-                v.sigma.c_str(), r.initial.theta[i] / f, pi.unit.c_str(),
-                rep.held.count(pi.name)            ? "  (held at nominal)"
-                : rep.not_estimable.count(pi.name) ? "  (not estimable: prior value)"
-                                                   : "");
+                v.sigma.c_str(), r.initial.theta[i] / f, pi.unit.c_str(), label.c_str());
   }
   for (const WeakDirection& d : rep.weak) {
     std::printf("NOT SEPARABLE: %s (sigma %.0f%% of the prior along it)\n", d.description.c_str(),

@@ -1,0 +1,62 @@
+#include "tools/report/fit_report.h"
+
+#include <gtest/gtest.h>
+
+namespace triadcal {
+namespace {
+
+// A solution where the data determine every parameter to 1e-3 of its prior
+// except Kx, which keeps its prior sigma: Kx ended 9.5 prior sigma from its
+// nominal value (moved by the misfit through correlations, as on the real
+// slow roll run), W0x (determined) 4 prior sigma, Ky (undetermined) at 0.5.
+BatchResult Solution(const ParameterLayout& layout) {
+  BatchResult r;
+  const int n = layout.size();
+  r.prior.mean = Eigen::VectorXd::Zero(n);
+  r.prior.sigma = Eigen::VectorXd::Ones(n);
+  r.estimate.theta = Eigen::VectorXd::Zero(n);
+  r.estimate.cov = 1e-6 * Eigen::MatrixXd::Identity(n, n);
+  const int kx = layout.IndexOf("Kx"), ky = layout.IndexOf("Ky");
+  r.estimate.cov(kx, kx) = 1.0;
+  r.estimate.cov(ky, ky) = 1.0;
+  r.estimate.theta[kx] = 9.5;
+  r.estimate.theta[ky] = 0.5;
+  r.estimate.theta[layout.IndexOf("W0x")] = -4.0;
+  r.initial = r.estimate;
+  r.converged = true;
+  return r;
+}
+
+TEST(FitReport, UndeterminedParameterFarFromItsPriorIsNotCalledThePriorsValue) {
+  const ParameterLayout layout;
+  const BatchResult r = Solution(layout);
+  const FitReport rep = MakeFitReport(layout, r);
+  EXPECT_EQ(rep.at_prior_bound, (std::vector<std::string>{"Kx", "W0x"}));
+  EXPECT_NE(rep.verdict.find("BEYOND 3 PRIOR SIGMA (value - nominal in prior sigma): Kx (+9.5) "
+                             "W0x (-4.0)"),
+            std::string::npos)
+      << rep.verdict;
+  EXPECT_NE(rep.verdict.find("NOT SEPARABLE in this run (values are the prior's): Ky;"),
+            std::string::npos)
+      << rep.verdict;
+  EXPECT_NE(rep.verdict.find("MOVED beyond 3 prior sigma by the misfit (values neither the "
+                             "prior's nor estimates): Kx"),
+            std::string::npos)
+      << rep.verdict;
+  const nlohmann::json j = FitJson(layout, r, rep, false);
+  EXPECT_EQ(j["verdict"]["beyond_prior"], (std::vector<std::string>{"Kx", "W0x"}));
+  EXPECT_EQ(j["at_prior_bound"], (std::vector<std::string>{"Kx", "W0x"}));
+}
+
+TEST(FitReport, NothingBeyondThePriorSaysSo) {
+  const ParameterLayout layout;
+  BatchResult r = Solution(layout);
+  r.estimate.theta.setZero();
+  const FitReport rep = MakeFitReport(layout, r);
+  EXPECT_TRUE(rep.at_prior_bound.empty());
+  EXPECT_NE(rep.verdict.find("no parameter at a prior bound"), std::string::npos);
+  EXPECT_EQ(rep.verdict.find("MOVED"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace triadcal
