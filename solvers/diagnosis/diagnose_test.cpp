@@ -90,6 +90,33 @@ TEST(Diagnose, CleanRunSelectsNothing) {
   EXPECT_NE(d.verdict.find("consistent with the declared noise"), std::string::npos);
 }
 
+// A nominal value that is wrong by far more than its prior allows (Kx 3 mV/g
+// off, prior sigma 0.5 mV/g): the loop finds no effect, and its verdict says
+// that Kx ended beyond 3 prior sigma (about +5.9: the data's sigma is about
+// 0.05 mV/g), so its value is not taken for a calibration result unnoticed.
+TEST(Diagnose, VerdictNamesWhatEndsBeyondThreePriorSigma) {
+  Scenario s = PaperScenario(50.0, 90.0, 2.0, 15.0, 5);
+  const int kx = s.truth_layout.IndexOf("Kx");
+  s.truth[kx] = NominalTheta(s.run, s.truth_layout)[kx] + 3.0 * s.truth_layout.info(kx).si_per_unit;
+  s.run.prior_sigma["Kx"] = 0.5;
+  const RunData data = Simulate(s);
+  const DiagnosisResult d = Diagnose(s.run, data, {});
+  EXPECT_TRUE(d.selected.empty()) << d.verdict;
+  ASSERT_FALSE(d.beyond_prior.empty()) << d.verdict;
+  EXPECT_EQ(d.beyond_prior[0].name, "Kx");
+  EXPECT_GT(d.beyond_prior[0].z, 4.5);
+  EXPECT_LT(d.beyond_prior[0].z, 6.5);
+  EXPECT_NE(d.verdict.find("AFTER THE LOOP BEYOND 3 PRIOR SIGMA (value - nominal in prior "
+                           "sigma): Kx (+"),
+            std::string::npos)
+      << d.verdict;
+  // Without the wrong nominal value nothing is named.
+  const DiagnosisResult clean = Diagnose(PaperScenario(50.0, 90.0, 2.0, 15.0, 5).run,
+                                         Simulate(PaperScenario(50.0, 90.0, 2.0, 15.0, 5)), {});
+  EXPECT_TRUE(clean.beyond_prior.empty()) << clean.verdict;
+  EXPECT_EQ(clean.verdict.find("PRIOR SIGMA"), std::string::npos);
+}
+
 // noise_mV: auto with a far-off start (0.2 mV for 2 mV): the noise is
 // estimated once from the base fit and then held, so the loop still finds the
 // latency and chi2/dof is about 1 after it.
