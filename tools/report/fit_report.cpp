@@ -27,7 +27,6 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
   rep.not_estimable.insert(rep.held.begin(), rep.held.end());
   for (const auto& [name, anchors] : r.relative_to) rep.not_estimable.insert(name);
   rep.beyond_prior = BeyondPrior(layout, r.estimate.theta, r.prior.mean, r.prior.sigma);
-  for (const PriorExcursion& e : rep.beyond_prior) rep.at_prior_bound.push_back(e.name);
   // Whiteness of the whitened process residuals (the solver's test).
   rep.whiteness_p_value = r.whiteness_p_value;
   rep.residual_white = r.residual_white;
@@ -73,7 +72,7 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
   } else {
     v << "; RESIDUALS NOT WHITE (sigma may be optimistic)";
   }
-  if (rep.at_prior_bound.empty()) {
+  if (rep.beyond_prior.empty()) {
     v << "; no parameter at a prior bound";
   } else {
     v << "; BEYOND 3 PRIOR SIGMA (value - nominal in prior sigma): "
@@ -98,7 +97,8 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
     // A parameter the data do not determine that still ended far from its
     // prior mean was moved there by the misfit through its correlations: its
     // value is neither the prior's nor an estimate.
-    const std::set<std::string> beyond(rep.at_prior_bound.begin(), rep.at_prior_bound.end());
+    std::set<std::string> beyond;
+    for (const PriorExcursion& e : rep.beyond_prior) beyond.insert(e.name);
     std::vector<std::string> at_prior, moved;
     for (const std::string& s : ParametersIn(rep.weak)) {
       (beyond.count(s) ? moved : at_prior).push_back(s);
@@ -157,14 +157,16 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
   out["not_estimable"] = std::vector<std::string>(rep.not_estimable.begin(), rep.not_estimable.end());
   out["held"] = r.held;
   out["unobservable_at_nominal"] = WeakDirectionsJson(r.unsupported_at_start);
-  out["at_prior_bound"] = rep.at_prior_bound;
+  std::vector<std::string> beyond_prior;
+  for (const PriorExcursion& e : rep.beyond_prior) beyond_prior.push_back(e.name);
+  out["at_prior_bound"] = beyond_prior;
   out["verdict"] = {{"converged", r.converged},
                     {"chi2_per_dof", r.chi2_per_dof},
                     {"noise_consistent", rep.noise_consistent},
                     {"residual_white", rep.residual_white},
                     {"whiteness_p_value", rep.whiteness_p_value},
                     {"held", r.held},
-                    {"beyond_prior", rep.at_prior_bound},
+                    {"beyond_prior", beyond_prior},
                     {"pass", rep.pass},
                     {"sentence", rep.verdict}};
   out["converged"] = r.converged;

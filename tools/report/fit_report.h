@@ -16,10 +16,11 @@ namespace triadcal {
 
 struct FitReport {
   std::vector<WeakDirection> weak;
-  std::set<std::string> not_estimable;      // held, or in a weak direction
+  std::set<std::string> not_estimable;  // held, or in a weak direction
   std::set<std::string> held;
-  std::vector<std::string> at_prior_bound;  // > 3 prior sigma from the nominal value
-  std::vector<PriorExcursion> beyond_prior;  // the same with their z, largest |z| first
+  // > 3 prior sigma from the nominal value, largest |z| first (JSON
+  // "at_prior_bound" and verdict.beyond_prior: their names).
+  std::vector<PriorExcursion> beyond_prior;
   std::string verdict;  // the sentence
   // The verdict machines read: residual_white is a Ljung-Box test of each
   // whitened process-residual channel (Bonferroni over the 6, alpha 1 %);

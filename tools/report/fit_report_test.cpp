@@ -31,7 +31,10 @@ TEST(FitReport, UndeterminedParameterFarFromItsPriorIsNotCalledThePriorsValue) {
   const ParameterLayout layout;
   const BatchResult r = Solution(layout);
   const FitReport rep = MakeFitReport(layout, r);
-  EXPECT_EQ(rep.at_prior_bound, (std::vector<std::string>{"Kx", "W0x"}));
+  ASSERT_EQ(rep.beyond_prior.size(), 2u);
+  EXPECT_EQ(rep.beyond_prior[0].name, "Kx");
+  EXPECT_DOUBLE_EQ(rep.beyond_prior[0].z, 9.5);
+  EXPECT_EQ(rep.beyond_prior[1].name, "W0x");
   EXPECT_NE(rep.verdict.find("BEYOND 3 PRIOR SIGMA (value - nominal in prior sigma): Kx (+9.5) "
                              "W0x (-4.0)"),
             std::string::npos)
@@ -46,6 +49,16 @@ TEST(FitReport, UndeterminedParameterFarFromItsPriorIsNotCalledThePriorsValue) {
   const nlohmann::json j = FitJson(layout, r, rep, false);
   EXPECT_EQ(j["verdict"]["beyond_prior"], (std::vector<std::string>{"Kx", "W0x"}));
   EXPECT_EQ(j["at_prior_bound"], (std::vector<std::string>{"Kx", "W0x"}));
+  // The table: the misfit's value is not called the prior's.
+  ::testing::internal::CaptureStdout();
+  PrintParameterTable(layout, r, rep);
+  const std::string table = ::testing::internal::GetCapturedStdout();
+  EXPECT_NE(table.find("(not estimable, moved +9.5 prior sigma by misfit)"), std::string::npos)
+      << table;
+  const std::size_t ky = table.find("\nKy ");
+  ASSERT_NE(ky, std::string::npos) << table;
+  const std::string ky_line = table.substr(ky, table.find('\n', ky + 1) - ky);
+  EXPECT_NE(ky_line.find("(not estimable: prior value)"), std::string::npos) << table;
 }
 
 TEST(FitReport, NothingBeyondThePriorSaysSo) {
@@ -53,7 +66,7 @@ TEST(FitReport, NothingBeyondThePriorSaysSo) {
   BatchResult r = Solution(layout);
   r.estimate.theta.setZero();
   const FitReport rep = MakeFitReport(layout, r);
-  EXPECT_TRUE(rep.at_prior_bound.empty());
+  EXPECT_TRUE(rep.beyond_prior.empty());
   EXPECT_NE(rep.verdict.find("no parameter at a prior bound"), std::string::npos);
   EXPECT_EQ(rep.verdict.find("MOVED"), std::string::npos);
 }
