@@ -1,6 +1,7 @@
 #include "solvers/diagnosis/effect_discovery.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <limits>
 #include <set>
@@ -218,6 +219,19 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
   res.before_layout = ParameterLayout();
   res.before = SolveBatch(run, data, res.before_layout, first);
   res.before_residuals = AnalyzeResiduals(run, data, res.before_layout, res.before);
+  if (!res.before.pinned.empty()) {
+    std::ostringstream n;
+    n << "pinned at nominal after the declared model's first fit moved them (prior sigma; data "
+         "information at the nominal values in prior units):";
+    for (const PinnedExcursion& p : res.before.pinned) {
+      char one[96];
+      std::snprintf(one, sizeof(one), " %s (%+.1f, %.2g)", p.name.c_str(), p.z,
+                    p.data_information);
+      n << one;
+    }
+    n << "; held in every refit, their uncertainty kept in the other parameters' sigma";
+    res.notes.push_back(n.str());
+  }
 
   std::vector<Effect> current;
   ParameterLayout layout = res.before_layout;
@@ -302,6 +316,21 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
       // only relative to a held one (beta_x to dtheta_c on a single-axis run)
       // is not reported as estimable on its own after the loop either.
       r.relative_to = fit.relative_to;
+      // So do its pins, and their uncertainty in the others' sigma (the
+      // information at the start has no rows for the new effect: its
+      // parameters get none of it).
+      r.pinned = fit.pinned;
+      if (!r.pinned.empty() && fit.information_at_start.rows() == layout.size()) {
+        r.information_at_start = Eigen::MatrixXd::Zero(aug.size(), aug.size());
+        for (int a = 0; a < layout.size(); ++a) {
+          for (int b = 0; b < layout.size(); ++b) {
+            r.information_at_start(aug.IndexOf(layout.info(a).name),
+                                   aug.IndexOf(layout.info(b).name)) =
+                fit.information_at_start(a, b);
+          }
+        }
+        AddPinnedUncertainty(aug, &r);
+      }
       r.unsupported_at_start = fit.unsupported_at_start;
       const int k = static_cast<int>(GetEffectSpec(e).params.size());
       int held_new = 0;

@@ -1,5 +1,7 @@
 #include "solvers/estimation/batch_linearization.h"
 
+#include <algorithm>
+
 #include "solvers/estimation/parallel.h"
 #include "solvers/estimation/schur_covariance.h"
 
@@ -81,10 +83,15 @@ std::array<std::vector<double>, 6> ExpectedProcessAutocorrelation(
       trace_rest += 1.0 - C[t].row(c).dot(a[t]);
     }
     rho[c].assign(lags, 0.0);
+    // When the fit takes most of a channel's residual (few epochs for the
+    // parameters: a 10-s run has 20), its share is not a small correction
+    // and the ratio below is unstable (it reached -200): nothing is
+    // subtracted then.
+    if (trace_rest < 0.5 * static_cast<double>(T)) continue;
     for (int k = 1; k <= lags && static_cast<std::size_t>(k) < T; ++k) {
       double h = 0.0;
       for (std::size_t t = 0; t + k < T; ++t) h += C[t + k].row(c).dot(a[t]);
-      rho[c][k - 1] = -h / trace_rest;
+      rho[c][k - 1] = std::clamp(-h / trace_rest, -1.0, 1.0);
     }
   }
   return rho;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <set>
 #include <cmath>
 #include <limits>
@@ -79,6 +80,17 @@ ceres::LinearSolverType SolverType(const std::string& name) {
                    "' (sparse_normal_cholesky, sparse_schur, dense_qr)");
 }
 
+// The posterior covariance in prior units of the parameters `idx` under the
+// data information `info` (prior units) and unit priors, the others held.
+Eigen::MatrixXd PosteriorOver(const Eigen::MatrixXd& info, const std::vector<int>& idx) {
+  const int k = static_cast<int>(idx.size());
+  Eigen::MatrixXd F(k, k);
+  for (int a = 0; a < k; ++a) {
+    for (int b = 0; b < k; ++b) F(a, b) = info(idx[a], idx[b]) + (a == b ? 1.0 : 0.0);
+  }
+  return F.ldlt().solve(Eigen::MatrixXd::Identity(k, k));
+}
+
 // cov is the posterior with priors; the prior contributes the identity to
 // its inverse in prior units.
 std::vector<int> SupportedParameters(const Eigen::MatrixXd& cov, const Eigen::VectorXd& prior_sigma,
@@ -137,6 +149,9 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
   if (threads <= 0) threads = DefaultThreads();
   HoldDecision d;
   std::vector<bool> held(n, false);
+  // The data information at the full rate in prior units (n x n), when the
+  // auto hold computed it.
+  Eigen::MatrixXd info_full;
   if (o.auto_hold) {
     // Decided at the nominal values (where a degenerate direction has no
     // information at all) on the samples thinned to decimation_hz: the
@@ -160,6 +175,11 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
                     static_cast<double>(m);
     }
     for (int i : SupportedParameters(cov0, pt.prior.sigma, min_info)) held[i] = false;
+    const Eigen::VectorXd inv_sigma = pt.prior.sigma.cwiseInverse();
+    const Eigen::MatrixXd Pn = inv_sigma.asDiagonal() * cov0 * inv_sigma.asDiagonal();
+    info_full = Pn.ldlt().solve(Eigen::MatrixXd::Identity(n, n));
+    info_full.diagonal().array() -= 1.0;
+    info_full *= static_cast<double>(m);
   }
   auto index_of = [&](const std::string& name) {
     const int i = layout.IndexOf(name);
@@ -170,6 +190,17 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
   for (const std::string& f : o.free) held[index_of(f)] = false;
   for (int i = 0; i < n; ++i) {
     if (held[i]) d.held.push_back(layout.info(i).name);
+  }
+  std::vector<int> kept;
+  for (int i = 0; i < n; ++i) {
+    if (!held[i]) kept.push_back(i);
+  }
+  if (info_full.size() > 0) {
+    d.data_information = Eigen::VectorXd::Zero(n);
+    const Eigen::MatrixXd C = PosteriorOver(info_full, kept);
+    for (std::size_t a = 0; a < kept.size(); ++a) {
+      d.data_information[kept[a]] = 1.0 / std::max(C(a, a), 1e-300) - 1.0;
+    }
   }
   // What the held parameters stand for: the other members of their
   // undetermined directions are estimated relative to them.
@@ -188,6 +219,7 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
       }
     }
   }
+  d.information = info_full;
   return d;
 }
 
@@ -580,10 +612,9 @@ Eigen::MatrixXd FreeCovariance(const RunProblem& p, const BatchLinearization& li
   return C;
 }
 
-}  // namespace
-
-BatchResult SolveBatch(const RunDescription& run, const RunData& data,
-                       const ParameterLayout& layout, const BatchOptions& opt) {
+// One fit with the hold decision of opt.holding (SolveBatch adds the pins).
+BatchResult SolveBatchOnce(const RunDescription& run, const RunData& data,
+                           const ParameterLayout& layout, const BatchOptions& opt) {
   const auto t_start = std::chrono::steady_clock::now();
   const int threads = opt.threads > 0 ? opt.threads : DefaultThreads();
   SolverType(opt.linear_solver);  // checks the name before the work
@@ -638,6 +669,8 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
     const HoldDecision hd = ChooseHeldParameters(run_start, data, layout, opt.holding, opt.epoch_s,
                                                  opt.derivatives, opt.init_decimation_hz, threads);
     res.unsupported_at_start = hd.unsupported;
+    res.data_information_at_start = hd.data_information;
+    res.information_at_start = hd.information;
     res.held = hd.held;
     res.relative_to = hd.relative_to;
     std::vector<int> held;
@@ -785,6 +818,107 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
     res.residual_white = w.white;
   }
   if (opt.fraction) opt.fraction(1.0);
+  return res;
+}
+
+}  // namespace
+
+void AddPinnedUncertainty(const ParameterLayout& layout, BatchResult* r) {
+  const int n = layout.size();
+  if (r->information_at_start.rows() != n) return;
+  std::vector<int> kept, pins;
+  for (int i = 0; i < n; ++i) {
+    const std::string& name = layout.info(i).name;
+    const bool held = std::find(r->held.begin(), r->held.end(), name) != r->held.end();
+    const bool pinned = std::any_of(r->pinned.begin(), r->pinned.end(),
+                                    [&](const PinnedExcursion& p) { return p.name == name; });
+    if (pinned) pins.push_back(i);
+    if (!held) kept.push_back(i);
+  }
+  std::vector<int> both = kept;
+  both.insert(both.end(), pins.begin(), pins.end());
+  const int k = static_cast<int>(kept.size());
+  const Eigen::MatrixXd marginal = PosteriorOver(r->information_at_start, both).topLeftCorner(k, k);
+  const Eigen::MatrixXd conditional = PosteriorOver(r->information_at_start, kept);
+  Eigen::MatrixXd add = Eigen::MatrixXd::Zero(n, n);
+  for (int a = 0; a < k; ++a) {
+    for (int b = 0; b < k; ++b) {
+      add(kept[a], kept[b]) = (marginal(a, b) - conditional(a, b)) * r->prior.sigma[kept[a]] *
+                              r->prior.sigma[kept[b]];
+    }
+  }
+  for (Eigen::MatrixXd* c : {&r->estimate.cov, &r->cov_white, &r->cov_hac}) {
+    if (c->rows() == n) *c += add;
+  }
+}
+
+std::vector<PinnedExcursion> WeakExcursions(const ParameterLayout& layout, const BatchResult& r,
+                                            const HoldPolicy& policy) {
+  std::vector<PinnedExcursion> out;
+  const Eigen::VectorXd& info = r.data_information_at_start;
+  if (info.size() != layout.size()) return out;
+  for (const PriorExcursion& e :
+       BeyondPrior(layout, r.estimate.theta, r.prior.mean, r.prior.sigma,
+                   policy.pin_excursion_sigma)) {
+    const int i = layout.IndexOf(e.name);
+    if (std::find(r.held.begin(), r.held.end(), e.name) != r.held.end()) continue;
+    if (std::find(policy.free.begin(), policy.free.end(), e.name) != policy.free.end()) continue;
+    if (info[i] > policy.pin_max_information) continue;
+    out.push_back({e.name, e.z, info[i]});
+  }
+  return out;
+}
+
+BatchResult SolveBatch(const RunDescription& run, const RunData& data,
+                       const ParameterLayout& layout, const BatchOptions& opt) {
+  BatchResult res = SolveBatchOnce(run, data, layout, opt);
+  if (!opt.holding.auto_hold || !opt.holding.pin_weak_excursions) return res;
+  // Each pin moves the fit: what it then moves is checked again (at most
+  // three refits; a parameter once pinned stays pinned).
+  std::vector<PinnedExcursion> pinned;
+  for (int round = 0; round < 3; ++round) {
+    const std::vector<PinnedExcursion> more = WeakExcursions(layout, res, opt.holding);
+    if (more.empty()) break;
+    BatchOptions o = opt;
+    for (const PinnedExcursion& p : pinned) o.holding.hold.push_back(p.name);
+    std::string names;
+    for (const PinnedExcursion& p : more) {
+      o.holding.hold.push_back(p.name);
+      pinned.push_back(p);
+      char one[96];
+      std::snprintf(one, sizeof(one), " %s (%+.1f prior sigma, data information %.2g)",
+                    p.name.c_str(), p.z, p.data_information);
+      names += one;
+    }
+    if (opt.progress) {
+      char head[160];
+      std::snprintf(head, sizeof(head),
+                    "refitting with weakly determined parameters that the fit moved beyond %g "
+                    "prior sigma pinned at nominal:",
+                    opt.holding.pin_excursion_sigma);
+      opt.progress(head + names);
+    }
+    res = SolveBatchOnce(run, data, layout, o);
+    res.pinned = pinned;
+  }
+  if (!pinned.empty()) {
+    // A pin is no anchor: what the pinned parameters' uncertainty does to
+    // the others is in their covariance, so none is "relative to" one (a
+    // pinned Kyz would otherwise make dpsi, in its weak direction at the
+    // nominal values, not estimable on its own).
+    for (auto it = res.relative_to.begin(); it != res.relative_to.end();) {
+      std::vector<std::string>& anchors = it->second;
+      anchors.erase(std::remove_if(anchors.begin(), anchors.end(),
+                                   [&](const std::string& a) {
+                                     return std::any_of(
+                                         pinned.begin(), pinned.end(),
+                                         [&](const PinnedExcursion& p) { return p.name == a; });
+                                   }),
+                    anchors.end());
+      it = anchors.empty() ? res.relative_to.erase(it) : std::next(it);
+    }
+    AddPinnedUncertainty(layout, &res);
+  }
   return res;
 }
 

@@ -77,6 +77,30 @@ struct HoldPolicy {
   double min_information = 1e-2;
   double min_information_effects = 1e-2;
   std::vector<std::string> hold, free;
+  // After the fit (auto_hold only): a parameter the data at the nominal
+  // values determine at most pin_max_information times as well as its prior
+  // (marginal data information in prior units, the held ones fixed) that the
+  // fit moves beyond pin_excursion_sigma prior sigma is pinned at its nominal
+  // value and the run refitted (SolveBatch). Under the model linearised at
+  // the nominal values such a parameter's estimate moves at most
+  // info/(1 + info) = 2/3 of the way to the data's value: 3 prior sigma
+  // would need a nominal value wrong by 4.5 prior sigma, or the model's
+  // nonlinearity following a misfit along a weak direction (real slow roll
+  // run: Kxy, Kzy at -57 prior sigma with Kx 1954 mV/g and a shaft tilt of
+  // 76 deg; fast run: Kxz, Kzz at +28, +22 with Kz 796 mV/g). A name in
+  // `free` is never pinned.
+  bool pin_weak_excursions = true;
+  double pin_max_information = 2.0;
+  double pin_excursion_sigma = 3.0;
+};
+
+// A parameter pinned after the fit (HoldPolicy::pin_weak_excursions): how far
+// the fit had moved it, in prior sigma, and the data information about it at
+// the nominal values (in prior units).
+struct PinnedExcursion {
+  std::string name;
+  double z = 0.0;
+  double data_information = 0.0;
 };
 
 struct BatchOptions {
@@ -127,10 +151,16 @@ struct BatchResult {
   Estimate estimate;            // theta and its covariance (SI)
   Estimate initial;             // the starting point (with the RTS sigma when from RTS)
   std::vector<std::string> held;  // held at nominal (their sigma is not an estimate)
+  // The held ones that were pinned after a first fit (HoldPolicy), in the
+  // order pinned; the estimate is the refit with them held.
+  std::vector<PinnedExcursion> pinned;
   std::map<std::string, std::vector<std::string>> relative_to;  // HoldDecision
   // The directions the run cannot determine, found at the nominal values
   // before holding (what the held parameters stand for).
   std::vector<WeakDirection> unsupported_at_start;
+  // HoldDecision::data_information of the hold decision (empty without it).
+  Eigen::VectorXd data_information_at_start;
+  Eigen::MatrixXd information_at_start;  // HoldDecision::information
   Prior prior;
   double final_cost = 0.0;      // 0.5 sum r^2 over all blocks
   int residual_count = 0;
@@ -190,8 +220,27 @@ struct BatchResult {
   int epochs = 0;
 };
 
+// The fit. With holding.auto_hold and holding.pin_weak_excursions, a fit
+// that moves weakly determined parameters beyond holding.pin_excursion_sigma
+// prior sigma is repeated with them pinned at nominal (BatchResult::pinned;
+// at most three refits).
 BatchResult SolveBatch(const RunDescription& run, const RunData& data,
                        const ParameterLayout& layout, const BatchOptions& options);
+
+// The parameters of fit `r` that HoldPolicy::pin_weak_excursions pins: free,
+// not in policy.free, data information at the start at most
+// policy.pin_max_information, beyond policy.pin_excursion_sigma prior sigma;
+// largest excursion first.
+// A pinned parameter is not known: the data know it at most a few times its
+// prior. What its uncertainty does to the estimated parameters is added to
+// r's covariances (estimate, white, HAC): a consider covariance at the
+// nominal linearisation of the hold decision (r.information_at_start), the
+// marginal posterior of the estimated parameters with the pinned ones free
+// under their priors minus the conditional one. SolveBatch applies it.
+void AddPinnedUncertainty(const ParameterLayout& layout, BatchResult* r);
+
+std::vector<PinnedExcursion> WeakExcursions(const ParameterLayout& layout, const BatchResult& r,
+                                            const HoldPolicy& policy);
 
 // The hold decision alone (what fit does first; filter uses it too). Costs one
 // linearisation of the run thinned to decimation_hz.
@@ -202,6 +251,13 @@ struct HoldDecision {
   // the held ones of that direction (e.g. gamma_y, gamma_z relative to
   // dlambda2 without the paper's constraint): not estimable on their own.
   std::map<std::string, std::vector<std::string>> relative_to;
+  // Per parameter of the layout: the data information at the nominal values
+  // (full rate, prior units, marginal: the other free parameters estimated,
+  // the held ones fixed); 0 for a held one, empty without auto_hold.
+  Eigen::VectorXd data_information;
+  // The data information itself (n x n, full rate, prior units: parameter i
+  // divided by its prior sigma), held ones included; empty without auto_hold.
+  Eigen::MatrixXd information;
 };
 HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data,
                                   const ParameterLayout& layout, const HoldPolicy& policy,

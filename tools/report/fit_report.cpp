@@ -80,9 +80,30 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
       << ": the nominal values or priors are wrong, or the model lacks an effect whose misfit "
          "they absorb (diagnose looks for one, --hold pins them)";
   }
-  if (!rep.held.empty()) {
+  if (!r.pinned.empty()) {
+    v << "; PINNED at nominal after a first fit (value - nominal there in prior sigma, data "
+         "information at the nominal values in prior units):";
+    for (const PinnedExcursion& p : r.pinned) {
+      char one[96];
+      std::snprintf(one, sizeof(one), " %s (%+.1f, %.2g)", p.name.c_str(), p.z,
+                    p.data_information);
+      v << one;
+    }
+    v << ": the run knows them at most twice as well as their priors, so only a nominal value "
+         "wrong by 4.5 prior sigma or the model's nonlinearity following a misfit moves them "
+         "that far; their uncertainty is kept in the other parameters' sigma (--free NAME "
+         "estimates one)";
+  }
+  std::vector<std::string> held_by_motion;
+  for (const std::string& s : r.held) {
+    if (std::none_of(r.pinned.begin(), r.pinned.end(),
+                     [&](const PinnedExcursion& p) { return p.name == s; })) {
+      held_by_motion.push_back(s);
+    }
+  }
+  if (!held_by_motion.empty()) {
     v << "; held at nominal (this run's motion does not determine them):";
-    for (const std::string& s : r.held) v << " " << s;
+    for (const std::string& s : held_by_motion) v << " " << s;
     if (!r.unsupported_at_start.empty()) {
       v << " (undetermined:";
       for (std::size_t k = 0; k < r.unsupported_at_start.size(); ++k) {
@@ -115,6 +136,17 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
   }
   rep.verdict = v.str();
   return rep;
+}
+
+void AddPinnedJson(const BatchResult& r, nlohmann::json* out) {
+  nlohmann::json pinned = nlohmann::json::array();
+  for (const PinnedExcursion& p : r.pinned) {
+    pinned.push_back({{"parameter", p.name},
+                      {"prior_sigmas", p.z},
+                      {"data_information", p.data_information}});
+    (*out)["parameters"][p.name]["pinned"] = true;
+  }
+  (*out)["pinned"] = pinned;
 }
 
 nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, const FitReport& rep,
@@ -156,6 +188,9 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
   out["unobservable"] = WeakDirectionsJson(unobservable);
   out["not_estimable"] = std::vector<std::string>(rep.not_estimable.begin(), rep.not_estimable.end());
   out["held"] = r.held;
+  AddPinnedJson(r, &out);
+  std::vector<std::string> pinned_names;
+  for (const PinnedExcursion& p : r.pinned) pinned_names.push_back(p.name);
   out["unobservable_at_nominal"] = WeakDirectionsJson(r.unsupported_at_start);
   std::vector<std::string> beyond_prior;
   for (const PriorExcursion& e : rep.beyond_prior) beyond_prior.push_back(e.name);
@@ -166,6 +201,7 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
                     {"residual_white", rep.residual_white},
                     {"whiteness_p_value", rep.whiteness_p_value},
                     {"held", r.held},
+                    {"pinned", pinned_names},
                     {"beyond_prior", beyond_prior},
                     {"pass", rep.pass},
                     {"sentence", rep.verdict}};
@@ -220,6 +256,13 @@ void PrintParameterTable(const ParameterLayout& layout, const BatchResult& r,
     std::string label;
     if (rep.held.count(pi.name)) {
       label = "  (held at nominal)";
+      for (const PinnedExcursion& p : r.pinned) {
+        if (p.name != pi.name) continue;
+        char pin[80];
+        std::snprintf(pin, sizeof(pin), "  (pinned at nominal: a first fit moved it %+.1f prior sigma)",
+                      p.z);
+        label = pin;
+      }
     } else if (rep.not_estimable.count(pi.name)) {
       label = "  (not estimable: prior value)";
       for (const PriorExcursion& e : rep.beyond_prior) {

@@ -39,6 +39,9 @@ constexpr int kExitRequirementFailed = 5;
 FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r);
 nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, const FitReport& rep,
                        bool correlations);
+// out["pinned"]: r.pinned as [{parameter, prior_sigmas, data_information}],
+// and "pinned": true on each in out["parameters"] (which must be written).
+void AddPinnedJson(const BatchResult& r, nlohmann::json* out);
 void PrintParameterTable(const ParameterLayout& layout, const BatchResult& r, const FitReport& rep);
 std::string ResidualsCsv(const BatchResult& r);
 

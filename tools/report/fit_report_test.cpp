@@ -71,5 +71,44 @@ TEST(FitReport, NothingBeyondThePriorSaysSo) {
   EXPECT_EQ(rep.verdict.find("MOVED"), std::string::npos);
 }
 
+// A parameter pinned after a first fit is reported as pinned, with where that
+// fit had moved it, not as held for want of motion.
+TEST(FitReport, PinnedParameterIsNamedWithHowFarTheFirstFitMovedIt) {
+  const ParameterLayout layout;
+  BatchResult r = Solution(layout);
+  r.estimate.theta.setZero();
+  const int kxy = layout.IndexOf("Kxy"), dy2 = layout.IndexOf("dy2");
+  for (int i : {kxy, dy2}) {
+    r.estimate.cov.row(i).setZero();
+    r.estimate.cov.col(i).setZero();
+  }
+  r.held = {"Kxy", "dy2"};
+  r.pinned = {{"Kxy", -57.3, 0.21}};
+  const FitReport rep = MakeFitReport(layout, r);
+  EXPECT_NE(rep.verdict.find("PINNED at nominal after a first fit (value - nominal there in prior "
+                             "sigma, data information at the nominal values in prior units): "
+                             "Kxy (-57.3, 0.21): "),
+            std::string::npos)
+      << rep.verdict;
+  EXPECT_NE(rep.verdict.find("held at nominal (this run's motion does not determine them): dy2"),
+            std::string::npos)
+      << rep.verdict;
+  const nlohmann::json j = FitJson(layout, r, rep, false);
+  EXPECT_EQ(j["verdict"]["pinned"], (std::vector<std::string>{"Kxy"}));
+  ASSERT_EQ(j["pinned"].size(), 1u);
+  EXPECT_EQ(j["pinned"][0]["parameter"], "Kxy");
+  EXPECT_DOUBLE_EQ(j["pinned"][0]["prior_sigmas"].get<double>(), -57.3);
+  EXPECT_DOUBLE_EQ(j["pinned"][0]["data_information"].get<double>(), 0.21);
+  EXPECT_TRUE(j["parameters"]["Kxy"]["pinned"].get<bool>());
+  EXPECT_TRUE(j["parameters"]["Kxy"]["sigma"].is_null());
+  EXPECT_FALSE(j["parameters"]["dy2"].contains("pinned"));
+  ::testing::internal::CaptureStdout();
+  PrintParameterTable(layout, r, rep);
+  const std::string table = ::testing::internal::GetCapturedStdout();
+  EXPECT_NE(table.find("(pinned at nominal: a first fit moved it -57.3 prior sigma)"),
+            std::string::npos)
+      << table;
+}
+
 }  // namespace
 }  // namespace triadcal
