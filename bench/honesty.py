@@ -35,10 +35,12 @@ Sections (all by default):
   real      the real roll runs (needs the shared data folder; skipped without
             it): each run fitted whole and in halves (time_range_s) with the
             noise estimated (noise_mV: auto) and the loop's effects
-            (--real-effects, angle_latency,thermal_drift), the shaft tilt held
-            (--real-hold, dpsi); the halves' estimates compared,
-            chi2 = (a - b)^2 / (sigma_a^2 + sigma_b^2) per parameter determined by
-            both, median over parameters; then the three speeds compared.
+            (--real-effects, angle_latency,thermal_drift), nothing held by hand
+            (--real-hold, '': what the fit pins it pins itself); the halves'
+            estimates compared, chi2 = (a - b)^2 / (sigma_a^2 + sigma_b^2) per
+            parameter determined by both, with the sigma given the pins (the
+            pinned values are common to both halves), median over parameters;
+            then the three speeds compared with the reported sigma.
 """
 import argparse
 import json
@@ -279,6 +281,12 @@ def shared_folder():
     return None
 
 
+# The median of a chi-square with 1 degree of freedom: what the median of
+# (a - b)^2 / (sigma_a^2 + sigma_b^2) over parameters is when sigma is honest
+# (its mean is 1).
+CHI2_1_MEDIAN = 0.455
+
+
 def real(work, a):
     print("\n## real roll runs: halves and speeds, noise estimated\n")
     if not shared_folder():
@@ -327,9 +335,19 @@ def real(work, a):
         if fits is None:
             continue
         a_, b_ = fits[1]["parameters"], fits[2]["parameters"]
-        chi = {n: (a_[n]["value"] - b_[n]["value"]) ** 2 / (a_[n]["sigma"] ** 2 + b_[n]["sigma"] ** 2)
-               for n in a_ if a_[n]["estimable"] and b_[n]["estimable"] and a_[n]["sigma"]
-               and b_[n]["sigma"]}
+        # Both halves pin (nearly) the same parameters at the same nominal
+        # values: that part of their error is common and cancels in the
+        # difference, so the halves are compared with the sigma given the
+        # pins (sigma_given_pinned; the reported sigma include it).
+        def chi_of(key):
+            def sg(p):
+                return p.get(key, p["sigma"]) if key else p["sigma"]
+            return {n: (a_[n]["value"] - b_[n]["value"]) ** 2 / (sg(a_[n]) ** 2 + sg(b_[n]) ** 2)
+                    for n in a_ if a_[n]["estimable"] and b_[n]["estimable"] and a_[n]["sigma"]
+                    and b_[n]["sigma"]}
+        chi = chi_of("sigma_given_pinned")
+        chi_reported = chi_of(None)
+        pins = [[p["parameter"] for p in f.get("pinned", [])] for f in fits]
         worst = sorted(chi.items(), key=lambda kv: -kv[1])[:3]
         conv = ", ".join(f"{l} {'converged' if f['converged'] else 'NOT converged'}"
                          for l, f in zip(("whole", "first half", "second half"), fits))
@@ -342,9 +360,15 @@ def real(work, a):
                           f"{tau['unit']}; Kx Ky Kz " + " ".join(
                               f"{f['parameters'][k]['value']:.1f}" for k in ("Kx", "Ky", "Kz")))
         print(f"{speed}: noise estimated {[round(x, 1) for x in whole[speed]['noise']['used_mV']]} mV; "
-              f"halves agree at median chi2/dof {statistics.median(chi.values()):.2f} over "
+              f"halves agree at median chi2/dof {statistics.median(chi.values()):.2f} "
+              f"(x {statistics.median(chi.values()) / CHI2_1_MEDIAN:.2f} the median of chi2 with "
+              f"1 dof, {CHI2_1_MEDIAN}, that honest sigma give) over "
               f"{len(chi)} parameters (largest: "
               + ", ".join(f"{n} {c:.1f}" for n, c in worst) + ")")
+        if any(pins):
+            print(f"{speed}: pinned (whole, halves) {pins}; with the reported sigma, which "
+                  f"include the pins' common uncertainty: median chi2/dof "
+                  f"{statistics.median(chi_reported.values()):.2f}")
     if len(whole) < 3:
         return
     names = [n for n in whole["slow"]["parameters"]
@@ -375,10 +399,10 @@ def main():
     ap.add_argument("--workdir", default="")
     ap.add_argument("--real-effects", default="angle_latency,thermal_drift",
                     help="effects fitted on the real runs (what the loop finds there; '' none)")
-    ap.add_argument("--real-hold", default="dpsi",
-                    help="parameters held on the real runs ('' none): the shaft tilt dpsi, "
-                         "which a single-axis run ties to W0y and the y reading's cross terms "
-                         "(docs/method.md, the degenerate family of the slow roll run)")
+    ap.add_argument("--real-hold", default="",
+                    help="parameters held on the real runs by hand ('' none, the default: "
+                         "the fit pins what it moved far along a weak direction itself, "
+                         "docs/method.md; dpsi was held by hand before that)")
     ap.add_argument("--real-runs", default="slow,medium,fast",
                     help="which real roll runs (slow,medium,fast)")
     ap.add_argument("--real-timeout", type=float, default=1200.0,

@@ -847,6 +847,7 @@ void AddPinnedUncertainty(const ParameterLayout& layout, BatchResult* r) {
                               r->prior.sigma[kept[b]];
     }
   }
+  r->cov_given_pinned = r->estimate.cov;
   for (Eigen::MatrixXd* c : {&r->estimate.cov, &r->cov_white, &r->cov_hac}) {
     if (c->rows() == n) *c += add;
   }

@@ -215,6 +215,12 @@ struct BatchResult {
   // empty with the Ceres covariance (robust loss).
   std::string sigma_method = "white";
   Eigen::MatrixXd cov_white, cov_hac;
+  // With pins: estimate.cov before their uncertainty was added (the
+  // covariance given the pinned values). Two fits that pin the same
+  // parameters at the same values share that part of their error, so their
+  // difference is judged on this one (the halves of a run). Empty without
+  // pins.
+  Eigen::MatrixXd cov_given_pinned;
   double hac_bandwidth_epochs = 0.0;  // the Bartlett bandwidth used, epochs
   double init_seconds = 0.0, solve_seconds = 0.0, covariance_seconds = 0.0;
   int epochs = 0;

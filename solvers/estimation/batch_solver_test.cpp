@@ -341,6 +341,9 @@ TEST(BatchSolver, WeakParameterMovedFarIsPinnedAndItsUncertaintyKept) {
     const double s_pin = std::sqrt(pinned.estimate.cov(i, i));
     const double s_free = std::sqrt(free_fit.estimate.cov(i, i));
     const double s_held = std::sqrt(held.estimate.cov(i, i));
+    // Given the pinned value, the sigma are the held fit's.
+    EXPECT_NEAR(std::sqrt(pinned.cov_given_pinned(i, i)), s_held, 1e-3 * s_held)
+        << layout.info(i).name;
     worst_free = std::max(worst_free, std::abs(std::log(s_pin / s_free)));
     if (s_held / s_free < most_shrunk) {
       most_shrunk = s_held / s_free;

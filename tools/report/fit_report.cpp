@@ -165,6 +165,10 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
     if (r.cov_hac.rows() == layout.size()) {
       pj["sigma_hac"] = std::sqrt(std::max(0.0, r.cov_hac(i, i))) / pi.si_per_unit;
     }
+    if (r.cov_given_pinned.rows() == layout.size()) {
+      pj["sigma_given_pinned"] =
+          std::sqrt(std::max(0.0, r.cov_given_pinned(i, i))) / pi.si_per_unit;
+    }
   }
   out["sigma_method"] = r.sigma_method;
   if (r.cov_hac.rows() > 0) {

@@ -84,6 +84,7 @@ TEST(FitReport, PinnedParameterIsNamedWithHowFarTheFirstFitMovedIt) {
   }
   r.held = {"Kxy", "dy2"};
   r.pinned = {{"Kxy", -57.3, 0.21}};
+  r.cov_given_pinned = 0.25 * r.estimate.cov;
   const FitReport rep = MakeFitReport(layout, r);
   EXPECT_NE(rep.verdict.find("PINNED at nominal after a first fit (value - nominal there in prior "
                              "sigma, data information at the nominal values in prior units): "
@@ -102,6 +103,8 @@ TEST(FitReport, PinnedParameterIsNamedWithHowFarTheFirstFitMovedIt) {
   EXPECT_TRUE(j["parameters"]["Kxy"]["pinned"].get<bool>());
   EXPECT_TRUE(j["parameters"]["Kxy"]["sigma"].is_null());
   EXPECT_FALSE(j["parameters"]["dy2"].contains("pinned"));
+  EXPECT_DOUBLE_EQ(j["parameters"]["Kx"]["sigma_given_pinned"].get<double>(),
+                   0.5 * j["parameters"]["Kx"]["sigma"].get<double>());
   ::testing::internal::CaptureStdout();
   PrintParameterTable(layout, r, rep);
   const std::string table = ::testing::internal::GetCapturedStdout();
