@@ -141,10 +141,12 @@ void AddFitOptions(CLI::App* app, FitSettings* a) {
       ->capture_default_str();
   app->add_flag("--correlations", a->correlations, "add the correlation matrix to OUT");
   app->add_option("--hold", a->hold, "parameters to hold at their nominal values, e.g. dpsi,Kxy");
-  app->add_option("--free", a->free, "parameters to estimate even if the run barely supports them");
+  app->add_option("--free", a->free,
+                  "parameters to estimate even if the run barely supports them, and never pin");
   app->add_flag("--no-auto-hold", a->no_auto_hold,
                 "estimate every parameter (by default those the run's motion does not support "
-                "are held at nominal)");
+                "are held at nominal, and weakly determined ones that a first fit moves beyond 3 "
+                "prior sigma are pinned there and the run refitted)");
 }
 
 }  // namespace triadcal
