@@ -1,6 +1,5 @@
 // `triadcal diagnose RUN.yaml -o OUT.json [--truth truth.json]`: the closed
 // loop of docs/method.md (solvers/diagnosis/effect_discovery.h).
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -136,9 +135,8 @@ int RunDiagnose(const DiagnoseArgs& a) {
         else std::printf(" %9s %9s", "-", "-");
       }
     }
-    const bool pinned = std::any_of(d.after.pinned.begin(), d.after.pinned.end(),
-                                    [&](const PinnedExcursion& q) { return q.name == p.name; });
-    std::printf("  %s%s\n", p.unit.c_str(), pinned ? " (pinned)" : held ? " (held)" : "");
+    std::printf("  %s%s\n", p.unit.c_str(),
+                IsPinned(d.after, p.name) ? " (pinned)" : held ? " (held)" : "");
   }
   std::printf("wrote %s\n", a.out_json.c_str());
   return 0;

@@ -187,28 +187,22 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
     return i;
   };
   for (const std::string& h : o.hold) held[index_of(h)] = true;
+  for (const std::string& h : o.pinned) held[index_of(h)] = true;
   for (const std::string& f : o.free) held[index_of(f)] = false;
   for (int i = 0; i < n; ++i) {
     if (held[i]) d.held.push_back(layout.info(i).name);
   }
-  std::vector<int> kept;
-  for (int i = 0; i < n; ++i) {
-    if (!held[i]) kept.push_back(i);
-  }
-  if (info_full.size() > 0) {
-    d.data_information = Eigen::VectorXd::Zero(n);
-    const Eigen::MatrixXd C = PosteriorOver(info_full, kept);
-    for (std::size_t a = 0; a < kept.size(); ++a) {
-      d.data_information[kept[a]] = 1.0 / std::max(C(a, a), 1e-300) - 1.0;
-    }
-  }
   // What the held parameters stand for: the other members of their
-  // undetermined directions are estimated relative to them.
+  // undetermined directions are estimated relative to them. A pinned one
+  // stands for nothing: its uncertainty goes into the others' sigma.
   const std::set<std::string> held_set(d.held.begin(), d.held.end());
+  const std::set<std::string> pinned_set(o.pinned.begin(), o.pinned.end());
   for (const WeakDirection& w : d.unsupported) {
     std::vector<std::string> anchors;
     for (const auto& [name, weight] : w.weights) {
-      if (held_set.count(name) && std::abs(weight) >= 0.1) anchors.push_back(name);
+      if (held_set.count(name) && !pinned_set.count(name) && std::abs(weight) >= 0.1) {
+        anchors.push_back(name);
+      }
     }
     if (anchors.empty()) continue;
     for (const auto& [name, weight] : w.weights) {
@@ -663,13 +657,12 @@ BatchResult SolveBatchOnce(const RunDescription& run, const RunData& data,
   }
 
   // 1. Which parameters are estimated: the held ones leave the problem.
-  if (opt.holding.auto_hold || !opt.holding.hold.empty()) {
+  if (opt.holding.auto_hold || !opt.holding.hold.empty() || !opt.holding.pinned.empty()) {
     say("choosing the parameters this run supports");
     if (opt.fraction) opt.fraction(0.0);
     const HoldDecision hd = ChooseHeldParameters(run_start, data, layout, opt.holding, opt.epoch_s,
                                                  opt.derivatives, opt.init_decimation_hz, threads);
     res.unsupported_at_start = hd.unsupported;
-    res.data_information_at_start = hd.data_information;
     res.information_at_start = hd.information;
     res.held = hd.held;
     res.relative_to = hd.relative_to;
@@ -830,9 +823,7 @@ void AddPinnedUncertainty(const ParameterLayout& layout, BatchResult* r) {
   for (int i = 0; i < n; ++i) {
     const std::string& name = layout.info(i).name;
     const bool held = std::find(r->held.begin(), r->held.end(), name) != r->held.end();
-    const bool pinned = std::any_of(r->pinned.begin(), r->pinned.end(),
-                                    [&](const PinnedExcursion& p) { return p.name == name; });
-    if (pinned) pins.push_back(i);
+    if (IsPinned(*r, name)) pins.push_back(i);
     if (!held) kept.push_back(i);
   }
   std::vector<int> both = kept;
@@ -853,10 +844,32 @@ void AddPinnedUncertainty(const ParameterLayout& layout, BatchResult* r) {
   }
 }
 
+bool IsPinned(const BatchResult& r, const std::string& name) {
+  return std::any_of(r.pinned.begin(), r.pinned.end(),
+                     [&](const PinnedExcursion& p) { return p.name == name; });
+}
+
+Eigen::VectorXd MarginalInformationAtStart(const ParameterLayout& layout, const BatchResult& r) {
+  const int n = layout.size();
+  if (r.information_at_start.rows() != n) return {};
+  std::vector<int> kept;
+  for (int i = 0; i < n; ++i) {
+    if (std::find(r.held.begin(), r.held.end(), layout.info(i).name) == r.held.end()) {
+      kept.push_back(i);
+    }
+  }
+  Eigen::VectorXd info = Eigen::VectorXd::Zero(n);
+  const Eigen::MatrixXd C = PosteriorOver(r.information_at_start, kept);
+  for (std::size_t a = 0; a < kept.size(); ++a) {
+    info[kept[a]] = 1.0 / std::max(C(a, a), 1e-300) - 1.0;
+  }
+  return info;
+}
+
 std::vector<PinnedExcursion> WeakExcursions(const ParameterLayout& layout, const BatchResult& r,
                                             const HoldPolicy& policy) {
   std::vector<PinnedExcursion> out;
-  const Eigen::VectorXd& info = r.data_information_at_start;
+  const Eigen::VectorXd info = MarginalInformationAtStart(layout, r);
   if (info.size() != layout.size()) return out;
   for (const PriorExcursion& e :
        BeyondPrior(layout, r.estimate.theta, r.prior.mean, r.prior.sigma,
@@ -881,10 +894,10 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
     const std::vector<PinnedExcursion> more = WeakExcursions(layout, res, opt.holding);
     if (more.empty()) break;
     BatchOptions o = opt;
-    for (const PinnedExcursion& p : pinned) o.holding.hold.push_back(p.name);
+    for (const PinnedExcursion& p : pinned) o.holding.pinned.push_back(p.name);
     std::string names;
     for (const PinnedExcursion& p : more) {
-      o.holding.hold.push_back(p.name);
+      o.holding.pinned.push_back(p.name);
       pinned.push_back(p);
       char one[96];
       std::snprintf(one, sizeof(one), " %s (%+.1f prior sigma, data information %.2g)",
@@ -902,24 +915,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
     res = SolveBatchOnce(run, data, layout, o);
     res.pinned = pinned;
   }
-  if (!pinned.empty()) {
-    // A pin is no anchor: what the pinned parameters' uncertainty does to
-    // the others is in their covariance, so none is "relative to" one (a
-    // pinned Kyz would otherwise make dpsi, in its weak direction at the
-    // nominal values, not estimable on its own).
-    for (auto it = res.relative_to.begin(); it != res.relative_to.end();) {
-      std::vector<std::string>& anchors = it->second;
-      anchors.erase(std::remove_if(anchors.begin(), anchors.end(),
-                                   [&](const std::string& a) {
-                                     return std::any_of(
-                                         pinned.begin(), pinned.end(),
-                                         [&](const PinnedExcursion& p) { return p.name == a; });
-                                   }),
-                    anchors.end());
-      it = anchors.empty() ? res.relative_to.erase(it) : std::next(it);
-    }
-    AddPinnedUncertainty(layout, &res);
-  }
+  if (!pinned.empty()) AddPinnedUncertainty(layout, &res);
   return res;
 }
 

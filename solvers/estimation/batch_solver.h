@@ -90,6 +90,9 @@ struct HoldPolicy {
   // 76 deg; fast run: Kxz, Kzz at +28, +22 with Kz 796 mV/g). A name in
   // `free` is never pinned.
   bool pin_weak_excursions = true;
+  // Held like `hold`, but pinned by that rule: no anchor of a `relative_to`
+  // (their uncertainty goes into the others' sigma instead, SolveBatch).
+  std::vector<std::string> pinned;
   double pin_max_information = 2.0;
   double pin_excursion_sigma = 3.0;
 };
@@ -158,8 +161,6 @@ struct BatchResult {
   // The directions the run cannot determine, found at the nominal values
   // before holding (what the held parameters stand for).
   std::vector<WeakDirection> unsupported_at_start;
-  // HoldDecision::data_information of the hold decision (empty without it).
-  Eigen::VectorXd data_information_at_start;
   Eigen::MatrixXd information_at_start;  // HoldDecision::information
   Prior prior;
   double final_cost = 0.0;      // 0.5 sum r^2 over all blocks
@@ -245,6 +246,15 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
 // under their priors minus the conditional one. SolveBatch applies it.
 void AddPinnedUncertainty(const ParameterLayout& layout, BatchResult* r);
 
+// Per parameter of r's layout: the data information at the nominal values
+// from r.information_at_start, marginal (the other free parameters
+// estimated, r.held fixed), in prior units; 0 for a held one. Empty when the
+// fit made no hold decision.
+Eigen::VectorXd MarginalInformationAtStart(const ParameterLayout& layout, const BatchResult& r);
+
+// Whether r pinned parameter `name`.
+bool IsPinned(const BatchResult& r, const std::string& name);
+
 std::vector<PinnedExcursion> WeakExcursions(const ParameterLayout& layout, const BatchResult& r,
                                             const HoldPolicy& policy);
 
@@ -257,12 +267,9 @@ struct HoldDecision {
   // the held ones of that direction (e.g. gamma_y, gamma_z relative to
   // dlambda2 without the paper's constraint): not estimable on their own.
   std::map<std::string, std::vector<std::string>> relative_to;
-  // Per parameter of the layout: the data information at the nominal values
-  // (full rate, prior units, marginal: the other free parameters estimated,
-  // the held ones fixed); 0 for a held one, empty without auto_hold.
-  Eigen::VectorXd data_information;
-  // The data information itself (n x n, full rate, prior units: parameter i
-  // divided by its prior sigma), held ones included; empty without auto_hold.
+  // The data information at the nominal values (n x n, full rate, prior
+  // units: parameter i divided by its prior sigma), held ones included;
+  // empty without auto_hold.
   Eigen::MatrixXd information;
 };
 HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data,

@@ -289,6 +289,26 @@ TEST(FitCommand, FitAndCompareWriteTheirOutputs) {
             "triadcal: error: --init: expected rts or nominal, got 'sideways'\n");
 }
 
+// A held parameter anchors the other members of its weak direction
+// (relative_to); a pinned one does not: its uncertainty goes into their sigma.
+// Single-axis run: dtheta_c with beta_x, beta_z.
+TEST(HoldDecision, APinIsNoAnchorOfRelativeTo) {
+  Scenario s = PaperScenario(50.0, 30.0, 2.0, 15.0, 4);
+  s.profile.amplitude_rad[1] = 0.0;
+  const RunData data = Simulate(s);
+  HoldPolicy held;
+  held.hold = {"dtheta_c"};
+  const HoldDecision h = ChooseHeldParameters(s.run, data, ParameterLayout(), held, 0.5, {});
+  ASSERT_TRUE(h.relative_to.count("beta_x"));
+  EXPECT_EQ(h.relative_to.at("beta_x"), std::vector<std::string>{"dtheta_c"});
+  HoldPolicy pinned;
+  pinned.pinned = {"dtheta_c"};
+  const HoldDecision p = ChooseHeldParameters(s.run, data, ParameterLayout(), pinned, 0.5, {});
+  EXPECT_NE(std::find(p.held.begin(), p.held.end(), "dtheta_c"), p.held.end());
+  EXPECT_FALSE(p.relative_to.count("beta_x"));
+  EXPECT_FALSE(p.relative_to.count("beta_z"));
+}
+
 // A parameter the data know less than twice its prior that the fit moves
 // beyond 3 prior sigma is pinned at nominal and the run refitted; what its
 // uncertainty does to the others is added to their covariance, so their sigma
@@ -320,9 +340,9 @@ TEST(BatchSolver, WeakParameterMovedFarIsPinnedAndItsUncertaintyKept) {
 
   const double z_free = free_fit.estimate.theta[kDz2] / free_fit.prior.sigma[kDz2];
   std::printf("free dz2 %.4f m (%.1f prior sigma), information %.3f\n",
-              free_fit.estimate.theta[kDz2], z_free, free_fit.data_information_at_start[kDz2]);
+              free_fit.estimate.theta[kDz2], z_free, MarginalInformationAtStart(layout, free_fit)[kDz2]);
   ASSERT_GT(z_free, 3.0);
-  ASSERT_LT(free_fit.data_information_at_start[kDz2], 2.0);
+  ASSERT_LT(MarginalInformationAtStart(layout, free_fit)[kDz2], 2.0);
   EXPECT_TRUE(WeakExcursions(layout, free_fit, HoldPolicy{}).size() >= 1);
   ASSERT_FALSE(pinned.pinned.empty());
   EXPECT_EQ(pinned.pinned[0].name, "dz2");

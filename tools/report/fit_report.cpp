@@ -96,8 +96,7 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
   }
   std::vector<std::string> held_by_motion;
   for (const std::string& s : r.held) {
-    if (std::none_of(r.pinned.begin(), r.pinned.end(),
-                     [&](const PinnedExcursion& p) { return p.name == s; })) {
+    if (!IsPinned(r, s)) {
       held_by_motion.push_back(s);
     }
   }
