@@ -10,14 +10,15 @@ namespace {
 
 constexpr int kMaxParams = 64;
 
-// Jets for the few parameters whose columns are not written out.
+// Jets of the angle stage: its parameters (latency, encoder harmonic, angle
+// scale: 1 + 4 + 2).
 constexpr int kJetParams = 8;
 using SmallJet = ceres::Jet<double, kJetParams>;
 
 // Jets of the geometry behind the size effect: the six bench-angle
 // quantities (angle, rate, acceleration of both axes) and the geometric
-// parameters (dpsi, d, dR, r): at most 6 + 1 + 1 + 3 + 6 = 17.
-constexpr int kGeometryJet = 17;
+// parameters (dpsi, d, eps, dR, r): at most 6 + 1 + 1 + 1 + 3 + 6 = 18.
+constexpr int kGeometryJet = 18;
 using GeoJet = ceres::Jet<double, kGeometryJet>;
 
 // theta as Jets with only the listed entries seeded (derivative slot q for
@@ -30,17 +31,22 @@ std::array<J, kMaxParams> SeededTheta(const double* th, int n, const std::vector
   return t;
 }
 
-// The parameter indices of the layout's angle-stage effects (angle_stage) or
-// of its effects without written-out columns.
-std::vector<int> EffectParams(const ParameterLayout& layout, bool angle_stage) {
+// The parameter indices of the layout's angle-stage effects.
+std::vector<int> AngleStageParams(const ParameterLayout& layout) {
   std::vector<int> idx;
   for (Effect e : layout.effects()) {
     const EffectSpec& s = GetEffectSpec(e);
-    const bool take = angle_stage ? s.stage == EffectStage::kAngle : !s.b1_analytic_jacobian;
-    if (!take) continue;
+    if (s.stage != EffectStage::kAngle) continue;
     for (std::size_t q = 0; q < s.params.size(); ++q) idx.push_back(layout.offset(e) + q);
   }
   return idx;
+}
+
+// [v x]
+Mat3<double> Cross(const Vec3<double>& v) {
+  Mat3<double> m;
+  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  return m;
 }
 
 // Misalignment angle at M(i, j), i != j, and its sign there (bench_model.h).
@@ -90,18 +96,9 @@ double ReadingWithoutOffset(const ParameterLayout& layout, const double* th, int
 }  // namespace
 
 bool B1HasAnalyticJacobian(const ParameterLayout& layout) {
+  if (layout.size() > kMaxParams || AngleStageParams(layout).size() > kJetParams) return false;
   for (Effect e : layout.effects()) {
     if (!GetEffectSpec(e).b1_analytic_jacobian) return false;
-  }
-  return true;
-}
-
-bool B1HasCheapJacobian(const ParameterLayout& layout, const double* theta) {
-  if (layout.size() > kMaxParams) return false;
-  const std::vector<int> jet = EffectParams(layout, false);
-  if (jet.size() > static_cast<std::size_t>(kJetParams)) return false;
-  for (int i : jet) {
-    if (theta[i] != 0.0) return false;
   }
   return true;
 }
@@ -120,7 +117,7 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
   // angle-stage parameters (Jets over those alone).
   BenchAngles<double> b = rec;
   const std::vector<int> angle_params =
-      layout.has_stage(EffectStage::kAngle) ? EffectParams(layout, true) : std::vector<int>();
+      layout.has_stage(EffectStage::kAngle) ? AngleStageParams(layout) : std::vector<int>();
   Eigen::Matrix<double, 6, kJetParams> db = Eigen::Matrix<double, 6, kJetParams>::Zero();
   if (!angle_params.empty()) {
     const std::array<SmallJet, kMaxParams> t = SeededTheta<SmallJet>(th, n, angle_params);
@@ -138,13 +135,35 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
   // D_i = R_i(W_i) - R_i(W_O) from reading i first (AccelerationFromReadings_L).
   // dD/dtheta: by W through Jets of the geometry (the bench-angle quantities
   // and the geometric parameters), and by the sensor parameters written out.
+  // With r = 0 (the score tests of `diagnose` linearise there) D vanishes for
+  // every other parameter value, and only its columns by r remain: W at the
+  // point r from O is W_O + C_L2^T (w' x q + w x (w x q)) / g with q = C_L2 r
+  // (MotionOfPoint), so dD_i/dr_i = grad R_i(W_O) C_L2^T ([w' x] + [w x]^2) C_L2 / g.
   Eigen::Vector3d z = z_in;
   Eigen::MatrixXd dD;  // 3 x n, empty without the size effect
   const int o_s = layout.offset(Effect::kSizeEffect);
-  if (o_s >= 0) {
+  bool r_zero = o_s >= 0;
+  for (int q = 0; q < 6 && r_zero; ++q) r_zero = th[o_s + q] == 0.0;
+  if (r_zero) {
+    const BenchMotion<double> m = ComputeBenchMotion(cfg, th, b);
+    const Vec3<double> W_O =
+        SpecificForce_g(cfg, m.C_L2, MotionOfPoint(m, SensingPoint_m(cfg, th, 0)).a_L);
+    const Vec3<double> w = m.w1_L + m.w12_L;
+    const Mat3<double> G = Cross(m.dw1_L + m.dw12_L) + Cross(w) * Cross(w);
+    const Mat3<double> dW_dr = m.C_L2.transpose() * G * m.C_L2 / g;
+    dD = Eigen::MatrixXd::Zero(3, n);
+    Eigen::RowVectorXd scratch = Eigen::RowVectorXd::Zero(n);
+    for (int i = 1; i < 3; ++i) {
+      Eigen::RowVector3d grad_O;
+      ReadingWithoutOffset(layout, th, i, W_O, &grad_O, 0.0, scratch);
+      dD.row(i).segment<3>(o_s + 3 * (i - 1)) = grad_O * dW_dr;
+    }
+  } else if (o_s >= 0) {
     std::vector<int> geo = {kDpsi, kDx2, kDy2, kDz2};
     const int o_d = layout.offset(Effect::kAxisNonintersection);
     if (o_d >= 0) geo.push_back(o_d);
+    const int o_e = layout.offset(Effect::kAxisNonperpendicularity);
+    if (o_e >= 0) geo.push_back(o_e);
     for (int q = 0; q < 6; ++q) geo.push_back(o_s + q);
     const std::array<GeoJet, kMaxParams> t = SeededTheta<GeoJet>(th, n, geo);
     BenchAngles<GeoJet> bj;
@@ -189,10 +208,14 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
     }
   }
 
+  // C = C_L1 C_12 with C_12 = Rz(eps) Rx Rz(-eps) (ComputeBenchMotion).
   const Mat3<double> Rzp = Rz(th[kDpsi]);
   const Mat3<double> Ryp = Ry(b.axis[0].angle + th[kDthetaC]);
-  const Mat3<double> Rxp = Rx(b.axis[1].angle + th[kDlambda2]);
-  const Mat3<double> C = Rzp * Ryp * Rxp;
+  const int o_eps = layout.offset(Effect::kAxisNonperpendicularity);
+  const Mat3<double> Reps = Rz(o_eps >= 0 ? th[o_eps] : 0.0);
+  const Mat3<double> C_12 = Reps * Rx(b.axis[1].angle + th[kDlambda2]) * Reps.transpose();
+  const Mat3<double> C_L1 = Rzp * Ryp;
+  const Mat3<double> C = C_L1 * C_12;
 
   // Sensor stage: u_i = (z_i - W0_i(t)) / s_i with s_i = K_i (+- dK_i with the
   // scale asymmetry, the sign of z_i - W0_i), and F(W) = M W + W o (K W) + Q(W) - u.
@@ -222,9 +245,16 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
   *a_out = g * CW;
   (*a_out).x() -= g;
 
+  const Vec3<double> C12W = C_12 * W;
   J.col(kDpsi) = g * Vec3<double>::UnitZ().cross(CW);
-  J.col(kDthetaC) = g * Rzp * Vec3<double>::UnitY().cross(Ryp * Rxp * W);
-  J.col(kDlambda2) = g * C * Vec3<double>::UnitX().cross(W);
+  J.col(kDthetaC) = g * Rzp * Vec3<double>::UnitY().cross(Ryp * C12W);
+  // d C_12 / d l2 = [n x] C_12 with n = Rz(eps) e_x (the inner axis in frame 1);
+  // d C_12 / d eps = [e_z x] C_12 - C_12 [e_z x].
+  J.col(kDlambda2) = g * C_L1 * Reps.col(0).cross(C12W);
+  if (o_eps >= 0) {
+    J.col(o_eps) =
+        g * C_L1 * (Vec3<double>::UnitZ().cross(C12W) - C_12 * Vec3<double>::UnitZ().cross(W));
+  }
   for (int i = 0; i < 3; ++i) {
     J.col(kKx + i) = T.col(i) * (u[i] / s[i]);
     J.col(kW0x + i) = T.col(i) * (1.0 / s[i]);
@@ -264,17 +294,6 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
   // dF/dD_i = 1 / s_i e_i, so da/dD_i = T.col(i) / s_i.
   if (dD.size() > 0) {
     for (int i = 1; i < 3; ++i) J += (T.col(i) / s[i]) * dD.row(i);
-  }
-  // Effects without written-out columns (B1HasCheapJacobian: all at zero,
-  // where the model above is the whole model): their own columns by Jets.
-  const std::vector<int> jet_params =
-      B1HasAnalyticJacobian(layout) ? std::vector<int>() : EffectParams(layout, false);
-  if (!jet_params.empty()) {
-    const std::array<SmallJet, kMaxParams> t = SeededTheta<SmallJet>(th, n, jet_params);
-    const Vec3<SmallJet> aj = AccelerationFromReadings_L<SmallJet>(cfg, t.data(), rec, z_in, ctx);
-    for (std::size_t q = 0; q < jet_params.size(); ++q) {
-      for (int r = 0; r < 3; ++r) J(r, jet_params[q]) = aj[r].v[q];
-    }
   }
 }
 

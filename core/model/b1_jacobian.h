@@ -7,19 +7,21 @@
 // dlambda2 times the angles' derivatives, taken by small Jets of the angle
 // stage alone), the sensor stage (drifts through the zero offsets, scale
 // asymmetry through s_i, cross_quadratic through F and its Jacobian),
-// axis_nonintersection (B2 only) and the size effect (the correction D of
-// the readings, with its derivatives by W taken by Jets of the geometry
-// alone, 17 wide, and by the sensor parameters written out). The axis
-// non-perpendicularity is not written out: with its parameter at zero (where
-// the score tests of `diagnose` linearise) the model above is the whole
-// model, and its own column comes from a small Jet (B1HasCheapJacobian);
-// elsewhere use the Jet path.
+// axis_nonintersection (B2 only), the axis non-perpendicularity (through C)
+// and the size effect (the correction D of the readings, with its derivatives
+// by W taken by Jets of the geometry alone, 18 wide, and by the sensor
+// parameters written out; with r = 0, where the score tests of `diagnose`
+// linearise, only its columns by r, written out). A layout with an effect
+// that has no written-out columns, more than 64 parameters or more than 8
+// angle-stage ones takes the Jet path (B1HasAnalyticJacobian false).
 //
-//   a = g C W - g e_x,   C = Rz(dpsi) Ry(l1 + dtheta_c) Rx(l2 + dlambda2)
+//   a = g C W - g e_x,   C = C_L1 C_12,   C_L1 = Rz(dpsi) Ry(l1 + dtheta_c),
+//   C_12 = Rz(eps) Rx(l2 + dlambda2) Rz(-eps)
 //
 //   da/d dpsi     = g e_z x (C W)
-//   da/d dtheta_c = g Rz (e_y x (Ry Rx W))
-//   da/d dlambda2 = g C (e_x x W)
+//   da/d dtheta_c = g Rz (e_y x (Ry C_12 W))
+//   da/d dlambda2 = g C_L1 (n x (C_12 W)),   n = Rz(eps) e_x
+//   da/d eps      = g C_L1 (e_z x (C_12 W) - C_12 (e_z x W))
 //   da/d theta_W  = g C dW/d theta_W,   dW/d theta_W = -J^-1 dF/d theta_W
 //
 // with F(W) = M W + W o (K W) + Q(W) - u = 0, u_i = (z_i - W0_i(t)) / s_i,
@@ -41,14 +43,12 @@
 
 namespace triadcal {
 
+// True when AccelerationWithJacobian covers the layout: every effect has
+// written-out columns (catalogue b1_analytic_jacobian), at most 64
+// parameters, at most 8 of them in the angle stage.
 bool B1HasAnalyticJacobian(const ParameterLayout& layout);
 
-// True when AccelerationWithJacobian is exact at theta: the layout's effects
-// without written-out columns have all their parameters at zero (at most 8
-// of them).
-bool B1HasCheapJacobian(const ParameterLayout& layout, const double* theta);
-
-// Requires B1HasCheapJacobian(cfg.layout, theta).
+// Requires B1HasAnalyticJacobian(cfg.layout).
 // a [m/s^2] and da/dtheta (3 x layout.size(), written into *J which must have
 // that size; columns of parameters B1 does not depend on are set to zero).
 void AccelerationWithJacobian(const ModelConfig& cfg, const double* theta,

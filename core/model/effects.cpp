@@ -66,6 +66,7 @@ const std::vector<EffectSpec>& EffectCatalogue() {
       e.plausible_reason =
           "bench axes are perpendicular to machining tolerance (arcmin); a degree is a "
           "mis-assembled bench";
+      e.b1_analytic_jacobian = true;
       c.push_back(e);
     }
     {

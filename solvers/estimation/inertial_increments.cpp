@@ -95,7 +95,7 @@ IntervalIncrement IntegrateInterval(const ModelConfig& cfg, const Eigen::VectorX
     }
     return inc;
   }
-  if (B1HasCheapJacobian(cfg.layout, theta.data())) {
+  if (B1HasAnalyticJacobian(cfg.layout)) {
     inc.ddv_dtheta = Eigen::MatrixXd::Zero(3, n);
     inc.dds_dtheta = Eigen::MatrixXd::Zero(3, n);
     Eigen::MatrixXd Jk(3, n);
