@@ -347,6 +347,13 @@ constexpr double kMissRatio = 0.5;
 // 0.37 still at step 34), so the old limit of 30 sent it to the fallback. Past this the solve falls
 // back to Ceres with exact increments, which is far slower (hours there).
 constexpr int kExactGaussNewtonSteps = 100;
+// Halvings of one step back towards the last point before the linearised
+// increments are judged to mislead there: after this many the solve takes
+// Gauss-Newton on the exact increments from the step's end, as it did before
+// after halving on (each halving costs a linearisation) until the point came
+// back to where the pass started and the identical pass ran again (real slow
+// roll run: 17 halvings and a second 100-iteration pass, 11 s of a 27-s fit).
+constexpr int kHalvingsBeforeExact = 3;
 
 // Relinearise and solve until the linearisation point stops moving.
 void Relinearise(const RunProblem& p, const StateSpaceModel& model, const Eigen::MatrixXd& A,
@@ -368,7 +375,9 @@ void Relinearise(const RunProblem& p, const StateSpaceModel& model, const Eigen:
   double predicted_cost = std::numeric_limits<double>::quiet_NaN();
   double predicted_change = 0.0;
   bool linearisation_off = false;
-  int halvings = 0;
+  int halvings = 0, halvings_in_row = 0;
+  Eigen::VectorXd theta_end;  // where the step being halved ended
+  std::vector<double> x_end;
   // Set when Gauss-Newton on the exact increments has converged: that is the
   // minimum of the exact problem, so the next pass only solves the trajectory
   // at it (the linearised increments, whose gradient differs from the exact
@@ -377,6 +386,32 @@ void Relinearise(const RunProblem& p, const StateSpaceModel& model, const Eigen:
   bool at_exact_minimum = false;
   res->converged = false;
   BatchOptions o = opt;
+  // Gauss-Newton on the reduced cost (the trajectory solved for at every
+  // step, reduced_run.h): one linearisation per step and quadratic
+  // convergence on the exact problem; the next pass then relinearises at its
+  // solution, where Ceres has next to nothing left to do.
+  auto exact_gauss_newton = [&]() {
+    say("Gauss-Newton on the exact increments");
+    bool gn_converged = false;
+    int gn_iterations = 0;
+    theta_free = MinimiseReducedCost(p, theta_free, threads, kExactGaussNewtonSteps,
+                                     opt.outer_tolerance, &gn_converged, &gn_iterations, say);
+    res->ceres_iterations += gn_iterations;
+    for (std::size_t e = 0; e < E; ++e) {
+      Eigen::Map<Vec6> x_e(&x[6 * e]);
+      x_e = model.Measurement(e, model.Expand(theta_free), false, false).h;
+    }
+    // The next pass's cost is the true one at a better point: no backtracking.
+    cost_prev = std::numeric_limits<double>::infinity();
+    predicted_cost = std::numeric_limits<double>::quiet_NaN();
+    last_step = 0.0;
+    halvings_in_row = 0;
+    if (gn_converged) {
+      at_exact_minimum = true;
+    } else {
+      st->exact = true;  // the slow but sure way for the rest
+    }
+  };
   for (int outer = 0; outer < opt.max_outer_iterations + halvings || at_exact_minimum; ++outer) {
     o.exact_increments = opt.exact_increments || st->exact;
     say(o.exact_increments && !opt.exact_increments
@@ -410,11 +445,25 @@ void Relinearise(const RunProblem& p, const StateSpaceModel& model, const Eigen:
       break;
     }
     if (cost_here > cost_prev * (1.0 + 1e-9) && halvings < 20 && !o.exact_increments) {
-      ++halvings;
-      theta_free = 0.5 * (theta_free + theta_prev);
-      for (std::size_t i = 0; i < x.size(); ++i) x[i] = 0.5 * (x[i] + x_prev[i]);
+      if (halvings_in_row < kHalvingsBeforeExact) {
+        if (halvings_in_row == 0) {
+          theta_end = theta_free;
+          x_end = x;
+        }
+        ++halvings;
+        ++halvings_in_row;
+        theta_free = 0.5 * (theta_free + theta_prev);
+        for (std::size_t i = 0; i < x.size(); ++i) x[i] = 0.5 * (x[i] + x_prev[i]);
+        continue;
+      }
+      say("  the linearised step made the cost worse even at 1/" +
+          std::to_string(1 << kHalvingsBeforeExact) + " of its length");
+      theta_free = theta_end;
+      x = x_end;
+      exact_gauss_newton();
       continue;
     }
+    halvings_in_row = 0;
     theta_prev = theta_free;
     x_prev = x;
     cost_prev = cost_here;
@@ -463,31 +512,7 @@ void Relinearise(const RunProblem& p, const StateSpaceModel& model, const Eigen:
     // Exact increments only help when the linearised increments are what
     // holds the passes back: their prediction of the cost at the last point
     // missed by more than kMissRatio of the decrease it promised.
-    if (slow && linearisation_off) {
-      // Gauss-Newton on the reduced cost (the trajectory solved for at every
-      // step, reduced_run.h): one linearisation per step and quadratic
-      // convergence on the exact problem; the next pass then relinearises
-      // at its solution, where Ceres has next to nothing left to do.
-      say("Gauss-Newton on the exact increments");
-      bool gn_converged = false;
-      int gn_iterations = 0;
-      theta_free = MinimiseReducedCost(p, theta_free, threads, kExactGaussNewtonSteps,
-                                       opt.outer_tolerance, &gn_converged, &gn_iterations, say);
-      res->ceres_iterations += gn_iterations;
-      for (std::size_t e = 0; e < E; ++e) {
-        Eigen::Map<Vec6> x_e(&x[6 * e]);
-        x_e = model.Measurement(e, model.Expand(theta_free), false, false).h;
-      }
-      // The next pass's cost is the true one at a better point: no backtracking.
-      cost_prev = std::numeric_limits<double>::infinity();
-      predicted_cost = std::numeric_limits<double>::quiet_NaN();
-      last_step = 0.0;
-      if (gn_converged) {
-        at_exact_minimum = true;
-      } else {
-        st->exact = true;  // the slow but sure way for the rest
-      }
-    }
+    if (slow && linearisation_off) exact_gauss_newton();
   }
 }
 
