@@ -33,7 +33,10 @@ Eigen::Vector4d LocalCubic(const double* t, const double* y, int n, double t0, d
 namespace {
 
 // Rate and acceleration of both axes at sample k from the samples in the
-// window [lo, hi) (widened to at least 5 points).
+// window [lo, hi) (widened to at least 5 points). The two axes share the time
+// stamps, so one pass over the window gives the power sums of the normal
+// matrix (A(r, c) = sum s^(r+c), s = (t - t_k) / h) for both, as LocalCubic
+// builds it column by column.
 void FitAt(const RunData& run, std::size_t k, std::size_t lo, std::size_t hi, double h,
            BenchAngles<double>* o) {
   const std::size_t n = run.size();
@@ -44,17 +47,43 @@ void FitAt(const RunData& run, std::size_t k, std::size_t lo, std::size_t hi, do
     if (b - a < 5 && b < n) ++b;
   }
   const int m = static_cast<int>(b - a);
-  const int degree = std::min(3, m - 1);
+  const bool rates = run.has_rates();
+  // Angles: a cubic (rate c1, acceleration 2 c2); rates: a quadratic (acceleration c1).
+  const int degree = std::min(rates ? 2 : 3, m - 1);
+  const std::vector<double>& y0 = rates ? run.rate_rad_s[0] : run.lambda_rad[0];
+  const std::vector<double>& y1 = rates ? run.rate_rad_s[1] : run.lambda_rad[1];
+  double S[7] = {0, 0, 0, 0, 0, 0, 0};
+  Eigen::Vector4d T0 = Eigen::Vector4d::Zero(), T1 = Eigen::Vector4d::Zero();
+  for (std::size_t j = a; j < b; ++j) {
+    const double s1 = (run.t_s[j] - t0) / h, s2 = s1 * s1, s3 = s2 * s1;
+    S[0] += 1.0;
+    S[1] += s1;
+    S[2] += s2;
+    S[3] += s3;
+    S[4] += s2 * s2;
+    S[5] += s2 * s3;
+    S[6] += s3 * s3;
+    const Eigen::Vector4d p(1.0, s1, s2, s3);
+    T0 += p * y0[j];
+    T1 += p * y1[j];
+  }
+  // Coefficients above the degree: identity rows and zero sums, so they solve to 0.
+  const int q = degree + 1;
+  Eigen::Matrix4d A = Eigen::Matrix4d::Identity();
+  for (int r = 0; r < q; ++r)
+    for (int c = 0; c < q; ++c) A(r, c) = S[r + c];
+  T0.tail(4 - q).setZero();
+  T1.tail(4 - q).setZero();
+  const Eigen::LDLT<Eigen::Matrix4d> ldlt(A);
+  const Eigen::Vector4d c[2] = {ldlt.solve(T0), ldlt.solve(T1)};
   for (int i = 0; i < 2; ++i) {
-    if (run.has_rates()) {
+    const Eigen::Vector4d& ci = c[i];
+    if (rates) {
       o->axis[i].rate = run.rate_rad_s[i][k];
-      const Eigen::Vector4d c =
-          LocalCubic(&run.t_s[a], &run.rate_rad_s[i][a], m, t0, h, std::min(degree, 2));
-      o->axis[i].accel = c[1];
+      o->axis[i].accel = q > 1 ? ci[1] / h : 0.0;
     } else {
-      const Eigen::Vector4d c = LocalCubic(&run.t_s[a], &run.lambda_rad[i][a], m, t0, h, degree);
-      o->axis[i].rate = c[1];
-      o->axis[i].accel = 2.0 * c[2];
+      o->axis[i].rate = q > 1 ? ci[1] / h : 0.0;
+      o->axis[i].accel = q > 2 ? 2.0 * ci[2] / (h * h) : 0.0;
     }
   }
 }
