@@ -15,10 +15,10 @@ constexpr int kMaxParams = 64;
 constexpr int kJetParams = 8;
 using SmallJet = ceres::Jet<double, kJetParams>;
 
-// Jets of the geometry behind the size effect: the six bench-angle
+// Jets of the bench motion behind the size effect: the six bench-angle
 // quantities (angle, rate, acceleration of both axes) and the geometric
-// parameters (dpsi, d, eps, dR, r): at most 6 + 1 + 1 + 1 + 3 + 6 = 18.
-constexpr int kGeometryJet = 18;
+// parameters the motion depends on (dpsi, d, eps): at most 6 + 3 = 9.
+constexpr int kGeometryJet = 9;
 using GeoJet = ceres::Jet<double, kGeometryJet>;
 
 // theta as Jets with only the listed entries seeded (derivative slot q for
@@ -159,12 +159,15 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
       dD.row(i).segment<3>(o_s + 3 * (i - 1)) = grad_O * dW_dr;
     }
   } else if (o_s >= 0) {
-    std::vector<int> geo = {kDpsi, kDx2, kDy2, kDz2};
+    // Jets over what the bench's motion depends on: dpsi, d, eps and the six
+    // bench-angle quantities. The points' positions (O at R, accelerometer i
+    // at R + r_i) enter their accelerations linearly (MotionOfPoint), so the
+    // columns of R and r are dW/dp = C_L2^T ([w' x] + [w x]^2) C_L2 / g.
+    std::vector<int> geo = {kDpsi};
     const int o_d = layout.offset(Effect::kAxisNonintersection);
     if (o_d >= 0) geo.push_back(o_d);
     const int o_e = layout.offset(Effect::kAxisNonperpendicularity);
     if (o_e >= 0) geo.push_back(o_e);
-    for (int q = 0; q < 6; ++q) geo.push_back(o_s + q);
     const std::array<GeoJet, kMaxParams> t = SeededTheta<GeoJet>(th, n, geo);
     BenchAngles<GeoJet> bj;
     const int slot0 = static_cast<int>(geo.size());  // b's six quantities after the parameters
@@ -174,28 +177,38 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
       bj.axis[i].accel = GeoJet(b.axis[i].accel, slot0 + 3 * i + 2);
     }
     const BenchMotion<GeoJet> m = ComputeBenchMotion(cfg, t.data(), bj);
-    const Mat3<GeoJet> Wj = SpecificForceAtAxes_g(cfg, t.data(), m);
+    auto value = [](const Vec3<GeoJet>& v) { return Vec3<double>(v[0].a, v[1].a, v[2].a); };
+    Mat3<double> C_L2;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) C_L2(r, c) = m.C_L2(r, c).a;
+    const Vec3<double> w = value(m.w1_L) + value(m.w12_L);
+    const Mat3<double> G = Cross(value(m.dw1_L) + value(m.dw12_L)) + Cross(w) * Cross(w);
+    const Mat3<double> dW_dp = C_L2.transpose() * G * C_L2 / g;
+    // W at the point p (frame 2) and its derivatives by the Jet slots.
+    auto at = [&](const Vec3<double>& p, Vec3<double>* W_p,
+                  Eigen::Matrix<double, 3, kGeometryJet>* dW_p) {
+      const Vec3<GeoJet> pj(GeoJet(p.x()), GeoJet(p.y()), GeoJet(p.z()));
+      const Vec3<GeoJet> Wj = SpecificForce_g(cfg, m.C_L2, MotionOfPoint(m, pj).a_L);
+      for (int r = 0; r < 3; ++r) {
+        (*W_p)[r] = Wj[r].a;
+        dW_p->row(r) = Wj[r].v.transpose();
+      }
+    };
     Vec3<double> W_O;
     Eigen::Matrix<double, 3, kGeometryJet> dW_O;
-    for (int r = 0; r < 3; ++r) {
-      W_O[r] = Wj(r, 0).a;
-      dW_O.row(r) = Wj(r, 0).v.transpose();
-    }
+    at(SensingPoint_m(cfg, th, 0), &W_O, &dW_O);
     dD = Eigen::MatrixXd::Zero(3, n);
     Eigen::RowVectorXd drow(n);
     for (int i = 1; i < 3; ++i) {  // x senses at O: D_0 = 0
       Vec3<double> W_i;
       Eigen::Matrix<double, 3, kGeometryJet> dW_i;
-      for (int r = 0; r < 3; ++r) {
-        W_i[r] = Wj(r, i).a;
-        dW_i.row(r) = Wj(r, i).v.transpose();
-      }
+      at(SensingPoint_m(cfg, th, i), &W_i, &dW_i);
       drow.setZero();
       Eigen::RowVector3d grad_i, grad_O;
       const double d = ReadingWithoutOffset(layout, th, i, W_i, &grad_i, 1.0, drow) -
                        ReadingWithoutOffset(layout, th, i, W_O, &grad_O, -1.0, drow);
       z[i] -= d;
-      // By the geometry slots: grad R_i(W_i) dW_i - grad R_i(W_O) dW_O.
+      // By the Jet slots: grad R_i(W_i) dW_i - grad R_i(W_O) dW_O.
       const Eigen::Matrix<double, 1, kGeometryJet> dx = grad_i * dW_i - grad_O * dW_O;
       for (std::size_t q = 0; q < geo.size(); ++q) drow[geo[q]] += dx[q];
       // The bench angles enter as the sums l1 + dtheta_c and l2 + dlambda2.
@@ -204,6 +217,9 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
       for (std::size_t q = 0; q < angle_params.size(); ++q) {
         for (int c = 0; c < 6; ++c) drow[angle_params[q]] += dx[slot0 + c] * db(c, q);
       }
+      // By R (moves both points) and r_i (moves accelerometer i's).
+      drow.segment<3>(kDx2) += (grad_i - grad_O) * dW_dp;
+      drow.segment<3>(o_s + 3 * (i - 1)) += grad_i * dW_dp;
       dD.row(i) = drow;
     }
   }

@@ -9,7 +9,8 @@
 // asymmetry through s_i, cross_quadratic through F and its Jacobian),
 // axis_nonintersection (B2 only), the axis non-perpendicularity (through C)
 // and the size effect (the correction D of the readings, with its derivatives
-// by W taken by Jets of the geometry alone, 18 wide, and by the sensor
+// by W taken by Jets of the bench motion alone, 9 wide, by the lever arm and
+// r written out (the points enter linearly), and by the sensor
 // parameters written out; with r = 0, where the score tests of `diagnose`
 // linearise, only its columns by r, written out). A layout with an effect
 // that has no written-out columns, more than 64 parameters or more than 8
