@@ -846,16 +846,35 @@ void AddPinnedUncertainty(const ParameterLayout& layout, BatchResult* r) {
   if (r->information_at_start.rows() != n) return;
   std::vector<int> kept, pins;
   for (int i = 0; i < n; ++i) {
-    const std::string& name = layout.info(i).name;
-    const bool held = std::find(r->held.begin(), r->held.end(), name) != r->held.end();
-    if (IsPinned(*r, name)) pins.push_back(i);
-    if (!held) kept.push_back(i);
+    if (std::find(r->held.begin(), r->held.end(), layout.info(i).name) == r->held.end()) {
+      kept.push_back(i);
+    }
   }
+  for (const PinnedExcursion& p : r->pinned) pins.push_back(layout.IndexOf(p.name));
   std::vector<int> both = kept;
   both.insert(both.end(), pins.begin(), pins.end());
-  const int k = static_cast<int>(kept.size());
-  const Eigen::MatrixXd marginal = PosteriorOver(r->information_at_start, both).topLeftCorner(k, k);
-  const Eigen::MatrixXd conditional = PosteriorOver(r->information_at_start, kept);
+  const int k = static_cast<int>(kept.size()), m = static_cast<int>(pins.size());
+  const Eigen::MatrixXd& info = r->information_at_start;
+  const Eigen::MatrixXd marginal = PosteriorOver(info, both);
+  const Eigen::MatrixXd conditional = PosteriorOver(info, kept);
+  // In prior units: S = -conditional Lambda_kp (the prior adds nothing off
+  // the diagonal), and marginal_kk - conditional = S P S^T with P the pins'
+  // block of the marginal posterior.
+  Eigen::MatrixXd info_kp(k, m);
+  for (int a = 0; a < k; ++a)
+    for (int q = 0; q < m; ++q) info_kp(a, q) = info(kept[a], pins[q]);
+  const Eigen::MatrixXd S = -conditional * info_kp;
+  r->pinned_sensitivity = Eigen::MatrixXd::Zero(n, m);
+  r->pinned_cov = Eigen::MatrixXd::Zero(m, m);
+  for (int q = 0; q < m; ++q) {
+    const double sq = r->prior.sigma[pins[q]];
+    for (int a = 0; a < k; ++a) {
+      r->pinned_sensitivity(kept[a], q) = S(a, q) * r->prior.sigma[kept[a]] / sq;
+    }
+    for (int c = 0; c < m; ++c) {
+      r->pinned_cov(q, c) = marginal(k + q, k + c) * sq * r->prior.sigma[pins[c]];
+    }
+  }
   Eigen::MatrixXd add = Eigen::MatrixXd::Zero(n, n);
   for (int a = 0; a < k; ++a) {
     for (int b = 0; b < k; ++b) {

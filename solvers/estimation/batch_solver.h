@@ -222,6 +222,14 @@ struct BatchResult {
   // difference is judged on this one (the halves of a run). Empty without
   // pins.
   Eigen::MatrixXd cov_given_pinned;
+  // With pins, the consider model behind what was added (SI units, columns
+  // in the order of `pinned`): pinned_sensitivity (n x pins) is the change of
+  // each estimated parameter per unit change of a pinned one (zero rows for
+  // held ones), pinned_cov (pins x pins) the pinned ones' marginal posterior;
+  // the added covariance is S P S^T. Two fits that pin the same parameters
+  // differ by (S_a - S_b) delta from the pins, which their common error
+  // delta ~ P does not cancel.
+  Eigen::MatrixXd pinned_sensitivity, pinned_cov;
   double hac_bandwidth_epochs = 0.0;  // the Bartlett bandwidth used, epochs
   double init_seconds = 0.0, solve_seconds = 0.0, covariance_seconds = 0.0;
   int epochs = 0;

@@ -309,6 +309,57 @@ TEST(HoldDecision, APinIsNoAnchorOfRelativeTo) {
   EXPECT_FALSE(p.relative_to.count("beta_z"));
 }
 
+// The sensitivity of the consider model (BatchResult::pinned_sensitivity)
+// is how the estimates follow the pinned value: dz2 pinned 20 mm (one prior
+// sigma) further -- the nominal lever arm moved by that, dz2 held at 0 --
+// moves the other estimates by up to 1.2 sigma, S times 20 mm. S is taken at
+// the hold decision's linearisation (the nominal values), as the added
+// covariance is: it predicts the change within 0.13 sigma (alpha_y -0.37
+// for -0.50). The fit's own information, at its estimate, predicts it within
+// 0.03 sigma (the regression on dz2 in the covariance of the fit with dz2
+// free): what S misses is the linearisation point, not the algebra.
+TEST(BatchSolver, PinnedSensitivityPredictsTheEstimatesAtAnotherPinnedValue) {
+  const ParameterLayout layout;
+  Scenario s = PaperScenario(50.0, 10.0, 2.0, 15.0, 3);
+  s.run.prior_sigma["dz2"] = 20.0;
+  const RunData data = Simulate(s);
+  BatchOptions opt;
+  opt.estimate_noise = false;
+  opt.sigma = "white";
+  opt.holding.hold = {"dz2"};
+  BatchResult r = Fit(s, data, opt);
+  ASSERT_TRUE(r.converged);
+  ASSERT_EQ(r.information_at_start.rows(), layout.size());
+  r.pinned = {PinnedExcursion{"dz2", 0.0, 0.0}};
+  AddPinnedUncertainty(layout, &r);
+  ASSERT_EQ(r.pinned_sensitivity.cols(), 1);
+  BatchOptions free_opt = opt;
+  free_opt.holding.hold = {};
+  free_opt.holding.pin_weak_excursions = false;
+  const BatchResult free_fit = Fit(s, data, free_opt);
+  const double delta = 0.02;
+  Scenario moved = s;
+  moved.run.lever_arm0_m.z() += delta;
+  const BatchResult r_moved = Fit(moved, data, opt);
+  double miss_nominal = 0.0, miss_estimate = 0.0, largest = 0.0;
+  for (int i = 0; i < kNumBaseParams; ++i) {
+    if (i == kDz2 || r.cov_given_pinned(i, i) <= 0.0) continue;
+    const double sigma = std::sqrt(r.cov_given_pinned(i, i));
+    const double change = (r_moved.estimate.theta[i] - r.estimate.theta[i]) / sigma;
+    const double by_s = r.pinned_sensitivity(i, 0) * delta / sigma;
+    const double by_fit =
+        free_fit.estimate.cov(i, kDz2) / free_fit.estimate.cov(kDz2, kDz2) * delta / sigma;
+    miss_nominal = std::max(miss_nominal, std::abs(change - by_s));
+    miss_estimate = std::max(miss_estimate, std::abs(change - by_fit));
+    largest = std::max(largest, std::abs(change));
+  }
+  std::printf("largest change %.2f sigma; missed by S %.3f sigma, by the fit's own %.3f sigma\n",
+              largest, miss_nominal, miss_estimate);
+  EXPECT_GT(largest, 1.0);  // the test has teeth
+  EXPECT_LT(miss_nominal, 0.15);
+  EXPECT_LT(miss_estimate, 0.03);
+}
+
 // A parameter the data know less than twice its prior that the fit moves
 // beyond 3 prior sigma is pinned at nominal and the run refitted; what its
 // uncertainty does to the others is added to their covariance, so their sigma
@@ -374,6 +425,26 @@ TEST(BatchSolver, WeakParameterMovedFarIsPinnedAndItsUncertaintyKept) {
               worst_free, most_shrunk, shrunk.c_str());
   EXPECT_LT(most_shrunk, 0.8) << shrunk;  // holding alone would hide the uncertainty
   EXPECT_LT(worst_free, std::log(1.1));
+
+  // The consider model behind the added covariance: S P S^T is what was
+  // added (PinnedSensitivityPredictsTheEstimatesAtAnotherPinnedValue checks S).
+  const Eigen::MatrixXd& S = pinned.pinned_sensitivity;
+  ASSERT_EQ(S.rows(), layout.size());
+  ASSERT_EQ(S.cols(), 1);
+  ASSERT_EQ(pinned.pinned_cov.rows(), 1);
+  const Eigen::MatrixXd added = pinned.estimate.cov - pinned.cov_given_pinned;
+  const Eigen::MatrixXd consider = S * pinned.pinned_cov * S.transpose();
+  for (int i = 0; i < kNumBaseParams; ++i) {
+    if (pinned.estimate.cov(i, i) <= 0.0) continue;
+    for (int j = 0; j < kNumBaseParams; ++j) {
+      if (pinned.estimate.cov(j, j) <= 0.0) continue;
+      const double scale = std::sqrt(pinned.estimate.cov(i, i) * pinned.estimate.cov(j, j));
+      EXPECT_NEAR(consider(i, j), added(i, j), 1e-9 * scale)
+          << layout.info(i).name << " " << layout.info(j).name;
+    }
+  }
+  EXPECT_EQ(S(kDz2, 0), 0.0);  // held: no row
+
   // Named free, it is not pinned.
   BatchOptions keep = pin_opt;
   keep.holding.free = {"dz2"};

@@ -137,12 +137,37 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
   return rep;
 }
 
-void AddPinnedJson(const BatchResult& r, nlohmann::json* out) {
+void AddPinnedJson(const ParameterLayout& layout, const BatchResult& r, nlohmann::json* out) {
   nlohmann::json pinned = nlohmann::json::array();
-  for (const PinnedExcursion& p : r.pinned) {
-    pinned.push_back({{"parameter", p.name},
-                      {"prior_sigmas", p.z},
-                      {"data_information", p.data_information}});
+  const int m = static_cast<int>(r.pinned.size());
+  const bool consider = r.pinned_sensitivity.rows() == layout.size() &&
+                        r.pinned_sensitivity.cols() == m && r.pinned_cov.rows() == m;
+  for (int q = 0; q < m; ++q) {
+    const PinnedExcursion& p = r.pinned[q];
+    nlohmann::json e = {{"parameter", p.name},
+                        {"prior_sigmas", p.z},
+                        {"data_information", p.data_information}};
+    if (consider) {
+      // The consider model in file units: the pinned value's uncertainty,
+      // its correlation with the other pins, and how each estimate follows it.
+      const double unit_q = layout.info(layout.IndexOf(p.name)).si_per_unit;
+      const double var_q = std::max(0.0, r.pinned_cov(q, q));
+      e["sigma"] = std::sqrt(var_q) / unit_q;
+      nlohmann::json corr = nlohmann::json::object();
+      for (int c = 0; c < m; ++c) {
+        if (c == q) continue;
+        const double d = std::sqrt(var_q * std::max(0.0, r.pinned_cov(c, c)));
+        corr[r.pinned[c].name] = d > 0.0 ? r.pinned_cov(q, c) / d : 0.0;
+      }
+      e["correlation"] = corr;
+      nlohmann::json sens = nlohmann::json::object();
+      for (int i = 0; i < layout.size(); ++i) {
+        if (r.pinned_sensitivity(i, q) == 0.0) continue;
+        sens[layout.info(i).name] = r.pinned_sensitivity(i, q) * unit_q / layout.info(i).si_per_unit;
+      }
+      e["sensitivity"] = sens;
+    }
+    pinned.push_back(e);
     (*out)["parameters"][p.name]["pinned"] = true;
   }
   (*out)["pinned"] = pinned;
@@ -191,7 +216,7 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
   out["unobservable"] = WeakDirectionsJson(unobservable);
   out["not_estimable"] = std::vector<std::string>(rep.not_estimable.begin(), rep.not_estimable.end());
   out["held"] = r.held;
-  AddPinnedJson(r, &out);
+  AddPinnedJson(layout, r, &out);
   std::vector<std::string> pinned_names;
   for (const PinnedExcursion& p : r.pinned) pinned_names.push_back(p.name);
   out["unobservable_at_nominal"] = WeakDirectionsJson(r.unsupported_at_start);

@@ -39,9 +39,11 @@ constexpr int kExitRequirementFailed = 5;
 FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r);
 nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, const FitReport& rep,
                        bool correlations);
-// out["pinned"]: r.pinned as [{parameter, prior_sigmas, data_information}],
-// and "pinned": true on each in out["parameters"] (which must be written).
-void AddPinnedJson(const BatchResult& r, nlohmann::json* out);
+// out["pinned"]: r.pinned as [{parameter, prior_sigmas, data_information,
+// sigma, correlation, sensitivity}] (the last three, the consider model of
+// BatchResult::pinned_sensitivity and pinned_cov, in file units), and
+// "pinned": true on each in out["parameters"] (which must be written).
+void AddPinnedJson(const ParameterLayout& layout, const BatchResult& r, nlohmann::json* out);
 void PrintParameterTable(const ParameterLayout& layout, const BatchResult& r, const FitReport& rep);
 std::string ResidualsCsv(const BatchResult& r);
 

@@ -85,6 +85,12 @@ TEST(FitReport, PinnedParameterIsNamedWithHowFarTheFirstFitMovedIt) {
   r.held = {"Kxy", "dy2"};
   r.pinned = {{"Kxy", -57.3, 0.21}};
   r.cov_given_pinned = 0.25 * r.estimate.cov;
+  // The consider model in SI: Kx follows Kxy by 2 mV/g per 1/g (0.002 V/g
+  // per 1/g), Kxy's posterior sigma 0.02 /g.
+  const int kx = layout.IndexOf("Kx");
+  r.pinned_sensitivity = Eigen::MatrixXd::Zero(layout.size(), 1);
+  r.pinned_sensitivity(kx, 0) = 2.0 * layout.info(kx).si_per_unit / layout.info(kxy).si_per_unit;
+  r.pinned_cov = Eigen::MatrixXd::Constant(1, 1, std::pow(0.02 * layout.info(kxy).si_per_unit, 2));
   const FitReport rep = MakeFitReport(layout, r);
   EXPECT_NE(rep.verdict.find("PINNED at nominal after a first fit (value - nominal there in prior "
                              "sigma, data information at the nominal values in prior units): "
@@ -100,6 +106,10 @@ TEST(FitReport, PinnedParameterIsNamedWithHowFarTheFirstFitMovedIt) {
   EXPECT_EQ(j["pinned"][0]["parameter"], "Kxy");
   EXPECT_DOUBLE_EQ(j["pinned"][0]["prior_sigmas"].get<double>(), -57.3);
   EXPECT_DOUBLE_EQ(j["pinned"][0]["data_information"].get<double>(), 0.21);
+  EXPECT_NEAR(j["pinned"][0]["sigma"].get<double>(), 0.02, 1e-15);
+  EXPECT_TRUE(j["pinned"][0]["correlation"].empty());
+  ASSERT_EQ(j["pinned"][0]["sensitivity"].size(), 1u);
+  EXPECT_NEAR(j["pinned"][0]["sensitivity"]["Kx"].get<double>(), 2.0, 1e-12);
   EXPECT_TRUE(j["parameters"]["Kxy"]["pinned"].get<bool>());
   EXPECT_TRUE(j["parameters"]["Kxy"]["sigma"].is_null());
   EXPECT_FALSE(j["parameters"]["dy2"].contains("pinned"));
