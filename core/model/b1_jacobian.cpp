@@ -49,6 +49,14 @@ Mat3<double> Cross(const Vec3<double>& v) {
   return m;
 }
 
+// dW/dp of the specific force [g] at a point p fixed in frame 2: its
+// acceleration is affine in q = C_L2 p with the linear part w' x q + w x (w x q)
+// (MotionOfPoint), so dW/dp = C_L2^T ([w' x] + [w x]^2) C_L2 / g.
+Mat3<double> ForceGradientByPoint(const Mat3<double>& C_L2, const Vec3<double>& w,
+                                  const Vec3<double>& dw, double g) {
+  return C_L2.transpose() * (Cross(dw) + Cross(w) * Cross(w)) * C_L2 / g;
+}
+
 // Misalignment angle at M(i, j), i != j, and its sign there (bench_model.h).
 struct MisalignmentEntry {
   int param;
@@ -136,9 +144,8 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
   // dD/dtheta: by W through Jets of the geometry (the bench-angle quantities
   // and the geometric parameters), and by the sensor parameters written out.
   // With r = 0 (the score tests of `diagnose` linearise there) D vanishes for
-  // every other parameter value, and only its columns by r remain: W at the
-  // point r from O is W_O + C_L2^T (w' x q + w x (w x q)) / g with q = C_L2 r
-  // (MotionOfPoint), so dD_i/dr_i = grad R_i(W_O) C_L2^T ([w' x] + [w x]^2) C_L2 / g.
+  // every other parameter value, and only its columns by r remain:
+  // dD_i/dr_i = grad R_i(W_O) dW/dp (ForceGradientByPoint).
   Eigen::Vector3d z = z_in;
   Eigen::MatrixXd dD;  // 3 x n, empty without the size effect
   const int o_s = layout.offset(Effect::kSizeEffect);
@@ -148,9 +155,8 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
     const BenchMotion<double> m = ComputeBenchMotion(cfg, th, b);
     const Vec3<double> W_O =
         SpecificForce_g(cfg, m.C_L2, MotionOfPoint(m, SensingPoint_m(cfg, th, 0)).a_L);
-    const Vec3<double> w = m.w1_L + m.w12_L;
-    const Mat3<double> G = Cross(m.dw1_L + m.dw12_L) + Cross(w) * Cross(w);
-    const Mat3<double> dW_dr = m.C_L2.transpose() * G * m.C_L2 / g;
+    const Mat3<double> dW_dr =
+        ForceGradientByPoint(m.C_L2, m.w1_L + m.w12_L, m.dw1_L + m.dw12_L, g);
     dD = Eigen::MatrixXd::Zero(3, n);
     Eigen::RowVectorXd scratch = Eigen::RowVectorXd::Zero(n);
     for (int i = 1; i < 3; ++i) {
@@ -161,8 +167,8 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
   } else if (o_s >= 0) {
     // Jets over what the bench's motion depends on: dpsi, d, eps and the six
     // bench-angle quantities. The points' positions (O at R, accelerometer i
-    // at R + r_i) enter their accelerations linearly (MotionOfPoint), so the
-    // columns of R and r are dW/dp = C_L2^T ([w' x] + [w x]^2) C_L2 / g.
+    // at R + r_i) enter their accelerations linearly, so the columns of R
+    // and r are by ForceGradientByPoint.
     std::vector<int> geo = {kDpsi};
     const int o_d = layout.offset(Effect::kAxisNonintersection);
     if (o_d >= 0) geo.push_back(o_d);
@@ -181,9 +187,8 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
     Mat3<double> C_L2;
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) C_L2(r, c) = m.C_L2(r, c).a;
-    const Vec3<double> w = value(m.w1_L) + value(m.w12_L);
-    const Mat3<double> G = Cross(value(m.dw1_L) + value(m.dw12_L)) + Cross(w) * Cross(w);
-    const Mat3<double> dW_dp = C_L2.transpose() * G * C_L2 / g;
+    const Mat3<double> dW_dp = ForceGradientByPoint(C_L2, value(m.w1_L) + value(m.w12_L),
+                                                    value(m.dw1_L) + value(m.dw12_L), g);
     // W at the point p (frame 2) and its derivatives by the Jet slots.
     auto at = [&](const Vec3<double>& p, Vec3<double>* W_p,
                   Eigen::Matrix<double, 3, kGeometryJet>* dW_p) {

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <stdexcept>
 
 #include "core/model/errors.h"
 #include "core/model/sample_noise.h"
@@ -850,7 +851,12 @@ void AddPinnedUncertainty(const ParameterLayout& layout, BatchResult* r) {
       kept.push_back(i);
     }
   }
-  for (const PinnedExcursion& p : r->pinned) pins.push_back(layout.IndexOf(p.name));
+  for (const PinnedExcursion& p : r->pinned) {
+    if (layout.IndexOf(p.name) < 0) {
+      throw std::logic_error("AddPinnedUncertainty: pinned '" + p.name + "' is not in the layout");
+    }
+    pins.push_back(layout.IndexOf(p.name));
+  }
   std::vector<int> both = kept;
   both.insert(both.end(), pins.begin(), pins.end());
   const int k = static_cast<int>(kept.size()), m = static_cast<int>(pins.size());
