@@ -1,7 +1,6 @@
 #include "solvers/diagnosis/effect_discovery.h"
 
 #include <algorithm>
-#include <cstdio>
 #include <cmath>
 #include <limits>
 #include <set>
@@ -220,17 +219,11 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
   res.before = SolveBatch(run, data, res.before_layout, first);
   res.before_residuals = AnalyzeResiduals(run, data, res.before_layout, res.before);
   if (!res.before.pinned.empty()) {
-    std::ostringstream n;
-    n << "pinned at nominal after the declared model's first fit moved them (prior sigma; data "
-         "information at the nominal values in prior units):";
-    for (const PinnedExcursion& p : res.before.pinned) {
-      char one[96];
-      std::snprintf(one, sizeof(one), " %s (%+.1f, %.2g)", p.name.c_str(), p.z,
-                    p.data_information);
-      n << one;
-    }
-    n << "; held in every refit, their uncertainty kept in the other parameters' sigma";
-    res.notes.push_back(n.str());
+    res.notes.push_back(
+        "pinned at nominal after the declared model's first fit moved them (prior sigma; data "
+        "information at the nominal values in prior units): " +
+        DescribePins(res.before.pinned) +
+        "; held in every refit, their uncertainty kept in the other parameters' sigma");
   }
 
   std::vector<Effect> current;

@@ -894,6 +894,17 @@ void AddPinnedUncertainty(const ParameterLayout& layout, BatchResult* r) {
   }
 }
 
+std::string DescribePins(const std::vector<PinnedExcursion>& pinned) {
+  std::string out;
+  for (const PinnedExcursion& p : pinned) {
+    char one[96];
+    std::snprintf(one, sizeof(one), "%s%s (%+.1f, %.2g)", out.empty() ? "" : " ", p.name.c_str(),
+                  p.z, p.data_information);
+    out += one;
+  }
+  return out;
+}
+
 bool IsPinned(const BatchResult& r, const std::string& name) {
   return std::any_of(r.pinned.begin(), r.pinned.end(),
                      [&](const PinnedExcursion& p) { return p.name == name; });

@@ -260,6 +260,10 @@ void AddPinnedUncertainty(const ParameterLayout& layout, BatchResult* r);
 // fit made no hold decision.
 Eigen::VectorXd MarginalInformationAtStart(const ParameterLayout& layout, const BatchResult& r);
 
+// "Kxy (-57.3, 0.21) Kzy (-56.8, 0.093)": each pin with where the first fit
+// had moved it (prior sigma) and its data information at the nominal values.
+std::string DescribePins(const std::vector<PinnedExcursion>& pinned);
+
 // Whether r pinned parameter `name`.
 bool IsPinned(const BatchResult& r, const std::string& name);
 

@@ -82,14 +82,8 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
   }
   if (!r.pinned.empty()) {
     v << "; PINNED at nominal after a first fit (value - nominal there in prior sigma, data "
-         "information at the nominal values in prior units):";
-    for (const PinnedExcursion& p : r.pinned) {
-      char one[96];
-      std::snprintf(one, sizeof(one), " %s (%+.1f, %.2g)", p.name.c_str(), p.z,
-                    p.data_information);
-      v << one;
-    }
-    v << ": the run knows them at most twice as well as their priors, so only a nominal value "
+         "information at the nominal values in prior units): "
+      << DescribePins(r.pinned) << ": the run knows them at most twice as well as their priors, so only a nominal value "
          "wrong by 4.5 prior sigma or the model's nonlinearity following a misfit moves them "
          "that far; their uncertainty is kept in the other parameters' sigma (--free NAME "
          "estimates one)";
