@@ -32,6 +32,11 @@ Sections (all by default):
             time, 0.5 s), 90 s and 360 s, N seeds (20) each through `fit`: RMS (estimate - truth) /
             sigma per group with the reported sigma, the model's white sigma
             and the HAC sigma; which one was reported; the bandwidth.
+  unalike   bench/scenarios/paper-unalike.yaml (white reading noise 2 / 10 / 2
+            mV, noise_mV: auto: one weight serves the three channels), N seeds
+            (20) through `fit`: RMS z per channel's parameters with the
+            reported, white and HAC sigma, and sigma / that of the fit weighted
+            with the true per-channel noise.
   real      the real roll runs (needs the shared data folder; skipped without
             it): each run fitted whole and in halves (time_range_s) with the
             noise estimated (noise_mV: auto) and the loop's effects
@@ -237,41 +242,87 @@ def vertical(work, a):
               f"{[n for n in f['not_estimable'] if n[0] in 'KW' and len(n) <= 3]}")
 
 
+def z_table(work, a, scen, tag, groups, efficient_noise=None):
+    """RMS (estimate - truth) / sigma per group over a.seeds seeds of scen
+    through `fit`, with the reported sigma, the model's white one and the HAC
+    one. efficient_noise: a noise_mV line for run.yaml with which the same data
+    are also fitted (the truly weighted fit), to give sigma / its sigma."""
+    z = {m: {g: [] for g in groups} for m in ("sigma", "sigma_white", "sigma_hac")}
+    ratio = {g: [] for g in groups}
+    methods, bands, floors = [], [], []
+    for seed in range(1, a.seeds + 1):
+        d = os.path.join(work, f"{tag}_{seed}")
+        run([BIN, "simulate", scen, "-o", d, "-q", "--seed", str(seed), "--force"])
+        run([BIN, "fit", os.path.join(d, "run.yaml"), "-o", os.path.join(d, "fit.json"),
+             "-q", "--force"])
+        f = json.load(open(os.path.join(d, "fit.json")))
+        t = json.load(open(os.path.join(d, "truth.json")))["parameters"]
+        eff = None
+        if efficient_noise:
+            y = os.path.join(d, "run_efficient.yaml")
+            open(y, "w").write(re.sub(r"noise_mV: .*", efficient_noise,
+                                      open(os.path.join(d, "run.yaml")).read()))
+            run([BIN, "fit", y, "-o", os.path.join(d, "fit_efficient.json"), "-q", "--force"])
+            eff = json.load(open(os.path.join(d, "fit_efficient.json")))["parameters"]
+        methods.append(f["sigma_method"])
+        bands.append(f["hac"]["bandwidth_epochs"])
+        floors.append(f["hac"].get("floor", "-"))
+        for g, names in groups.items():
+            for n in names:
+                p = f["parameters"][n]
+                if p["sigma"] is None or not p["estimable"]:
+                    continue
+                tv = t[n]["value"] if isinstance(t[n], dict) else t[n]
+                for m in z:
+                    z[m][g].append((p["value"] - tv) / p[m])
+                if eff and eff[n]["sigma"]:
+                    ratio[g].append(p["sigma"] / eff[n]["sigma"])
+    print(f"{a.seeds} seeds: sigma reported from {methods.count('hac')} HAC / "
+          f"{methods.count('white')} white fits (HAC floor: "
+          + ", ".join(f"{k} {floors.count(k)}" for k in sorted(set(floors)))
+          + f"); bandwidth {min(bands):.1f}-{max(bands):.1f} epochs")
+    head = f"  {'RMS z':18s} {'reported':>9s} {'white':>9s} {'HAC':>9s}"
+    if efficient_noise:
+        head += "   mean sigma / sigma of the truly weighted fit"
+    print(head)
+    for g in groups:
+        cells = [math.sqrt(statistics.mean(v * v for v in z[m][g])) if z[m][g]
+                 else float("nan") for m in z]
+        line = f"  {g:18s} " + " ".join(f"{c:9.3f}" for c in cells)
+        if efficient_noise and ratio[g]:
+            line += f"   {statistics.mean(ratio[g]):.2f}"
+        print(line)
+    allz = [math.sqrt(statistics.mean(v * v for g in groups for v in z[m][g])) for m in z]
+    print(f"  {'all':18s} " + " ".join(f"{c:9.3f}" for c in allz))
+
+
 def coloured(work, a):
     print("\n## reading noise correlated in time (bench/scenarios/paper-coloured.yaml)\n")
     base = open(os.path.join(HERE, "scenarios", "paper-coloured.yaml")).read()
     for duration in (90, 360):
         scen = os.path.join(work, f"coloured_{duration}.yaml")
         open(scen, "w").write(re.sub(r"duration_s: \d+.*", f"duration_s: {duration}", base))
-        z = {m: {g: [] for g in GROUPS} for m in ("sigma", "sigma_white", "sigma_hac")}
-        methods, bands = [], []
-        for seed in range(1, a.seeds + 1):
-            d = os.path.join(work, f"col_{duration}_{seed}")
-            run([BIN, "simulate", scen, "-o", d, "-q", "--seed", str(seed), "--force"])
-            run([BIN, "fit", os.path.join(d, "run.yaml"), "-o", os.path.join(d, "fit.json"),
-                 "-q", "--force"])
-            f = json.load(open(os.path.join(d, "fit.json")))
-            t = json.load(open(os.path.join(d, "truth.json")))["parameters"]
-            methods.append(f["sigma_method"])
-            bands.append(f["hac"]["bandwidth_epochs"])
-            for g, names in GROUPS.items():
-                for n in names:
-                    p = f["parameters"][n]
-                    if p["sigma"] is None or not p["estimable"]:
-                        continue
-                    tv = t[n]["value"] if isinstance(t[n], dict) else t[n]
-                    for m in z:
-                        z[m][g].append((p["value"] - tv) / p[m])
-        print(f"{duration}-s runs, {a.seeds} seeds: sigma reported from "
-              f"{methods.count('hac')} HAC / {methods.count('white')} white fits; bandwidth "
-              f"{min(bands):.1f}-{max(bands):.1f} epochs")
-        print(f"  {'RMS z':18s} {'reported':>9s} {'white':>9s} {'HAC':>9s}")
-        for g in GROUPS:
-            cells = [math.sqrt(statistics.mean(v * v for v in z[m][g])) if z[m][g]
-                     else float("nan") for m in z]
-            print(f"  {g:18s} " + " ".join(f"{c:9.3f}" for c in cells))
-        allz = [math.sqrt(statistics.mean(v * v for g in GROUPS for v in z[m][g])) for m in z]
-        print(f"  {'all':18s} " + " ".join(f"{c:9.3f}" for c in allz))
+        print(f"{duration}-s runs:")
+        z_table(work, a, scen, f"col_{duration}", GROUPS)
+
+
+# Parameters by the channel they belong to (bench/scenarios/paper-unalike.yaml
+# makes y's noise 5x x's and z's).
+CHANNEL_GROUPS = {
+    "x channel (2 mV)": ["Kx", "W0x", "Kxx", "Kxy", "Kxz"],
+    "y channel (10 mV)": ["Ky", "W0y", "Kyx", "Kyy", "Kyz"],
+    "z channel (2 mV)": ["Kz", "W0z", "Kzx", "Kzy", "Kzz"],
+    "angles": ["alpha_x", "alpha_y", "beta_x", "beta_z", "gamma_y", "gamma_z"],
+    "bench": ["dpsi", "dtheta_c", "dlambda2"],
+    "lever arm": ["dx2", "dy2", "dz2"],
+}
+
+
+def unalike(work, a):
+    print("\n## channels whose noise differs 5x (bench/scenarios/paper-unalike.yaml, "
+          "2 / 10 / 2 mV, noise_mV: auto)\n")
+    z_table(work, a, os.path.join(HERE, "scenarios", "paper-unalike.yaml"), "unalike",
+            CHANNEL_GROUPS, efficient_noise="noise_mV: [2, 10, 2]")
 
 
 def shared_folder():
@@ -423,7 +474,7 @@ def real(work, a):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--only",
-                    default="short,noise,unconstrained,diagnose,bias,vertical,coloured,real")
+                    default="short,noise,unconstrained,diagnose,bias,vertical,coloured,unalike,real")
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--diagnose-seeds", type=int, default=100)
     ap.add_argument("--bias-seeds", type=int, default=400)
@@ -443,7 +494,7 @@ def main():
     os.makedirs(work, exist_ok=True)
     sections = {"short": short, "noise": noise, "unconstrained": unconstrained,
                 "diagnose": diagnose, "bias": bias, "vertical": vertical, "coloured": coloured,
-                "real": real}
+                "unalike": unalike, "real": real}
     for name in a.only.split(","):
         if name not in sections:
             sys.exit(f"honesty: --only: unknown section '{name}' ({', '.join(sections)})")

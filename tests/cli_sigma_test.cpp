@@ -53,6 +53,7 @@ TEST_F(SigmaCli, CorrelatedResidualsGiveTheHacSigmaAndBoth) {
   EXPECT_EQ(out["sigma_method"], "hac");
   EXPECT_EQ(out["hac"]["kernel"], "Bartlett");
   EXPECT_GT(out["hac"]["bandwidth_epochs"].get<double>(), 0.0);
+  EXPECT_EQ(out["hac"]["floor"], "white");  // the channels are alike
   EXPECT_NE(out["verdict"]["sentence"].get<std::string>().find("sigma from the HAC covariance"),
             std::string::npos);
   int larger = 0;
@@ -67,6 +68,7 @@ TEST_F(SigmaCli, CorrelatedResidualsGiveTheHacSigmaAndBoth) {
 
   const nlohmann::json white = Fit("--sigma white");
   EXPECT_EQ(white["sigma_method"], "white");
+  EXPECT_FALSE(white["hac"].contains("floor"));
   for (const auto& [name, p] : white["parameters"].items()) {
     if (!p["sigma"].is_null()) {
       EXPECT_DOUBLE_EQ(p["sigma"], p["sigma_white"]) << name;

@@ -24,9 +24,15 @@ void PrintSummary(const Scenario& s, const RunData& data, const std::string& dir
   std::printf("simulated %zu samples: %g s at %g Hz, profile %g/%g deg, %g/%g s\n", data.size(),
               p.duration_s, p.rate_hz, p.amplitude_rad[0] / kDegToRad,
               p.amplitude_rad[1] / kDegToRad, p.period_s[0], p.period_s[1]);
-  std::printf("noise (1 sigma per sample): accelerometers %g mV, angles %g arcsec; seed %llu\n",
-              s.accel_noise_mV, s.angle_noise_rad / kArcsecToRad,
-              static_cast<unsigned long long>(s.seed));
+  char accel[96];
+  if (s.accel_noise_channel_mV) {
+    const Eigen::Vector3d& c = *s.accel_noise_channel_mV;
+    std::snprintf(accel, sizeof(accel), "%g %g %g", c[0], c[1], c[2]);
+  } else {
+    std::snprintf(accel, sizeof(accel), "%g", s.accel_noise_mV);
+  }
+  std::printf("noise (1 sigma per sample): accelerometers %s mV, angles %g arcsec; seed %llu\n",
+              accel, s.angle_noise_rad / kArcsecToRad, static_cast<unsigned long long>(s.seed));
   std::string effects;
   for (int i = kNumBaseParams; i < s.truth_layout.size(); ++i) {
     char value[32];

@@ -33,9 +33,10 @@ std::string NoiseWarning(const std::string& run_yaml, const LoadedRun& run, cons
                   "white to be noise alone: %s (run diagnose to find what the model lacks)",
                   run_yaml.c_str(), d[0], d[1], d[2], r.chi2_per_dof, e[0], e[1], e[2],
                   r.noise_check.lag1.cwiseAbs().maxCoeff(),
-                  r.sigma_method == "hac"
-                      ? "sigma from the HAC covariance, at least the model's scaled by chi2/dof"
-                      : "sigma scaled by chi2/dof");
+                  r.sigma_method != "hac"          ? "sigma scaled by chi2/dof"
+                  : r.hac_floor == "per_channel_bound"
+                      ? "sigma from the HAC covariance, at least the bound of each channel's noise"
+                      : "sigma from the HAC covariance, at least the model's scaled by chi2/dof");
     return w;
   }
   std::snprintf(w, sizeof(w),

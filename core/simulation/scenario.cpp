@@ -171,7 +171,8 @@ Eigen::VectorXd ParseTruth(const YAML::Node& n, const YamlPlace& at, const RunDe
 // sqrt(accel^2 + q^2 / 12) with the quantization step q, floored at
 // kMinDeclaredNoise_mV because run.yaml requires noise_mV > 0.
 RunDescription ParseRunSection(const YAML::Node& n, const YamlPlace& at,
-                               const std::string& yaml_path, double accel_noise_mV,
+                               const std::string& yaml_path,
+                               const Eigen::Vector3d& accel_noise_mV, bool per_channel,
                                double quantization_mV, double angle_noise_rad) {
   if (!n.IsNull() && !n.IsMap()) at.Fail("expected a map, got " + DescribeNode(n));
   const YAML::Node node = n.IsNull() ? YAML::Node(YAML::NodeType::Map) : n;
@@ -184,9 +185,14 @@ RunDescription ParseRunSection(const YAML::Node& n, const YamlPlace& at,
   RunDescription run = ParseRunDescription(node, yaml_path, at.where + ": " + at.path);
   const YAML::Node triad = node["triad"], bench = node["bench"];
   if (!(triad && triad.IsMap() && triad["noise_mV"])) {
-    const double variance_mV2 =
-        accel_noise_mV * accel_noise_mV + quantization_mV * quantization_mV / 12.0;
-    run.noise_mV = std::max(std::sqrt(variance_mV2), kMinDeclaredNoise_mV);
+    Eigen::Vector3d declared;
+    for (int i = 0; i < 3; ++i) {
+      const double variance_mV2 =
+          accel_noise_mV[i] * accel_noise_mV[i] + quantization_mV * quantization_mV / 12.0;
+      declared[i] = std::max(std::sqrt(variance_mV2), kMinDeclaredNoise_mV);
+    }
+    run.noise_mV = std::sqrt(declared.squaredNorm() / 3.0);
+    if (per_channel) run.noise_channel_mV = declared;
   }
   if (!(bench && bench.IsMap() && bench["angle_noise_arcsec"])) {
     run.angle_noise_rad = angle_noise_rad;
@@ -217,7 +223,18 @@ Scenario LoadScenario(const std::string& yaml_path) {
   const YamlPlace noise_at = top.Child("noise");
   CheckSection(noise, noise_at, {"accel_mV", "angle_arcsec", "accel_correlation_s"});
   if (!noise.IsNull() && noise["accel_mV"]) {
-    s.accel_noise_mV = ReadNonNegative(noise["accel_mV"], noise_at.Child("accel_mV"));
+    const YamlPlace accel_at = noise_at.Child("accel_mV");
+    if (noise["accel_mV"].IsSequence()) {
+      // One figure per channel [x, y, z].
+      const Eigen::Vector3d v = ReadVector3(noise["accel_mV"], accel_at);
+      for (int i = 0; i < 3; ++i) {
+        if (!(v[i] >= 0.0)) accel_at.Index(i).Fail("must be >= 0, got " + FormatDouble(v[i]));
+      }
+      s.accel_noise_channel_mV = v;
+      s.accel_noise_mV = std::sqrt(v.squaredNorm() / 3.0);
+    } else {
+      s.accel_noise_mV = ReadNonNegative(noise["accel_mV"], accel_at);
+    }
   }
   if (!noise.IsNull() && noise["accel_correlation_s"]) {
     s.accel_correlation_s =
@@ -247,8 +264,9 @@ Scenario LoadScenario(const std::string& yaml_path) {
     s.saturation_high_mV = lim[1];
   }
 
-  s.run = ParseRunSection(section("run"), top.Child("run"), yaml_path, s.accel_noise_mV,
-                          s.quantization_mV, s.angle_noise_rad);
+  s.run = ParseRunSection(section("run"), top.Child("run"), yaml_path, s.AccelNoise_mV(),
+                          s.accel_noise_channel_mV.has_value(), s.quantization_mV,
+                          s.angle_noise_rad);
 
   const std::vector<InjectedEffect> effects =
       ParseEffects(section("effects"), top.Child("effects"));

@@ -62,6 +62,10 @@ std::string TruthJson(const Scenario& s, const RunData& data, const std::string&
   j["scenario"] = fs::path(s.yaml_path).filename().string();
   j["seed"] = s.seed;
   j["noise"] = {{"accel_mV", s.accel_noise_mV}, {"angle_arcsec", s.angle_noise_rad / kArcsecToRad}};
+  if (s.accel_noise_channel_mV) {
+    const Eigen::Vector3d& c = *s.accel_noise_channel_mV;
+    j["noise"]["accel_mV"] = {c[0], c[1], c[2]};
+  }
   j["samples"] = data.size();
   if (!provenance.empty()) j["provenance"] = nlohmann::ordered_json::parse(provenance);
   return j.dump(2) + "\n";

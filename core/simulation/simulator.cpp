@@ -66,6 +66,7 @@ RunData Simulate(const Scenario& s) {
       s.accel_correlation_s > 0.0 ? std::exp(-1.0 / (s.profile.rate_hz * s.accel_correlation_s))
                                   : 0.0;
   double colour[3] = {0.0, 0.0, 0.0};
+  const Eigen::Vector3d accel_sigma_mV = s.AccelNoise_mV();
   for (std::size_t k = 0; k < n; ++k) {
     const double t_s = s.profile.SampleTime_s(k);
     const SampleContext ctx{t_s, ScenarioTemperature_C(s, t_s)};
@@ -89,7 +90,7 @@ RunData Simulate(const Scenario& s) {
       if (s.write_rates) d.rate_rad_s[i].push_back(recorded.axis[i].rate);
     }
     for (int i = 0; i < 3; ++i) {
-      double w = readings_mV[i] + s.accel_noise_mV * accel_noise[i];
+      double w = readings_mV[i] + accel_sigma_mV[i] * accel_noise[i];
       if (s.quantization_mV > 0.0) w = std::round(w / s.quantization_mV) * s.quantization_mV;
       w = std::clamp(w, s.saturation_low_mV, s.saturation_high_mV);
       d.w_mV[i].push_back(w);

@@ -9,7 +9,8 @@
 //   truth: {Kx: 171.5, dpsi: -33, dx2: -7}   # docs/file-formats.md names, file units;
 //                                             # absent: nominal (Kx..Kz, W0x..W0z
 //                                             # from run.triad) or 0
-//   noise: {accel_mV: 2.0, angle_arcsec: 0}   # white, 1 sigma per sample
+//   noise: {accel_mV: 2.0, angle_arcsec: 0}   # white, 1 sigma per sample; accel_mV
+//                                             # may be [x, y, z], one per channel
 //          # accel_correlation_s: 0.5 makes the reading noise first-order
 //          # Gauss-Markov (correlated in time) with the same sigma per sample
 //   effects: {angle_latency: {tau_ms: 2}}     # injected into the data, NOT declared
@@ -60,6 +61,7 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -90,8 +92,14 @@ struct Scenario {
   RunDescription run;            // what run.yaml declares
   ParameterLayout truth_layout;  // base + injected effects
   Eigen::VectorXd truth;         // SI, in truth_layout
-  // noise, 1 sigma per sample
+  // noise, 1 sigma per sample: one figure for every channel, or one per
+  // channel (noise.accel_mV: [x, y, z]; accel_noise_mV is then their RMS)
   double accel_noise_mV = 2.0;
+  std::optional<Eigen::Vector3d> accel_noise_channel_mV;
+  Eigen::Vector3d AccelNoise_mV() const {
+    return accel_noise_channel_mV ? *accel_noise_channel_mV
+                                  : Eigen::Vector3d::Constant(accel_noise_mV);
+  }
   // > 0: the reading noise is first-order Gauss-Markov with this correlation
   // time (same sigma per sample): residuals correlated in time
   double accel_correlation_s = 0.0;

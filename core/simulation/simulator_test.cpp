@@ -196,6 +196,24 @@ TEST(SimulatorNoise, ResidualsAgainstTheModelHaveTheDeclaredSigma) {
   }
 }
 
+// noise.accel_mV: [x, y, z]: each channel has its own sigma.
+TEST(SimulatorNoise, PerChannelNoiseGivesEachChannelItsSigma) {
+  TempDir dir("noise_channels");
+  std::string text = NoisyScenario(1.0, 0.0);
+  text.replace(text.find("accel_mV: "), std::string("accel_mV: 1.000000").size(),
+               "accel_mV: [1.5, 6, 0.5]");
+  const Scenario s = LoadFromText(dir, text);
+  const ModelConfig cfg = TruthModelConfig(s);
+  const RunData d = Simulate(s);
+  std::vector<double> e_w[3];
+  for (std::size_t k = 0; k < d.size(); ++k) {
+    const Eigen::Vector3d w0 = ModelReadings_mV(s, cfg, d.t_s[k]);
+    for (int i = 0; i < 3; ++i) e_w[i].push_back(d.w_mV[i][k] - w0[i]);
+  }
+  const Eigen::Vector3d sigma(1.5, 6.0, 0.5);
+  for (int i = 0; i < 3; ++i) ExpectWhiteNoise(e_w[i], sigma[i], std::string("w") + "xyz"[i]);
+}
+
 TEST(SimulatorNoise, SameSeedSameDataOtherSeedOtherData) {
   TempDir dir("seed");
   Scenario s = LoadFromText(dir, NoisyScenario(2.0, 15.0));
@@ -470,6 +488,18 @@ TEST(ScenarioLoad, DefaultsNominalTruthAndDeclaredNoise) {
   // Quantization adds q^2/12 to the declared variance.
   const Scenario q = LoadFromText(dir, "noise: {accel_mV: 0.6}\nsensor: {quantization_mV: 2.4}\n");
   EXPECT_NEAR(q.run.noise_mV, std::sqrt(0.36 + 2.4 * 2.4 / 12), 1e-12);
+  EXPECT_FALSE(q.run.noise_channel_mV.has_value());
+  // One figure per channel: the run declares each channel's.
+  const Scenario c =
+      LoadFromText(dir, "noise: {accel_mV: [1, 4, 0.6]}\nsensor: {quantization_mV: 2.4}\n");
+  ASSERT_TRUE(c.accel_noise_channel_mV.has_value());
+  EXPECT_EQ(c.AccelNoise_mV(), Eigen::Vector3d(1, 4, 0.6));
+  ASSERT_TRUE(c.run.noise_channel_mV.has_value());
+  for (int i = 0; i < 3; ++i) {
+    const double a = c.AccelNoise_mV()[i];
+    EXPECT_NEAR((*c.run.noise_channel_mV)[i], std::sqrt(a * a + 2.4 * 2.4 / 12), 1e-12) << i;
+  }
+  EXPECT_NEAR(c.run.noise_mV, std::sqrt(c.run.noise_channel_mV->squaredNorm() / 3), 1e-12);
 }
 
 TEST(ScenarioLoad, EffectParametersByNameOrNameUnitInCatalogueOrder) {
@@ -533,6 +563,9 @@ TEST(ScenarioErrors, EveryBadInputNamesFileKeyAndProblem) {
       {"noise: {accel_mV: -1}\n", f + ": noise.accel_mV: must be >= 0, got -1"},
       {"noise: {angle_arcsec: -0.5}\n", f + ": noise.angle_arcsec: must be >= 0, got -0.5"},
       {"noise: {accel_mV: abc}\n", f + ": noise.accel_mV: expected a number, got 'abc'"},
+      {"noise: {accel_mV: [2, -1, 2]}\n", f + ": noise.accel_mV[1]: must be >= 0, got -1"},
+      {"noise: {accel_mV: [2, 10]}\n",
+       f + ": noise.accel_mV: expected a list of 3 numbers, got 2"},
       {"noise: {accel_mV: .nan}\n", f + ": noise.accel_mV: expected a finite number, got '.nan'"},
       {"noise: 2\n", f + ": noise: expected a map, got '2'"},
       {"truth: {Kq: 1}\n",

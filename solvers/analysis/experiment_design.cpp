@@ -57,6 +57,7 @@ void StaticJacobians(const ModelConfig& cfg, const Eigen::VectorXd& theta,
 Scenario NoiseFreeScenario(const Scenario& s) {
   Scenario q = s;
   q.accel_noise_mV = 0.0;
+  q.accel_noise_channel_mV.reset();
   q.angle_noise_rad = 0.0;
   q.quantization_mV = 0.0;
   q.truth_spread.clear();

@@ -210,12 +210,20 @@ struct BatchResult {
   // the inverse Fisher information of the model times variance_factor, and
   // "hac", the sandwich over the epoch scores (hac_covariance.h), which stays
   // honest when the residuals are correlated in time. estimate.cov is the one
-  // named by sigma_method: "white" when the residual is white, else "hac",
-  // each parameter's variance then at least its white one (the rows and
-  // columns scaled, so the matrix stays positive semi-definite). cov_hac is
+  // named by sigma_method: "white" when the residual is white and one weight
+  // fits its channels, else "hac", each parameter's variance then at least
+  // its hac_floor's (the rows and columns scaled, so the matrix stays
+  // positive semi-definite). cov_hac is
   // empty with the Ceres covariance (robust loss).
   std::string sigma_method = "white";
   Eigen::MatrixXd cov_white, cov_hac;
+  // With "hac": what each variance is kept at least at. "white": cov_white.
+  // "per_channel_bound": when one weight served channels whose residuals
+  // differ beyond kMaxChannelRatio (noise_source "estimated_common", channels
+  // unalike; sigma is then the HAC one even on a white residual), the
+  // Cramer-Rao bound with each channel's readings at the noise its residual
+  // holds (noise_check.estimated_mV) and the angles as declared.
+  std::string hac_floor;
   // With pins: estimate.cov before their uncertainty was added (the
   // covariance given the pinned values). Two fits that pin the same
   // parameters at the same values share that part of their error, so their

@@ -53,15 +53,25 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
     std::snprintf(noise, sizeof(noise), " (%s: sigma rest on the estimate)", said);
     v << noise;
   } else if (r.noise_source == "estimated_common") {
-    std::snprintf(noise, sizeof(noise),
-                  " (%s; the residual is not white or its channels differ beyond 3x, so its "
-                  "split is misfit: the model's sigma scaled by one variance factor, chi2/dof "
-                  "%.3g)",
-                  said, r.variance_factor);
+    if (r.noise_check.white) {
+      std::snprintf(noise, sizeof(noise),
+                    " (%s; its channels differ beyond 3x, more than one triad's noise does: "
+                    "one weight for all three, variance factor chi2/dof %.3g)",
+                    said, r.variance_factor);
+    } else {
+      std::snprintf(noise, sizeof(noise),
+                    " (%s; the residual is not white, so its split between channels is misfit: "
+                    "the model's sigma scaled by one variance factor, chi2/dof %.3g)",
+                    said, r.variance_factor);
+    }
     v << noise;
   }
   if (rep.residual_white) {
     v << "; residuals white";
+    if (r.sigma_method == "hac" && r.hac_floor == "per_channel_bound") {
+      v << "; sigma from the HAC covariance, which measures what each channel's residual holds "
+           "(one weight served channels that differ beyond 3x)";
+    }
   } else if (r.sigma_method == "hac") {
     char hac[160];
     std::snprintf(hac, sizeof(hac),
@@ -193,6 +203,7 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
     out["hac"] = {{"kernel", "Bartlett"},
                   {"bandwidth_epochs", r.hac_bandwidth_epochs},
                   {"bandwidth_rule", "Andrews (1991) AR(1) plug-in over the epoch scores"}};
+    if (!r.hac_floor.empty()) out["hac"]["floor"] = r.hac_floor;
   }
   out["initial"] = {{"parameters", ParametersJson(layout, r.initial.theta, r.initial.cov, {})}};
   if (correlations) out["correlation"] = CorrelationJson(layout, r.estimate.cov);
