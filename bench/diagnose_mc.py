@@ -51,6 +51,7 @@ EFFECTS = {
     "size_effect": "{ry_x_mm: 22.0, rz_y_mm: -22.0}",
     "thermal_drift": "{rate_x_mV_per_min: 0.18, rate_y_mV_per_min: -0.12, rate_z_mV_per_min: 0.15}",
     "thermal_drift_temp": "{coef_x_mV_per_degC: 0.24, coef_y_mV_per_degC: -0.2, coef_z_mV_per_degC: 0.16}",
+    "thermal_drift_quadratic": "{quad_x: 1.0, quad_y: -0.7, quad_z: 0.8}",
     "scale_asymmetry": "{dKx_mV_per_g: 0.3, dKy_mV_per_g: -0.3, dKz_mV_per_g: 0.3}",
     # The same effects larger: the 4-sigma sizes above leave scale_asymmetry
     # (|u| is nearly a + b u^2, i.e. zero offset plus K_ii) and size_effect

@@ -15,8 +15,7 @@
 namespace triadcal {
 std::vector<Eigen::Vector3d> ApplyCalibration(const Calibration& cal, const RunDescription& run,
                                               const RunData& data) {
-  ModelConfig cfg = MakeModelConfig(run, cal.layout);
-  if (data.has_temp()) cfg.temp_ref_C = data.temp_C.front();
+  const ModelConfig cfg = MakeModelConfig(run, cal.layout, data);
   // The calibration in this run's axes, and its temperature terms.
   const Eigen::MatrixXd mount =
       cal.imu_axes ? MountingMap(run, cal.layout)

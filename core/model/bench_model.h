@@ -25,6 +25,10 @@ struct ModelConfig {
   Eigen::Vector3d lever_arm0_m{0.138, 0.020, 0.020};  // R0, nominal, frame 2
   double g_mps2 = kStandardGravity;
   double temp_ref_C = 0.0;  // reference of thermal_drift_temp (first temp_C of the run)
+  // The run's first sample time and duration [s] (thermal_drift_quadratic's
+  // signal is orthogonal over them to a constant and a linear drift).
+  double time_start_s = 0.0;
+  double time_span_s = 0.0;
   ParameterLayout layout;
 };
 
@@ -342,11 +346,20 @@ inline Eigen::RowVector3d CrossQuadraticGradient(const double* q, int i,
 }
 
 // The signal x(sample) of a zero-offset effect (effects.h ZeroOffsetSignal):
-//   thermal_drift: x = t [s];  thermal_drift_temp: x = temp_C - T_ref [degC].
+//   thermal_drift: x = t [s];  thermal_drift_temp: x = temp_C - T_ref [degC];
+//   thermal_drift_quadratic: x = T^2 P2(u), u = (t - t0) / T over the run
+//   [t0, t0 + T], P2(u) = u^2 - u + 1/6: (t - t0)^2 less the constant and the
+//   line that W0 and thermal_drift carry, so that a linear drift gives it no
+//   score (uniform sampling) and its coefficient is still half the drift's
+//   second derivative.
 inline double ZeroOffsetSignalValue(const ModelConfig& cfg, ZeroOffsetSignal signal,
                                     const SampleContext& ctx) {
   switch (signal) {
     case ZeroOffsetSignal::kTime_s: return ctx.t_s;
+    case ZeroOffsetSignal::kTimeCurvature_s2: {
+      const double d = ctx.t_s - cfg.time_start_s, T = cfg.time_span_s;
+      return d * d - T * d + T * T / 6.0;
+    }
     case ZeroOffsetSignal::kTempRise_C: return ctx.temp_C - cfg.temp_ref_C;
     case ZeroOffsetSignal::kNone: break;
   }

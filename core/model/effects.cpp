@@ -169,6 +169,25 @@ const std::vector<EffectSpec>& EffectCatalogue() {
       e.b1_analytic_jacobian = true;
       c.push_back(e);
     }
+    {
+      // With thermal_drift, W0_i + rate_i t + quad_i t^2: a drift whose rate
+      // changes over the run (a warm-up that slows). The real medium roll run
+      // cut in quarters gives its z rate 0.42, 0.23, 0.19, 0.14 mg/min.
+      EffectSpec e{Effect::kThermalDriftQuadratic,
+                   "thermal_drift_quadratic",
+                   "zero offsets bend in time: W0_i + quad_i * ((t - t0)^2 less its mean and "
+                   "line over the run) (with thermal_drift: a drift whose rate changes)",
+                   EffectStage::kSensor,
+                   {{"quad_x", "mV/min^2", kPerMin * kPerMin, 1.0, -3.0, 3.0, 0.05},
+                    {"quad_y", "mV/min^2", kPerMin * kPerMin, 1.0, -3.0, 3.0, 0.05},
+                    {"quad_z", "mV/min^2", kPerMin * kPerMin, 1.0, -3.0, 3.0, 0.05}}};
+      e.plausible_reason =
+          "a MEMS zero offset's warm-up drift slows by ~0.01 mg/min per minute (~0.001 "
+          "mV/min^2 at 175 mV/g); 3 mV/min^2 moves it by 1.2 V in 20 min: a failing sensor";
+      e.b1_analytic_jacobian = true;
+      e.zero_offset_signal = ZeroOffsetSignal::kTimeCurvature_s2;
+      c.push_back(e);
+    }
     return c;
   }();
   return catalogue;

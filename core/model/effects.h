@@ -64,8 +64,9 @@ enum class Effect {
   kScaleAsymmetry,
   kAngleScale,
   kCrossQuadratic,
+  kThermalDriftQuadratic,
 };
-constexpr int kNumEffects = 10;
+constexpr int kNumEffects = 11;
 
 // Where in the measurement chain an effect acts (see the diagram above).
 enum class EffectStage { kAngle, kGeometry, kSensor };
@@ -79,6 +80,7 @@ enum class ZeroOffsetSignal {
   kNone,
   kTime_s,      // x = t [s] from the start of the run
   kTempRise_C,  // x = temp_C - temp_C of the first sample [degC]
+  kTimeCurvature_s2,  // x = (t - t0)^2 less its constant and line over the run [s^2]
 };
 
 // One scalar parameter as it appears in files: value_file * si_per_unit gives

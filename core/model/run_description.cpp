@@ -19,4 +19,15 @@ ModelConfig MakeModelConfig(const RunDescription& run, const ParameterLayout& la
   return cfg;
 }
 
+ModelConfig MakeModelConfig(const RunDescription& run, const ParameterLayout& layout,
+                            const RunData& data) {
+  ModelConfig cfg = MakeModelConfig(run, layout);
+  if (data.has_temp()) cfg.temp_ref_C = data.temp_C.front();
+  if (!data.t_s.empty()) {
+    cfg.time_start_s = data.t_s.front();
+    cfg.time_span_s = data.t_s.back() - data.t_s.front();
+  }
+  return cfg;
+}
+
 }  // namespace triadcal

@@ -29,6 +29,7 @@
 
 #include "core/model/bench_model.h"
 #include "core/model/parameters.h"
+#include "core/model/run_data.h"
 
 namespace triadcal {
 
@@ -115,5 +116,9 @@ Eigen::VectorXd NominalTheta(const RunDescription& run, const ParameterLayout& l
 
 // The model configuration of this run (R0, g) for the given layout.
 ModelConfig MakeModelConfig(const RunDescription& run, const ParameterLayout& layout);
+// ... with the references its recorded data set: the first temp_C
+// (thermal_drift_temp), the first sample time and the span (the quadratic drift).
+ModelConfig MakeModelConfig(const RunDescription& run, const ParameterLayout& layout,
+                            const RunData& data);
 
 }  // namespace triadcal

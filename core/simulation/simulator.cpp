@@ -40,6 +40,10 @@ double ScenarioTemperature_C(const Scenario& s, double t_s) {
 ModelConfig TruthModelConfig(const Scenario& s) {
   ModelConfig cfg = MakeModelConfig(s.run, s.truth_layout);
   cfg.temp_ref_C = ScenarioTemperature_C(s, s.profile.SampleTime_s(0));
+  // The span of the samples simulate writes.
+  const std::size_t n = s.profile.NumSamples();
+  cfg.time_start_s = s.profile.SampleTime_s(0);
+  cfg.time_span_s = n > 0 ? s.profile.SampleTime_s(n - 1) - cfg.time_start_s : 0.0;
   return cfg;
 }
 

@@ -540,7 +540,7 @@ TEST(ScenarioErrors, EveryBadInputNamesFileKeyAndProblem) {
       {"effects: {angle_lag: {tau_ms: 2}}\n",
        f + ": effects: unknown effect 'angle_lag' (known: angle_latency, encoder_harmonic, "
            "axis_nonintersection, axis_nonperpendicularity, size_effect, thermal_drift, "
-           "thermal_drift_temp, scale_asymmetry, angle_scale, cross_quadratic)"},
+           "thermal_drift_temp, scale_asymmetry, angle_scale, cross_quadratic, thermal_drift_quadratic)"},
       {"effects: {angle_latency: {tau_s: 2}}\n",
        f + ": effects.angle_latency.tau_s: unknown key (allowed: tau, tau_ms)"},
       {"effects: {angle_latency: {tau: 2, tau_ms: 2}}\n",

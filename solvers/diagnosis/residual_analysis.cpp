@@ -47,8 +47,7 @@ ResidualReport AnalyzeResiduals(const RunDescription& run, const RunData& data,
   rep.degrees_of_freedom = fit.degrees_of_freedom;
   const std::size_t E = fit.epoch_t.size();
   if (E < 8) return rep;
-  ModelConfig cfg = MakeModelConfig(run, layout);
-  if (data.has_temp()) cfg.temp_ref_C = data.temp_C.front();
+  const ModelConfig cfg = MakeModelConfig(run, layout, data);
   const Eigen::VectorXd& th = fit.estimate.theta;
 
   // Interval midpoints and their kinematics.

@@ -76,8 +76,7 @@ RunProblem BuildRunProblem(const RunDescription& run, const RunData& data,
                            const AngleDerivativeOptions& derivatives) {
   if (!(epoch_s > 0.0)) throw OptionError("epoch_s", "must be > 0");
   RunProblem p;
-  p.cfg = MakeModelConfig(run, layout);
-  if (data.has_temp()) p.cfg.temp_ref_C = data.temp_C.front();
+  p.cfg = MakeModelConfig(run, layout, data);
   p.series.run = &data;
   p.epochs = ChooseEpochs(data, epoch_s);
   if (p.epochs.size() < 3) {

@@ -586,8 +586,7 @@ StaticResult SolveStatic(const RunDescription& run, const RunData& data,
   r.reference = reference;
   r.layout = ParameterLayout();
   r.held = HeldFor(reference, options.fixed, r.layout);
-  ModelConfig cfg = MakeModelConfig(run, r.layout);
-  if (data.has_temp()) cfg.temp_ref_C = data.temp_C.front();
+  const ModelConfig cfg = MakeModelConfig(run, r.layout, data);
 
   FindPositions(run, data, options, &r);
 
