@@ -979,15 +979,26 @@ std::vector<PinnedExcursion> WeakExcursions(const ParameterLayout& layout, const
 
 BatchResult SolveBatch(const RunDescription& run, const RunData& data,
                        const ParameterLayout& layout, const BatchOptions& opt) {
-  BatchResult res = SolveBatchOnce(run, data, layout, opt);
-  if (!opt.holding.auto_hold || !opt.holding.pin_weak_excursions) return res;
+  const bool may_pin = opt.holding.auto_hold && opt.holding.pin_weak_excursions;
+  // With pins possible the first fit reports 0..0.7 and each refit the next
+  // part (0.7..0.9, 0.9..0.97, 0.97..0.99), so the fraction only climbs.
+  auto within = [&opt](double lo, double hi) {
+    BatchOptions o = opt;
+    if (opt.fraction) {
+      o.fraction = [f = opt.fraction, lo, hi](double x) { f(lo + (hi - lo) * x); };
+    }
+    return o;
+  };
+  BatchResult res = SolveBatchOnce(run, data, layout, may_pin ? within(0.0, 0.7) : opt);
+  if (!may_pin) return res;
   // Each pin moves the fit: what it then moves is checked again (at most
   // three refits; a parameter once pinned stays pinned).
   std::vector<PinnedExcursion> pinned;
+  constexpr double kRefitEnds[4] = {0.7, 0.9, 0.97, 0.99};
   for (int round = 0; round < 3; ++round) {
     const std::vector<PinnedExcursion> more = WeakExcursions(layout, res, opt.holding);
     if (more.empty()) break;
-    BatchOptions o = opt;
+    BatchOptions o = within(kRefitEnds[round], kRefitEnds[round + 1]);
     for (const PinnedExcursion& p : pinned) o.holding.pinned.push_back(p.name);
     std::string names;
     for (const PinnedExcursion& p : more) {
@@ -1010,6 +1021,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
     res.pinned = pinned;
   }
   if (!pinned.empty()) AddPinnedUncertainty(layout, &res);
+  if (opt.fraction) opt.fraction(1.0);
   return res;
 }
 

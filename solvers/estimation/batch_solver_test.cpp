@@ -383,8 +383,18 @@ TEST(BatchSolver, WeakParameterMovedFarIsPinnedAndItsUncertaintyKept) {
   free_opt.holding.pin_weak_excursions = false;
   const BatchResult free_fit = Fit(s, data, free_opt);
   ASSERT_TRUE(free_fit.converged);
-  const BatchResult pinned = Fit(s, data, pin_opt);
+  // The progress of the fit and its refit only climbs, to 1.
+  std::vector<double> fractions;
+  BatchOptions watched = pin_opt;
+  watched.fraction = [&fractions](double x) { fractions.push_back(x); };
+  const BatchResult pinned = Fit(s, data, watched);
   ASSERT_TRUE(pinned.converged);
+  ASSERT_FALSE(fractions.empty());
+  for (std::size_t i = 1; i < fractions.size(); ++i) {
+    EXPECT_GE(fractions[i], fractions[i - 1]) << i;
+  }
+  EXPECT_EQ(fractions.front(), 0.0);
+  EXPECT_EQ(fractions.back(), 1.0);
   BatchOptions hold_opt = free_opt;
   hold_opt.holding.hold = {"dz2"};
   const BatchResult held = Fit(s, data, hold_opt);
