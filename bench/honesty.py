@@ -44,8 +44,11 @@ Sections (all by default):
             (--real-hold, '': what the fit pins it pins itself); the halves'
             estimates compared, chi2 = (a - b)^2 / (sigma_a^2 + sigma_b^2) per
             parameter determined by both, with the sigma given the pins (the
-            pinned values are common to both halves), median over parameters;
-            then the three speeds compared with the reported sigma.
+            pinned values are common to both halves), median over parameters,
+            with the 5-95 % band of that median for honest sigma given the
+            parameters' correlations (drawn from the halves' correlation given
+            the pins, `fit --correlations`; needs numpy); then the three speeds
+            compared with the reported sigma.
 """
 import argparse
 import json
@@ -332,6 +335,51 @@ def shared_folder():
     return None
 
 
+def median_band(fa, fb, chi, observed, draws=20000, seed=1):
+    """The median over parameters of (a - b)^2 / var(a - b) when sigma is
+    honest is 0.455 for independent parameters; correlated ones widen its
+    spread. Draws the halves' difference with its correlation (the halves are
+    independent data: the covariance of a - b is that of a plus that of b,
+    each given the pins, with the per-parameter variance chi was judged on)
+    and returns the 5 %, 50 %, 95 % points of the median and the chance of
+    one at least as far from 0.455 on the observed side. None without
+    correlations in the fits (--correlations) or numpy."""
+    try:
+        import numpy as np
+    except ImportError:
+        return None
+    names = list(chi)
+    def block(f):
+        c = f.get("correlation_given_pinned") or f.get("correlation")
+        if not c:
+            return None
+        idx = {n: i for i, n in enumerate(c["names"])}
+        m = np.array(c["matrix"])
+        k = [idx[n] for n in names]
+        return m[np.ix_(k, k)]
+    ra, rb = block(fa), block(fb)
+    if ra is None or rb is None:
+        return None
+    pa, pb = fa["parameters"], fb["parameters"]
+    sa = np.array([pa[n].get("sigma_given_pinned", pa[n]["sigma"]) for n in names])
+    sb = np.array([pb[n].get("sigma_given_pinned", pb[n]["sigma"]) for n in names])
+    cov = np.outer(sa, sa) * ra + np.outer(sb, sb) * rb
+    # chi's variance per parameter includes what the pins leave (consider
+    # term): added on the diagonal, uncorrelated (a conservative spread).
+    var = np.array([(pa[n]["value"] - pb[n]["value"]) ** 2 / chi[n] if chi[n] > 0
+                    else np.diag(cov)[i] for i, n in enumerate(names)])
+    cov += np.diag(np.maximum(var - np.diag(cov), 0.0))
+    d = np.sqrt(np.diag(cov))
+    r = cov / np.outer(d, d)
+    w, v = np.linalg.eigh(r)
+    root = v * np.sqrt(np.maximum(w, 0.0))
+    z = np.random.default_rng(seed).standard_normal((draws, len(names))) @ root.T
+    med = np.median(z * z, axis=1)
+    lo, mid, hi = np.percentile(med, [5, 50, 95])
+    p = float(np.mean(med >= observed)) if observed >= mid else float(np.mean(med <= observed))
+    return lo, mid, hi, p
+
+
 # The median of a chi-square with 1 degree of freedom: what the median of
 # (a - b)^2 / (sigma_a^2 + sigma_b^2) over parameters is when sigma is honest
 # (its mean is 1).
@@ -359,7 +407,7 @@ def real(work, a):
             y = os.path.join(ex, f".honesty_{speed}_{label.replace(' ', '_')}.yaml")
             open(y, "w").write(t)
             out = os.path.join(work, f"real_{speed}_{label.replace(' ', '_')}.json")
-            cmd = [BIN, "fit", y, "-o", out, "-q", "--force", "--residuals",
+            cmd = [BIN, "fit", y, "-o", out, "-q", "--force", "--correlations", "--residuals",
                    out.replace(".json", ".csv")]
             if a.real_effects:
                 cmd += ["--effects", a.real_effects]
@@ -424,6 +472,7 @@ def real(work, a):
                    b_[n].get("sigma_given_pinned", b_[n]["sigma"]) ** 2 + consider_var(n))
                for n in a_ if a_[n]["estimable"] and b_[n]["estimable"] and a_[n]["sigma"]
                and b_[n]["sigma"]}
+        band = median_band(fits[1], fits[2], chi, statistics.median(chi.values()))
         chi_given = chi_of("sigma_given_pinned")
         chi_reported = chi_of(None)
         pins = [[p["parameter"] for p in f.get("pinned", [])] for f in fits]
@@ -444,6 +493,11 @@ def real(work, a):
               f"1 dof, {CHI2_1_MEDIAN}, that honest sigma give) over "
               f"{len(chi)} parameters (largest: "
               + ", ".join(f"{n} {c:.1f}" for n, c in worst) + ")")
+        if band:
+            lo, mid, hi, p = band
+            print(f"{speed}: honest sigma, given the {len(chi)} parameters' correlations, give a "
+                  f"median of {mid:.2f} (5-95 %: {lo:.2f}-{hi:.2f}); one as far out as "
+                  f"{statistics.median(chi.values()):.2f}: p {p:.3g}")
         if any(pins):
             print(f"{speed}: pinned (whole, halves) {pins}; the difference judged with the "
                   f"sigma given the pins plus what the pins leave in it ((S_a - S_b) P (S_a - "

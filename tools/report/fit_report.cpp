@@ -206,7 +206,14 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
     if (!r.hac_floor.empty()) out["hac"]["floor"] = r.hac_floor;
   }
   out["initial"] = {{"parameters", ParametersJson(layout, r.initial.theta, r.initial.cov, {})}};
-  if (correlations) out["correlation"] = CorrelationJson(layout, r.estimate.cov);
+  if (correlations) {
+    out["correlation"] = CorrelationJson(layout, r.estimate.cov);
+    // With pins: the correlation given the pinned values (of cov_given_pinned),
+    // what two fits that pin alike share no part of.
+    if (r.cov_given_pinned.rows() == layout.size()) {
+      out["correlation_given_pinned"] = CorrelationJson(layout, r.cov_given_pinned);
+    }
+  }
   // The directions the run cannot determine: those still weak in the fit's
   // covariance, and those removed by holding a parameter (structural nulls).
   std::vector<WeakDirection> unobservable = rep.weak;

@@ -115,6 +115,19 @@ TEST(FitReport, PinnedParameterIsNamedWithHowFarTheFirstFitMovedIt) {
   EXPECT_FALSE(j["parameters"]["dy2"].contains("pinned"));
   EXPECT_DOUBLE_EQ(j["parameters"]["Kx"]["sigma_given_pinned"].get<double>(),
                    0.5 * j["parameters"]["Kx"]["sigma"].get<double>());
+  // --correlations: also the correlation given the pins (here the same
+  // matrix, the covariance given the pins being a quarter of the reported).
+  EXPECT_FALSE(j.contains("correlation_given_pinned"));
+  const nlohmann::json jc = FitJson(layout, r, rep, true);
+  ASSERT_TRUE(jc.contains("correlation_given_pinned"));
+  EXPECT_EQ(jc["correlation_given_pinned"]["names"], jc["correlation"]["names"]);
+  const auto& given = jc["correlation_given_pinned"]["matrix"];
+  const auto& whole = jc["correlation"]["matrix"];
+  for (int a : {0, kx, kxy}) {
+    for (int b : {0, kx, 5}) {
+      EXPECT_NEAR(given[a][b].get<double>(), whole[a][b].get<double>(), 1e-12) << a << " " << b;
+    }
+  }
   ::testing::internal::CaptureStdout();
   PrintParameterTable(layout, r, rep);
   const std::string table = ::testing::internal::GetCapturedStdout();
