@@ -335,12 +335,12 @@ def shared_folder():
     return None
 
 
-def median_band(fa, fb, chi, observed, draws=20000, seed=1):
+def median_band(fa, fb, var_diff, observed, draws=20000, seed=1):
     """The median over parameters of (a - b)^2 / var(a - b) when sigma is
     honest is 0.455 for independent parameters; correlated ones widen its
     spread. Draws the halves' difference with its correlation (the halves are
     independent data: the covariance of a - b is that of a plus that of b,
-    each given the pins, with the per-parameter variance chi was judged on)
+    each given the pins, with var_diff, the per-parameter variance the halves are judged on)
     and returns the 5 %, 50 %, 95 % points of the median and the chance of
     one at least as far from 0.455 on the observed side. None without
     correlations in the fits (--correlations) or numpy."""
@@ -348,7 +348,7 @@ def median_band(fa, fb, chi, observed, draws=20000, seed=1):
         import numpy as np
     except ImportError:
         return None
-    names = list(chi)
+    names = list(var_diff)
     def block(f):
         c = f.get("correlation_given_pinned") or f.get("correlation")
         if not c:
@@ -364,10 +364,9 @@ def median_band(fa, fb, chi, observed, draws=20000, seed=1):
     sa = np.array([pa[n].get("sigma_given_pinned", pa[n]["sigma"]) for n in names])
     sb = np.array([pb[n].get("sigma_given_pinned", pb[n]["sigma"]) for n in names])
     cov = np.outer(sa, sa) * ra + np.outer(sb, sb) * rb
-    # chi's variance per parameter includes what the pins leave (consider
+    # var_diff includes what the pins leave (consider
     # term): added on the diagonal, uncorrelated (a conservative spread).
-    var = np.array([(pa[n]["value"] - pb[n]["value"]) ** 2 / chi[n] if chi[n] > 0
-                    else np.diag(cov)[i] for i, n in enumerate(names)])
+    var = np.array([var_diff[n] for n in names])
     cov += np.diag(np.maximum(var - np.diag(cov), 0.0))
     d = np.sqrt(np.diag(cov))
     r = cov / np.outer(d, d)
@@ -467,12 +466,12 @@ def real(work, a):
                 s_ = {q: own[q]["sensitivity"].get(name, 0.0) for q in alone}
                 v += sum(s_[q] * s_[c] * cov(own, None, q, c) for q in alone for c in alone)
             return v
-        chi = {n: (a_[n]["value"] - b_[n]["value"]) ** 2 /
-                  (a_[n].get("sigma_given_pinned", a_[n]["sigma"]) ** 2 +
-                   b_[n].get("sigma_given_pinned", b_[n]["sigma"]) ** 2 + consider_var(n))
-               for n in a_ if a_[n]["estimable"] and b_[n]["estimable"] and a_[n]["sigma"]
-               and b_[n]["sigma"]}
-        band = median_band(fits[1], fits[2], chi, statistics.median(chi.values()))
+        var_diff = {n: a_[n].get("sigma_given_pinned", a_[n]["sigma"]) ** 2 +
+                       b_[n].get("sigma_given_pinned", b_[n]["sigma"]) ** 2 + consider_var(n)
+                    for n in a_ if a_[n]["estimable"] and b_[n]["estimable"] and a_[n]["sigma"]
+                    and b_[n]["sigma"]}
+        chi = {n: (a_[n]["value"] - b_[n]["value"]) ** 2 / v for n, v in var_diff.items()}
+        band = median_band(fits[1], fits[2], var_diff, statistics.median(chi.values()))
         chi_given = chi_of("sigma_given_pinned")
         chi_reported = chi_of(None)
         pins = [[p["parameter"] for p in f.get("pinned", [])] for f in fits]
