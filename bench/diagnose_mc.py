@@ -2,11 +2,15 @@
 """Monte Carlo of `triadcal diagnose` on each catalogue effect injected undeclared.
 
 usage: diagnose_mc.py [--seeds N] [--effects a,b] [--jobs J] [--keep DIR] [--rate HZ]
+                      [--noise auto] [--scenario PATH]
 
 For each case (clean, and each effect at the size below) it simulates N seeds of
 bench/scenarios/paper-mc.yaml with the effect added under `effects:` (not
 declared in run.yaml), runs `triadcal diagnose --truth`, and reports (--rate
-replaces the scenario's 100 Hz, e.g. 50: the paper profile of issue 12):
+replaces the scenario's 100 Hz, e.g. 50: the paper profile of issue 12;
+--noise auto writes `noise_mV: auto` into each run.yaml, so that diagnose
+estimates the noise and re-estimates it after each selection; --scenario
+replaces paper-mc.yaml, e.g. bench/scenarios/paper-coloured.yaml):
   bias    the largest |error/sigma| of the declared-model fit on NOISE-FREE data
           (how much the effect biases the parameters; the target asks >= 3)
   first   share of seeds where the injected effect is ranked first
@@ -71,6 +75,7 @@ SAME = {"thermal_drift_temp": {"thermal_drift_temp", "thermal_drift"}}
 
 
 RATE_HZ = None  # --rate
+NOISE_AUTO = False  # --noise auto
 
 
 def scenario(effect, noise_free=False):
@@ -98,6 +103,11 @@ def one(effect, seed, work):
     scen = os.path.join(d, "scenario.yaml")
     open(scen, "w").write(scenario(effect))
     run([BIN, "simulate", scen, "-o", d, "--seed", str(seed)])
+    if NOISE_AUTO:
+        ry = os.path.join(d, "run.yaml")
+        y = re.sub(r"(?m)^(\s*noise_mV:).*$", r"\g<1> auto", open(ry).read())
+        y = re.sub(r"(?m)^\s*noise_channel_mV:.*\n", "", y)
+        open(ry, "w").write(y)
     run([BIN, "diagnose", os.path.join(d, "run.yaml"), "-o", os.path.join(d, "out.json"),
          "--truth", os.path.join(d, "truth.json")])
     out = json.load(open(os.path.join(d, "out.json")))
@@ -145,18 +155,23 @@ def bias(effect, work):
 
 
 def main():
+    global RATE_HZ, NOISE_AUTO, BASE
     ap = argparse.ArgumentParser()
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--effects", default="clean," + ",".join(EFFECTS))
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--keep", default="")
     ap.add_argument("--rate", type=float, help="sampling rate [Hz] instead of the scenario's 100")
+    ap.add_argument("--noise", choices=["declared", "auto"], default="declared",
+                    help="auto: run.yaml says noise_mV: auto (diagnose estimates it)")
+    ap.add_argument("--scenario", default=None, help="base scenario instead of paper-mc.yaml")
     a = ap.parse_args()
-    global RATE_HZ
     RATE_HZ = a.rate
+    NOISE_AUTO = a.noise == "auto"
+    BASE = a.scenario or BASE
     work = a.keep or tempfile.mkdtemp()
     cases = [e for e in a.effects.split(",") if e]
-    print(f"{BASE} at {a.rate or 100:g} Hz")
+    print(f"{os.path.relpath(BASE)} at {a.rate or 100:g} Hz, noise {a.noise}")
     print(f"{'case':26s} {'bias':>6s} {'first':>6s} {'chosen':>7s} {'false':>6s} {'within3':>8s} {'honest':>7s} {'absorb':>7s}  (N={a.seeds})")
     ok = True
     for case in cases:

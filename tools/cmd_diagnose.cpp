@@ -68,11 +68,15 @@ int RunDiagnose(const DiagnoseArgs& a) {
   std::printf("diagnose: %s\n", d.verdict.c_str());
   for (const std::string& n : d.notes) std::printf("note: %s\n", n.c_str());
   std::printf("\n");
-  std::printf("candidates, round 1 (likelihood ratio, scaled; selected when p < %.2g):\n",
-              d.ranking.empty() ? 0.0 : d.ranking.front().threshold);
+  std::printf(
+      "candidates, round 1 (likelihood ratio, scaled, and refitted the Wald test against the "
+      "refit's sigma; selected when both p < %.2g):\n",
+      d.ranking.empty() ? 0.0 : d.ranking.front().threshold);
   for (const CandidateTest& t : d.ranking) {
-    std::printf("  %-26s stat %10.2f  dof %d  p %-10.3g %s%s\n", GetEffectSpec(t.effect).name.c_str(),
-                t.statistic, t.dof, t.p_value, t.selected ? "SELECTED" : "",
+    char wald[40] = "";
+    if (t.refit) std::snprintf(wald, sizeof(wald), "Wald p %-10.3g ", t.wald_p_value);
+    std::printf("  %-26s stat %10.2f  dof %d  p %-10.3g %s%s%s\n", GetEffectSpec(t.effect).name.c_str(),
+                t.statistic, t.dof, t.p_value, wald, t.selected ? "SELECTED" : "",
                 t.note.empty() ? "" : ("(" + t.note + ")").c_str());
   }
   for (const CandidateTest& t : d.absorbing) {
@@ -84,8 +88,8 @@ int RunDiagnose(const DiagnoseArgs& a) {
   }
   for (const CandidateTest& t : d.tests) {
     if (t.round > 1 && t.selected) {
-      std::printf("  round %d: %s selected (p %.3g)\n", t.round, GetEffectSpec(t.effect).name.c_str(),
-                  t.p_value);
+      std::printf("  round %d: %s selected (p %.3g, Wald p %.3g)\n", t.round,
+                  GetEffectSpec(t.effect).name.c_str(), t.p_value, t.wald_p_value);
     }
   }
   std::printf("\n%-32s %14s %14s\n", "residual", "before", "after");

@@ -53,6 +53,15 @@ nlohmann::json StateJson(const ParameterLayout& layout, const BatchResult& r,
 
 }  // namespace
 
+// What only a refit has: its chi2/dof and the Wald test of the effect
+// (docs/file-formats.md).
+void AddRefitKeys(const CandidateTest& t, nlohmann::json* j) {
+  (*j)["chi2_per_dof_after"] = t.chi2_per_dof_after;
+  (*j)["wald"] = t.wald;
+  (*j)["wald_p_value"] = t.wald_p_value;
+  (*j)["wald_dof"] = std::isfinite(t.wald_dof) ? nlohmann::json(t.wald_dof) : nlohmann::json();
+}
+
 nlohmann::json CouldHideJson(const std::vector<HideCase>& could_hide) {
   nlohmann::json hide = nlohmann::json::array();
   for (const HideCase& h : could_hide) {
@@ -98,7 +107,7 @@ nlohmann::json DiagnoseJson(const std::string& run_yaml, double alpha, const Dia
                        {"score", t.score},
                        {"score_p_value", t.score_p_value},
                        {"refit", t.refit}});
-    if (t.refit) ranking.back()["chi2_per_dof_after"] = t.chi2_per_dof_after;
+    if (t.refit) AddRefitKeys(t, &ranking.back());
     if (!t.absorbs.empty()) ranking.back()["absorbs"] = t.absorbs;
   }
   out["ranking"] = ranking;
@@ -116,7 +125,7 @@ nlohmann::json DiagnoseJson(const std::string& run_yaml, double alpha, const Dia
                      {"score", t.score},
                      {"score_p_value", t.score_p_value},
                      {"refit", t.refit}});
-    if (t.refit) tests.back()["chi2_per_dof_after"] = t.chi2_per_dof_after;
+    if (t.refit) AddRefitKeys(t, &tests.back());
     if (!t.absorbs.empty()) tests.back()["absorbs"] = t.absorbs;
   }
   out["tests"] = tests;
@@ -139,8 +148,9 @@ nlohmann::json DiagnoseJson(const std::string& run_yaml, double alpha, const Dia
   out["selected"] = nlohmann::json::array();
   for (Effect e : d.selected) out["selected"].push_back(GetEffectSpec(e).name);
   out["selection_rule"] =
-      "forward, one effect per round; selected when its p-value < alpha / "
-      "(candidates in the round), alpha = " +
+      "forward, one effect per round; selected when its p-value and, refitted, its Wald "
+      "p-value (against the refit's reported covariance) are both < alpha / (candidates in "
+      "the round), alpha = " +
       std::to_string(alpha);
   out["before"] = StateJson(d.before_layout, d.before, d.before_residuals, tp);
   out["after"] = StateJson(d.after_layout, d.after, d.after_residuals, tp);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <set>
 #include <sstream>
@@ -114,6 +115,21 @@ std::vector<EffectCorrelation> Correlations(const ParameterLayout& layout, const
   return out;
 }
 
+// A refitted candidate is significant when both its likelihood ratio and its
+// Wald test pass: the first assumes white residuals at the noise used, the
+// second measures the fitted size against the refit's reported sigma, which
+// hold for residuals correlated in time (the HAC sandwich, hac_covariance.h).
+// With reading noise correlated over 0.5 s (bench/scenarios/paper-coloured
+// .yaml, no effect) the likelihood ratio alone selected an effect on 41 of 50
+// clean runs. (A score test with the long-run covariance of the epochs'
+// scores at the base fit, which needs no refit, was tried: its variance comes
+// from the residual that still holds the effect, and it found a 5' encoder
+// harmonic in 35 % of the runs where the likelihood ratio finds it in 100 %.)
+double DecisionP(const CandidateTest& t) {
+  return t.refit ? std::max(t.p_value, t.wald_p_value) : t.p_value;
+}
+bool Significant(const CandidateTest& t, double threshold) { return DecisionP(t) < threshold; }
+
 std::vector<Effect> WithEffect(std::vector<Effect> v, Effect e) {
   v.push_back(e);
   return v;
@@ -185,6 +201,7 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
   DiagnoseOptions opt = options;
   opt.fit.estimate_noise = false;
   RunDescription run = declared_run;
+  const bool noise_auto = run.noise_auto;
   if (run.noise_auto) {
     if (opt.progress) opt.progress("estimating the reading noise (noise_mV: auto)");
     BatchOptions noise_opt = options.fit;
@@ -340,6 +357,41 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
         t.note = "not supported by this run's motion";
       } else {
         t.p_value = ChiSquareSurvival(t.statistic, t.dof);
+        // The Wald test of the effect's free components against the refit's
+        // covariance (its reported sigma: the HAC sandwich when the residual
+        // is not white).
+        std::vector<int> free_e;
+        for (int q = 0; q < k; ++q) {
+          const int i = aug.offset(e) + q;
+          if (std::find(r.held.begin(), r.held.end(), aug.info(i).name) == r.held.end()) {
+            free_e.push_back(i);
+          }
+        }
+        if (r.estimate.cov.rows() == aug.size() && !free_e.empty()) {
+          const int m = static_cast<int>(free_e.size());
+          Eigen::MatrixXd C(m, m);
+          Eigen::VectorXd v(m);
+          for (int a = 0; a < m; ++a) {
+            v[a] = r.estimate.theta[free_e[a]];
+            for (int b = 0; b < m; ++b) C(a, b) = r.estimate.cov(free_e[a], free_e[b]);
+          }
+          t.wald = std::max(0.0, v.dot(C.ldlt().solve(v)));
+          // The HAC covariance is an estimate: a Bartlett bandwidth of S
+          // epochs over E gives it about nu = 1.5 E / S degrees of freedom
+          // (its variance, 4/3 S/E of its square, Andrews 1991, as a scaled
+          // chi-square's), and the Wald statistic is then Hotelling's. The
+          // model's covariance is not estimated from this residual: chi2.
+          t.wald_dof = std::numeric_limits<double>::infinity();
+          if (r.sigma_method == "hac" && r.hac_bandwidth_epochs > 0.0) {
+            t.wald_dof = 1.5 * r.epochs / std::max(1.0, r.hac_bandwidth_epochs);
+          }
+          t.wald_p_value = HotellingSurvival(t.wald, m, t.wald_dof);
+        }
+        if (t.p_value < threshold && !(t.wald_p_value < threshold)) {
+          t.note = "likelihood ratio significant, but its size is not against its sigma (Wald p " +
+                   FormatNumber(t.wald_p_value) +
+                   "): what it fits is the residual's correlation in time";
+        }
         t.absorbs = Implausible(run, aug, r, e);
         // Significant, but every component it frees is in a direction its own
         // refit cannot determine (the fit's "not estimable": real fast roll,
@@ -435,14 +487,14 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
     // yet refitted are refitted, best score first, until one is plausible.
     {
       auto selectable = [&](const CandidateTest& t) {
-        return t.refit && t.p_value < threshold && t.absorbs.empty();
+        return t.refit && Significant(t, threshold) && t.absorbs.empty();
       };
       bool found = std::any_of(tests.begin(), tests.end(), selectable);
       while (!found) {
         int next = -1;
         for (std::size_t i = 0; i < tests.size(); ++i) {
           const CandidateTest& t = tests[i];
-          if (t.refit || t.dof == 0 || !(t.p_value < threshold)) continue;
+          if (t.refit || t.dof == 0 || !Significant(t, threshold)) continue;
           if (next < 0 || t.statistic > tests[next].statistic) next = static_cast<int>(i);
         }
         if (next < 0) break;
@@ -458,7 +510,8 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
     std::sort(order.begin(), order.end(), [&](int a, int b) {
       const CandidateTest& x = tests[a];
       const CandidateTest& y = tests[b];
-      return x.p_value < y.p_value || (x.p_value == y.p_value && x.statistic > y.statistic);
+      const double px = DecisionP(x), py = DecisionP(y);
+      return px < py || (px == py && x.statistic > y.statistic);
     });
     std::vector<CandidateTest> sorted;
     for (int i : order) sorted.push_back(tests[i]);
@@ -497,7 +550,7 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
       // it in this order can (p underflows to 0 for strong effects, and the
       // tie is broken by statistics of two kinds, score and LR).
       if (!t.refit) continue;
-      if (!(t.p_value < threshold)) break;
+      if (!Significant(t, threshold)) break;
       if (t.absorbs.empty()) {
         pick = static_cast<int>(i);
       } else {
@@ -511,7 +564,7 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
       const CandidateTest& s = sorted[pick];
       for (std::size_t i = pick + 1; i < sorted.size(); ++i) {
         const CandidateTest& t = sorted[i];
-        if (!t.refit || !(t.p_value < threshold) || !t.absorbs.empty()) continue;
+        if (!t.refit || !Significant(t, threshold) || !t.absorbs.empty()) continue;
         if ((s.statistic - s.dof) - (t.statistic - t.dof) < 2.0 * std::log(10.0)) {
           res.alternatives.push_back(t);
           res.notes.push_back(
@@ -534,6 +587,49 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
     const ParameterLayout next(current);
     // The selected candidate's refit (with its covariance) is the new fit.
     fit = std::move(refits[order[pick]]);
+    if (noise_auto) {
+      // noise_mV: auto: the noise estimated from the base model's fit holds
+      // the misfit of what the loop has since added (real medium roll run:
+      // chi2/dof 0.05 after the 8.6-ms latency and the drift), and every
+      // later test at that level would be blind by the same factor. The next
+      // round's tests, base fit and refits alike, use the noise of this fit's
+      // residual (and so does the final fit's sigma); within a round all
+      // fits share one noise, as the likelihood ratio needs.
+      say("round " + std::to_string(round) + ": re-estimating the reading noise with " +
+          GetEffectSpec(sorted[pick].effect).name + " added");
+      // As the batch solver decides (noise_estimation.h): each channel's
+      // figure when the residual is white and the channels alike, else one
+      // common level; then the fit at exactly that noise (the next round's
+      // likelihood ratios compare costs at one noise).
+      const NoiseEstimate& ne = fit.noise_check;
+      const Eigen::Vector3d noise =
+          ne.PerChannel() ? ne.estimated_mV
+                          : Eigen::Vector3d::Constant(std::sqrt(ne.estimated_mV.squaredNorm() / 3));
+      RunDescription next_run = run;
+      next_run.noise_channel_mV = noise;
+      next_run.noise_mV = std::sqrt(noise.squaredNorm() / 3.0);
+      span_begin = span_end;
+      span_end = round_end;
+      BatchResult r = FitLayout(next_run, data, next, fit.estimate.theta, fit.held,
+                                FreeNames(next, fit.held), fit_opt, true);
+      r.relative_to = fit.relative_to;
+      r.pinned = fit.pinned;
+      r.unsupported_at_start = fit.unsupported_at_start;
+      r.information_at_start = fit.information_at_start;
+      if (!r.pinned.empty() && r.information_at_start.rows() == next.size()) {
+        AddPinnedUncertainty(next, &r);
+      }
+      char figures[200];
+      std::snprintf(figures, sizeof(figures),
+                    "round %d: reading noise re-estimated with %s added: %.3g %.3g %.3g mV "
+                    "(was %.3g %.3g %.3g mV)",
+                    round, GetEffectSpec(sorted[pick].effect).name.c_str(), noise[0], noise[1],
+                    noise[2], run.ChannelNoise_mV()[0], run.ChannelNoise_mV()[1],
+                    run.ChannelNoise_mV()[2]);
+      res.notes.push_back(figures);
+      run = next_run;
+      fit = std::move(r);
+    }
     info_current = false;
     round_begin = round_end;
     round_end += 0.6 * (0.95 - round_end);

@@ -82,6 +82,15 @@ struct CandidateTest {
   double threshold = 0.0;  // alpha / candidates in the round
   double score = 0.0;      // score (LM) statistic from the current fit, scaled as the LR
   double score_p_value = 1.0;
+  // Refitted: the Wald statistic of the effect's free components against the
+  // refit's reported covariance (honest for correlated residuals), and its
+  // p-value. A candidate is selected only when this and p_value both pass.
+  double wald = 0.0;
+  double wald_p_value = 1.0;
+  // The degrees of freedom of that covariance (infinite for the model's;
+  // about 1.5 E / S for the HAC one, bandwidth S over E epochs): the p-value
+  // is Hotelling's (statistics.h).
+  double wald_dof = 0.0;
   bool refit = false;  // lr, statistic, p_value from a refit (else from the score)
   bool selected = false;
   std::string note;                 // e.g. why it could not be tested

@@ -27,6 +27,17 @@ double ChiSquareUpperQuantile(double p, double k) {
   return 0.5 * (lo + hi);
 }
 
+double FSurvival(double f, double d1, double d2) {
+  if (!(f > 0.0)) return 1.0;
+  return Eigen::numext::betainc(0.5 * d2, 0.5 * d1, d2 / (d2 + d1 * f));
+}
+
+double HotellingSurvival(double w, double k, double nu) {
+  if (!std::isfinite(nu)) return ChiSquareSurvival(w, k);
+  if (!(nu > k - 1.0)) return 1.0;
+  return FSurvival(w * (nu - k + 1.0) / (k * nu), k, nu - k + 1.0);
+}
+
 double NoncentralChiSquareSurvival(double x, double k, double lambda) {
   // Poisson mixture of central chi-squares: sum_j Pois(j; lambda/2) Q(x; k + 2j).
   if (lambda <= 0.0) return ChiSquareSurvival(x, k);

@@ -12,6 +12,16 @@ double ChiSquareSurvival(double x, double k);
 // x with P(X > x) = p for X ~ chi-square with k degrees of freedom.
 double ChiSquareUpperQuantile(double p, double k);
 
+// P(F > f) for F ~ Fisher's F with d1 and d2 degrees of freedom.
+double FSurvival(double f, double d1, double d2);
+
+// P(W > w) for a Wald (or Hotelling) statistic W = v^T C^-1 v over k
+// components whose covariance C is itself estimated with nu degrees of
+// freedom: W (nu - k + 1) / (k nu) ~ F(k, nu - k + 1) (Hotelling's T^2). As
+// nu grows it is ChiSquareSurvival(w, k); with nu <= k - 1 the estimate
+// cannot test k components, and the p-value is 1.
+double HotellingSurvival(double w, double k, double nu);
+
 // P(X > x) for X ~ noncentral chi-square, k degrees of freedom, noncentrality
 // lambda (the distribution of a test statistic when the tested effect is there).
 double NoncentralChiSquareSurvival(double x, double k, double lambda);
