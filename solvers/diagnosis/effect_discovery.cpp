@@ -194,10 +194,11 @@ std::vector<HideCase> CouldHideOnProfile(const RunDescription& run, const RunDat
 
 DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data,
                          const DiagnoseOptions& options) {
-  // The likelihood-ratio tests compare fits under one noise model: the noise
-  // is the declared one throughout (re-estimating it per candidate would let
-  // the noise absorb the very structure under test). With noise_mV: auto it
-  // is estimated once, from the base model's fit, and then held.
+  // The likelihood-ratio tests compare fits under one noise model: the
+  // declared noise throughout (re-estimating it per candidate would let the
+  // noise absorb the very structure under test). With noise_mV: auto it is
+  // estimated from the base model's fit, then again after each selection,
+  // and held within each round.
   DiagnoseOptions opt = options;
   opt.fit.estimate_noise = false;
   RunDescription run = declared_run;
@@ -207,6 +208,7 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
     BatchOptions noise_opt = options.fit;
     noise_opt.estimate_noise = true;
     noise_opt.fraction = nullptr;
+    noise_opt.compute_covariance = false;
     const BatchResult base = SolveBatch(run, data, ParameterLayout(), noise_opt);
     // With a variance factor (noise split judged misfit) every channel's
     // declared noise times its root.
