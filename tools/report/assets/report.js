@@ -363,10 +363,12 @@
   }
   function renderDiagnose(p, out) {
     var s = section(p, 'Candidate effects (round 1)', out.selection_rule);
-    s.appendChild(table(['effect', 'statistic', 'dof', 'p-value', 'threshold', 'selected', 'note'],
+    s.appendChild(table(['effect', 'statistic', 'dof', 'p-value', 'Wald p-value', 'threshold',
+                         'selected', 'note'],
         (out.ranking || []).map(function (t) {
-          return [t.effect, g(t.statistic, 4), t.dof, g(t.p_value, 3), g(t.threshold, 3),
-                  t.selected ? 'yes' : '', t.note || ''];
+          return [t.effect, g(t.statistic, 4), t.dof, g(t.p_value, 3),
+                  t.refit && isNum(t.wald_p_value) ? g(t.wald_p_value, 3) : '',
+                  g(t.threshold, 3), t.selected ? 'yes' : '', t.note || ''];
         })));
     var hide = [];
     (out.ranking || []).forEach(function (t) {
