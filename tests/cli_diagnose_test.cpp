@@ -33,8 +33,8 @@ run:
 effects:
   angle_latency: {tau_ms: 2.0}
 )");
-  ASSERT_EQ(RunTriadcal("simulate " + sc + " -o " + Path("sim") + " --seed 2", Path("s.err")).status,
-            0);
+  ASSERT_EQ(
+      RunTriadcal("simulate " + sc + " -o " + Path("sim") + " --seed 2", Path("s.err")).status, 0);
   // stdout kept (RunCommand discards the subshell's, not the command's).
   const auto r = testing_fixtures::RunCommand(
       std::string("(") + TRIADCAL_BIN + " diagnose " + Path("sim/run.yaml") + " -o " +

@@ -75,9 +75,9 @@ int RunDiagnose(const DiagnoseArgs& a) {
   for (const CandidateTest& t : d.ranking) {
     char wald[40] = "";
     if (t.refit) std::snprintf(wald, sizeof(wald), "Wald p %-10.3g ", t.wald_p_value);
-    std::printf("  %-26s stat %10.2f  dof %d  p %-10.3g %s%s%s\n", GetEffectSpec(t.effect).name.c_str(),
-                t.statistic, t.dof, t.p_value, wald, t.selected ? "SELECTED" : "",
-                t.note.empty() ? "" : ("(" + t.note + ")").c_str());
+    std::printf("  %-26s stat %10.2f  dof %d  p %-10.3g %s%s%s\n",
+                GetEffectSpec(t.effect).name.c_str(), t.statistic, t.dof, t.p_value, wald,
+                t.selected ? "SELECTED" : "", t.note.empty() ? "" : ("(" + t.note + ")").c_str());
   }
   for (const CandidateTest& t : d.absorbing) {
     std::printf("  round %d: %s NOT a finding (p %.3g): %s\n", t.round,

@@ -51,16 +51,17 @@ nlohmann::json StateJson(const ParameterLayout& layout, const BatchResult& r,
   return j;
 }
 
-}  // namespace
-
 // What only a refit has: its chi2/dof and the Wald test of the effect
 // (docs/file-formats.md).
 void AddRefitKeys(const CandidateTest& t, nlohmann::json* j) {
   (*j)["chi2_per_dof_after"] = t.chi2_per_dof_after;
   (*j)["wald"] = t.wald;
   (*j)["wald_p_value"] = t.wald_p_value;
-  (*j)["wald_dof"] = std::isfinite(t.wald_dof) ? nlohmann::json(t.wald_dof) : nlohmann::json();
+  (*j)["wald_dof"] =
+      std::isfinite(t.wald_dof) && t.wald_dof > 0.0 ? nlohmann::json(t.wald_dof) : nlohmann::json();
 }
+
+}  // namespace
 
 nlohmann::json CouldHideJson(const std::vector<HideCase>& could_hide) {
   nlohmann::json hide = nlohmann::json::array();

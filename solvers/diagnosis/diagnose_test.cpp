@@ -42,7 +42,8 @@ TEST(DiagnoseStatistics, FAndHotellingTails) {
   // few degrees of freedom makes the same statistic less significant; with
   // no more than k - 1 it tests nothing.
   const double inf = std::numeric_limits<double>::infinity();
-  EXPECT_EQ(HotellingSurvival(11.070497693516351, 5.0, inf), ChiSquareSurvival(11.070497693516351, 5));
+  EXPECT_EQ(HotellingSurvival(11.070497693516351, 5.0, inf),
+            ChiSquareSurvival(11.070497693516351, 5));
   EXPECT_NEAR(HotellingSurvival(11.070497693516351, 5.0, 1e7), 0.05, 1e-5);
   EXPECT_GT(HotellingSurvival(18.0, 3.0, 34.0), 5.0 * ChiSquareSurvival(18.0, 3));
   EXPECT_EQ(HotellingSurvival(50.0, 3.0, 2.0), 1.0);
