@@ -11,6 +11,7 @@
 
 #include "core/io/file_util.h"
 #include "core/model/effects.h"
+#include "tests/cli_scenarios.h"
 #include "tests/command_runner.h"
 #include "tests/temp_dir_test.h"
 
@@ -23,16 +24,7 @@ using testing_fixtures::RunTriadcal;
 class CouldHideCli : public testing_fixtures::TempDirTest {
  protected:
   std::string Scenario() {
-    return WriteText("scenario.yaml", R"(
-profile: {duration_s: 60, rate_hz: 50}
-truth: {Kx: 171.5, Ky: 175.8, Kz: 174.8, W0x: 1504.2, W0y: 1504.2, W0z: 1504.3,
-        dpsi: -33, dtheta_c: 43, dlambda2: -33, dx2: -7, dy2: 16, dz2: 4}
-noise: {accel_mV: 2.0, angle_arcsec: 15}
-run:
-  triad: {scale_mV_per_g: [174, 174, 174], bias_mV: [1500, 1500, 1500]}
-  constraints:
-    - {expr: "dpsi - dlambda2", value_arcmin: 0, sigma_arcsec: 30}
-)");
+    return WriteText("scenario.yaml", testing_fixtures::kPaper60sScenario);
   }
 };
 

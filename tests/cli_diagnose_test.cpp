@@ -7,6 +7,7 @@
 #include <string>
 
 #include "core/io/file_util.h"
+#include "tests/cli_scenarios.h"
 #include "tests/command_runner.h"
 #include "tests/temp_dir_test.h"
 
@@ -21,18 +22,9 @@ class DiagnoseCli : public testing_fixtures::TempDirTest {};
 // statistic within 20 % of the likelihood ratio and the model's covariance
 // behind it (wald_dof null: chi-square reference).
 TEST_F(DiagnoseCli, RefittedCandidateCarriesItsWaldTest) {
-  const std::string sc = WriteText("scenario.yaml", R"(
-profile: {duration_s: 60, rate_hz: 50}
-truth: {Kx: 171.5, Ky: 175.8, Kz: 174.8, W0x: 1504.2, W0y: 1504.2, W0z: 1504.3,
-        dpsi: -33, dtheta_c: 43, dlambda2: -33, dx2: -7, dy2: 16, dz2: 4}
-noise: {accel_mV: 2.0, angle_arcsec: 15}
-run:
-  triad: {scale_mV_per_g: [174, 174, 174], bias_mV: [1500, 1500, 1500]}
-  constraints:
-    - {expr: "dpsi - dlambda2", value_arcmin: 0, sigma_arcsec: 30}
-effects:
-  angle_latency: {tau_ms: 2.0}
-)");
+  const std::string sc =
+      WriteText("scenario.yaml", std::string(testing_fixtures::kPaper60sScenario) +
+                                     "effects:\n  angle_latency: {tau_ms: 2.0}\n");
   ASSERT_EQ(
       RunTriadcal("simulate " + sc + " -o " + Path("sim") + " --seed 2", Path("s.err")).status, 0);
   // stdout kept (RunCommand discards the subshell's, not the command's).

@@ -9,6 +9,10 @@ set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 bin="${TRIADCAL:-$here/../../build/tools/triadcal}"
 out="${1:-out/single-axis-roll}"
+if [ $# -gt 2 ] || { [ $# -eq 2 ] && [ "$2" != "--noise-auto" ]; }; then
+  echo "run_loop.sh: unknown argument '${*:2}' (usage: run_loop.sh [OUTDIR] [--noise-auto])" >&2
+  exit 2
+fi
 mkdir -p "$out"
 for s in slow medium fast; do
   yaml="$here/$s.yaml"

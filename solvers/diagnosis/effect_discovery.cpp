@@ -130,6 +130,30 @@ double DecisionP(const CandidateTest& t) {
 }
 bool Significant(const CandidateTest& t, double threshold) { return DecisionP(t) < threshold; }
 
+// A refit (FitLayout: every parameter named held or free) makes no hold
+// decision of its own, so what the holds of the fit it starts from stand for
+// carries over: a parameter known only relative to a held one (beta_x to
+// dtheta_c on a single-axis run) is not reported as estimable on its own
+// after the loop either. So do the pins, and their uncertainty in the others'
+// sigma (the information at the start has no rows for a new effect: its
+// parameters get none of it). `to` holds every parameter of `from_layout`.
+void CarryOverHolds(const BatchResult& from, const ParameterLayout& from_layout,
+                    const ParameterLayout& to, BatchResult* r) {
+  r->relative_to = from.relative_to;
+  r->pinned = from.pinned;
+  r->unsupported_at_start = from.unsupported_at_start;
+  if (r->pinned.empty() || from.information_at_start.rows() != from_layout.size()) return;
+  r->information_at_start = Eigen::MatrixXd::Zero(to.size(), to.size());
+  for (int a = 0; a < from_layout.size(); ++a) {
+    for (int b = 0; b < from_layout.size(); ++b) {
+      r->information_at_start(to.IndexOf(from_layout.info(a).name),
+                              to.IndexOf(from_layout.info(b).name)) =
+          from.information_at_start(a, b);
+    }
+  }
+  AddPinnedUncertainty(to, r);
+}
+
 std::vector<Effect> WithEffect(std::vector<Effect> v, Effect e) {
   v.push_back(e);
   return v;
@@ -323,27 +347,7 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
       for (int q : c.unsupported) hold.push_back(spec.name + "." + spec.params[q].name);
       for (int q : c.supported) free.push_back(spec.name + "." + spec.params[q].name);
       BatchResult r = FitLayout(run, data, aug, start, hold, free, fit_opt, true);
-      // The refit holds what the current fit held (no hold decision of its
-      // own): what those holds stand for carries over, so a parameter known
-      // only relative to a held one (beta_x to dtheta_c on a single-axis run)
-      // is not reported as estimable on its own after the loop either.
-      r.relative_to = fit.relative_to;
-      // So do its pins, and their uncertainty in the others' sigma (the
-      // information at the start has no rows for the new effect: its
-      // parameters get none of it).
-      r.pinned = fit.pinned;
-      if (!r.pinned.empty() && fit.information_at_start.rows() == layout.size()) {
-        r.information_at_start = Eigen::MatrixXd::Zero(aug.size(), aug.size());
-        for (int a = 0; a < layout.size(); ++a) {
-          for (int b = 0; b < layout.size(); ++b) {
-            r.information_at_start(aug.IndexOf(layout.info(a).name),
-                                   aug.IndexOf(layout.info(b).name)) =
-                fit.information_at_start(a, b);
-          }
-        }
-        AddPinnedUncertainty(aug, &r);
-      }
-      r.unsupported_at_start = fit.unsupported_at_start;
+      CarryOverHolds(fit, layout, aug, &r);
       const int k = static_cast<int>(GetEffectSpec(e).params.size());
       int held_new = 0;
       for (const std::string& h : r.held) {
@@ -614,13 +618,7 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
       span_end = round_end;
       BatchResult r = FitLayout(next_run, data, next, fit.estimate.theta, fit.held,
                                 FreeNames(next, fit.held), fit_opt, true);
-      r.relative_to = fit.relative_to;
-      r.pinned = fit.pinned;
-      r.unsupported_at_start = fit.unsupported_at_start;
-      r.information_at_start = fit.information_at_start;
-      if (!r.pinned.empty() && r.information_at_start.rows() == next.size()) {
-        AddPinnedUncertainty(next, &r);
-      }
+      CarryOverHolds(fit, next, next, &r);
       char figures[200];
       std::snprintf(figures, sizeof(figures),
                     "round %d: reading noise re-estimated with %s added: %.3g %.3g %.3g mV "
