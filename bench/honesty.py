@@ -491,8 +491,13 @@ def real(work, a):
               f"(x {statistics.median(chi.values()) / CHI2_1_MEDIAN:.2f} the median of chi2 with "
               f"1 dof, {CHI2_1_MEDIAN}, that honest sigma give) over "
               f"{len(chi)} parameters (largest: "
-              + ", ".join(f"{n} {c:.1f}" for n, c in worst) + ")")
-        if band:
+              + ", ".join(f"{n} {c:.1f}" for n, c in worst) + f"); mean {statistics.mean(chi.values()):.2f}, "
+              f"without the largest {statistics.mean(sorted(chi.values())[:-1]):.2f} (1 when honest)")
+        if band is None:
+            print(f"{speed}: the band of the median that honest sigma give is not drawn: "
+                  f"this python ({sys.executable}) has no numpy, or a fit wrote no "
+                  f"correlations (Debian: python3-numpy, with /usr/bin/python3)")
+        else:
             lo, mid, hi, p = band
             print(f"{speed}: honest sigma, given the {len(chi)} parameters' correlations, give a "
                   f"median of {mid:.2f} (5-95 %: {lo:.2f}-{hi:.2f}); one as far out as "

@@ -610,7 +610,8 @@ Eigen::MatrixXd FreeCovariance(const RunProblem& p, const BatchLinearization& li
         Eigen::LDLT<Eigen::MatrixXd>(info).solve(Eigen::MatrixXd::Identity(nf, nf));
     if (hac) {
       *hac = HacThetaCovariance(EpochScores(pb, mb), info, A.transpose() * A,
-                                opt.hac_bandwidth_epochs);
+                                opt.hac_bandwidth_epochs, false,
+                                opt.hac_kernel_bias_correction);
     }
     if (process_jacobians) *process_jacobians = std::move(C);
     return cov;
@@ -832,6 +833,10 @@ BatchResult SolveBatchOnce(const RunDescription& run, const RunData& data,
         res.noise_source == "estimated_common" && !res.noise_check.channels_alike;
     if (with_hac) {
       res.hac_bandwidth_epochs = hac.bandwidth;
+      res.hac_kernel_bias_corrected = opt.hac_kernel_bias_correction;
+      res.hac_kernel_bias_factor_max = hac.kernel_bias_factor.size() > 0
+                                           ? hac.kernel_bias_factor.maxCoeff()
+                                           : 1.0;
       res.cov_hac = ExpandCovariance(p, hac.cov);
       if (opt.sigma == "hac" || (opt.sigma == "auto" && (!res.residual_white || misweighted))) {
         res.sigma_method = "hac";

@@ -126,6 +126,7 @@ struct BatchOptions {
   // or "hac". HAC needs the Schur covariance (not with a robust loss).
   std::string sigma = "auto";
   double hac_bandwidth_epochs = -1.0;  // < 0: Andrews's plug-in (hac_covariance.h)
+  bool hac_kernel_bias_correction = true;  // hac_covariance.h
   int threads = 0;                // 0: all cores
   HoldPolicy holding;            // which parameters to hold at nominal
   // Estimate the reading noise from the residuals (noise_estimation.h) and
@@ -239,6 +240,10 @@ struct BatchResult {
   // delta ~ P does not cancel.
   Eigen::MatrixXd pinned_sensitivity, pinned_cov;
   double hac_bandwidth_epochs = 0.0;  // the Bartlett bandwidth used, epochs
+  // Whether the HAC estimate's kernel bias was corrected (hac_covariance.h),
+  // and the largest factor that put on a parameter's sigma_hac.
+  bool hac_kernel_bias_corrected = false;
+  double hac_kernel_bias_factor_max = 1.0;
   double init_seconds = 0.0, solve_seconds = 0.0, covariance_seconds = 0.0;
   int epochs = 0;
 };

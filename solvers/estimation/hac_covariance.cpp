@@ -7,6 +7,24 @@
 
 namespace triadcal {
 
+double Lag1(const Eigen::VectorXd& series) {
+  const Eigen::Index N = series.size();
+  if (N < 3) return 0.0;
+  const Eigen::VectorXd x = series.array() - series.mean();
+  const double x0 = x.head(N - 1).squaredNorm();
+  return x0 > 0.0 ? x.tail(N - 1).dot(x.head(N - 1)) / x0 : 0.0;
+}
+
+double BartlettAr1Ratio(double rho, double bandwidth, Eigen::Index max_lag) {
+  rho = std::clamp(rho, -0.97, 0.97);
+  double g = 1.0, p = 1.0;
+  for (Eigen::Index l = 1; static_cast<double>(l) < bandwidth && l <= max_lag; ++l) {
+    p *= rho;
+    g += 2.0 * (1.0 - static_cast<double>(l) / bandwidth) * p;
+  }
+  return (1.0 + rho) / (1.0 - rho) / g;
+}
+
 double BartlettBandwidth(const Eigen::MatrixXd& series, const Eigen::VectorXd& weight,
                          double* largest_lag1) {
   const Eigen::Index N = series.rows();
@@ -39,10 +57,12 @@ double BartlettBandwidth(const Eigen::MatrixXd& series, const Eigen::VectorXd& w
 HacCovariance HacThetaCovariance(const std::vector<Eigen::VectorXd>& scores,
                                  const Eigen::MatrixXd& information,
                                  const Eigen::MatrixXd& theta_rows_information,
-                                 double bandwidth, bool prewhiten) {
+                                 double bandwidth, bool prewhiten,
+                                 bool correct_kernel_bias) {
   const Eigen::Index n = information.rows();
   const std::size_t E = scores.size();
   HacCovariance out;
+  out.kernel_bias_factor = Eigen::VectorXd::Ones(n);
   const Eigen::LDLT<Eigen::MatrixXd> ldlt(information);
   const Eigen::MatrixXd Iinv = ldlt.solve(Eigen::MatrixXd::Identity(n, n));
   if (E < 2) {
@@ -97,9 +117,23 @@ HacCovariance HacThetaCovariance(const std::vector<Eigen::VectorXd>& scores,
   }
   const double N = 6.0 * static_cast<double>(E - 1);
   const double k = weight.sum();
-  B *= N / std::max(1.0, N - k);
-  B += theta_rows_information;
-  out.cov = Iinv * B * Iinv;
+  Eigen::MatrixXd data_cov = Iinv * B * Iinv * (N / std::max(1.0, N - k));
+  // The kernel's bias (hac_covariance.h), parameter by parameter: the
+  // long-run variance of an AR(1) series with the lag-1 of the parameter's
+  // influence series (I^-1 u_e, what each epoch adds to its error) over what
+  // the Bartlett weights at this bandwidth take of it.
+  if (correct_kernel_bias) {
+    const Eigen::MatrixXd influence = u * Iinv;
+    const Eigen::Index max_lag = m0 - 1;
+    for (Eigen::Index a = 0; a < n; ++a) {
+      if (!(data_cov(a, a) > 0.0)) continue;
+      out.kernel_bias_factor[a] =
+          std::sqrt(BartlettAr1Ratio(Lag1(influence.col(a)), out.bandwidth, max_lag));
+    }
+    const Eigen::VectorXd& d = out.kernel_bias_factor;
+    data_cov = d.asDiagonal() * data_cov * d.asDiagonal();
+  }
+  out.cov = data_cov + Iinv * theta_rows_information * Iinv;
   out.cov = 0.5 * (out.cov + out.cov.transpose());
   return out;
 }

@@ -22,14 +22,41 @@
 //
 // Prewhitening (Andrews and Monahan 1992; off by default), per parameter: an
 // AR(1) filter u_e = s_e - rho_a s_{e-1}, the kernel estimate on u,
-// recoloured by 1 / (1 - rho_a). Measured both ways: on simulated runs with
-// Gauss-Markov reading noise (bench/honesty.py --only coloured, 181 epochs)
-// RMS z is 1.16 without and 0.91 with it (1.04 without at 721 epochs); on the
-// real medium roll run cut in halves (--only real) the halves agree at a
-// median chi2/dof of 0.92 without and 0.29 with it: there the scores' lag-1
-// reaches 0.9 and the recolouring
-// 1 / (1 - rho)^2 (up to 1100 at the 0.97 cap) inflates sigma up to 15x. The
-// plain estimate is the default.
+// recoloured by 1 / (1 - rho_a). Measured both ways, before the kernel-bias
+// correction below: on simulated runs with Gauss-Markov reading noise
+// (bench/honesty.py --only coloured, 181 epochs) RMS z was 1.16 without and
+// 0.91 with it (1.04 without at 721 epochs); on the real medium roll run cut
+// in halves (--only real) the halves agreed at a median chi2/dof of 0.92
+// without and 0.29 with it: there the scores' lag-1 reaches 0.9 and the
+// recolouring 1 / (1 - rho)^2 (up to 1100 at the 0.97 cap) inflates sigma up
+// to 15x. The plain estimate is the default.
+//
+// The kernel's bias, corrected (on by default). At bandwidth S the Bartlett
+// weights take, of an AR(1) series with lag-1 rho and variance g0, not its
+// long-run variance g0 (1 + rho) / (1 - rho) but
+//   g0 (1 + 2 sum_{1 <= l < S} (1 - l / S) rho^l),
+// low by about 2 rho / ((1 - rho^2) S) of the former (rho 0.4 at S 7.5: 13 %
+// of the variance). On the 181 epochs of a 90-s run that bias, not the
+// estimate's spread, was most of the RMS z of 1.16 above. So each
+// parameter's row and column of the data's part of the covariance,
+// I^-1 B I^-1, is scaled by the square root of the ratio of the two at the
+// lag-1 of its influence series I^-1 s_e (what each epoch adds to its error;
+// kernel_bias_factor): the correlations stay, the matrix stays positive
+// semi-definite. Not at the raw scores' lag-1: where the information
+// correlates parameters, their scores mix (s = I v), and a factor on B from
+// a mixture spoils the cancellation in I^-1 B I^-1 (the slow real roll run's
+// first fit, before the loop: sigma of Kx 2.47 -> 37 mV/g that way, 2.47
+// as before this way; test KernelBiasCorrectionFollowsEachParametersInfluence).
+// Unlike prewhitening, only the part the
+// kernel misses is extrapolated from the AR(1) fit, so the factor stays
+// moderate where the scores' lag-1 is large (0.9 at S = 20: 1.31 on sigma;
+// prewhitening's recolouring there is 10). Measured (docs/method.md,
+// docs/validation.md): on 400 AR(1) series of 181 epochs with rho 0.4 the
+// mean estimate goes from 0.85 to 1.00 of the long-run variance (test
+// KernelBiasCorrectionRestoresTheLongRunVarianceOnFewEpochs); on the coloured
+// paper runs RMS z 1.16 -> 1.08 at 90 s (20 seeds; 100 seeds: 1.077, factor
+// 1.10-1.18) and 0.98 at 360 s; on white runs the factor's spread is a few
+// per cent and the floor at the model's covariance keeps sigma where it was.
 //
 // The bandwidth S: Andrews's AR(1) plug-in for the Bartlett kernel,
 // S = 1.1447 (alpha N)^(1/3), alpha from an AR(1) fit to each parameter's
@@ -47,6 +74,8 @@ struct HacCovariance {
   Eigen::MatrixXd cov;       // I^-1 B I^-1 (n x n)
   double bandwidth = 0.0;    // S, in epochs (lags l < S carry weight)
   double score_lag1 = 0.0;   // largest |lag-1 autocorrelation| of a parameter's scores
+  // Per parameter, the kernel-bias correction's factor on sigma (1 without it).
+  Eigen::VectorXd kernel_bias_factor;
 };
 
 // scores: E per-epoch score vectors (n each); information: the Fisher
@@ -59,7 +88,16 @@ struct HacCovariance {
 HacCovariance HacThetaCovariance(const std::vector<Eigen::VectorXd>& scores,
                                  const Eigen::MatrixXd& information,
                                  const Eigen::MatrixXd& theta_rows_information,
-                                 double bandwidth = -1.0, bool prewhiten = false);
+                                 double bandwidth = -1.0, bool prewhiten = false,
+                                 bool correct_kernel_bias = true);
+
+// The lag-1 autocorrelation of a series (mean removed, least squares).
+double Lag1(const Eigen::VectorXd& series);
+
+// The long-run variance of an AR(1) series with lag-1 rho (clamped to
+// +-0.97) over its Bartlett estimate's expectation at the given bandwidth,
+// lags up to max_lag (>= 1 for rho > 0).
+double BartlettAr1Ratio(double rho, double bandwidth, Eigen::Index max_lag);
 
 // Andrews's AR(1) plug-in bandwidth for the Bartlett kernel over the given
 // series (one per column of `series`, E rows; columns with weight 0 ignored).

@@ -202,7 +202,10 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
   if (r.cov_hac.rows() > 0) {
     out["hac"] = {{"kernel", "Bartlett"},
                   {"bandwidth_epochs", r.hac_bandwidth_epochs},
-                  {"bandwidth_rule", "Andrews (1991) AR(1) plug-in over the epoch scores"}};
+                  {"bandwidth_rule", "Andrews (1991) AR(1) plug-in over the epoch scores"},
+                  {"kernel_bias_correction",
+                   r.hac_kernel_bias_corrected ? "AR(1) ratio per parameter" : "none"},
+                  {"kernel_bias_sigma_factor_max", r.hac_kernel_bias_factor_max}};
     if (!r.hac_floor.empty()) out["hac"]["floor"] = r.hac_floor;
   }
   out["initial"] = {{"parameters", ParametersJson(layout, r.initial.theta, r.initial.cov, {})}};
