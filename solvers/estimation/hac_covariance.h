@@ -47,10 +47,10 @@
 // a mixture spoils the cancellation in I^-1 B I^-1 (the slow real roll run's
 // first fit, before the loop: sigma of Kx 2.47 -> 37 mV/g that way, 2.47
 // as before this way; test KernelBiasCorrectionFollowsEachParametersInfluence).
-// Unlike prewhitening, only the part the
-// kernel misses is extrapolated from the AR(1) fit, so the factor stays
-// moderate where the scores' lag-1 is large (0.9 at S = 20: 1.31 on sigma;
-// prewhitening's recolouring there is 10). Measured (docs/method.md,
+// Unlike prewhitening, only the part the kernel misses is extrapolated from
+// the AR(1) fit, so the factor stays moderate where the lag-1 is large (0.9
+// at S = 20: 1.31 on sigma; prewhitening's recolouring there is 10; on the
+// real medium and fast roll runs the largest factor is 1.05). Measured (docs/method.md,
 // docs/validation.md): on 400 AR(1) series of 181 epochs with rho 0.4 the
 // mean estimate goes from 0.85 to 1.00 of the long-run variance (test
 // KernelBiasCorrectionRestoresTheLongRunVarianceOnFewEpochs); on the coloured
