@@ -22,7 +22,9 @@ double BartlettAr1Ratio(double rho, double bandwidth, Eigen::Index max_lag) {
     p *= rho;
     g += 2.0 * (1.0 - static_cast<double>(l) / bandwidth) * p;
   }
-  return (1.0 + rho) / (1.0 - rho) / g;
+  // g > 0 for the Bartlett weights (a non-negative spectral window); kept
+  // as a guard against a degenerate series.
+  return g > 0.0 ? (1.0 + rho) / (1.0 - rho) / g : 1.0;
 }
 
 double BartlettBandwidth(const Eigen::MatrixXd& series, const Eigen::VectorXd& weight,
