@@ -114,9 +114,8 @@ py::dict RunDataDict(const RunData& d) {
 }
 
 py::object Fit(const py::object& run_arg, const std::string& effects, double epoch_s,
-               double rate_window_s, const std::string& init, const std::string& robust,
-               double robust_scale, const std::string& linear_solver, const std::string& covariance,
-               int threads, bool correlations, bool auto_hold, const std::vector<std::string>& hold,
+               double rate_window_s, const std::string& init, int threads, bool correlations,
+               bool auto_hold, const std::vector<std::string>& hold,
                const std::vector<std::string>& free) {
   if (init != "rts" && init != "nominal") {
     throw InputError("init: expected rts or nominal, got '" + init + "'");
@@ -147,11 +146,7 @@ py::object Fit(const py::object& run_arg, const std::string& effects, double epo
     opt.epoch_s = epoch_s;
     opt.derivatives.half_window_s = rate_window_s;
     opt.init = init == "rts" ? BatchInit::kRts : BatchInit::kNominal;
-    opt.linear_solver = linear_solver;
-    opt.robust_loss = robust;
-    opt.robust_scale = robust_scale;
     opt.threads = threads;
-    opt.covariance_method = covariance;
     opt.holding.auto_hold = auto_hold;
     opt.holding.hold = hold;
     opt.holding.free = free;
@@ -248,8 +243,7 @@ PYBIND11_MODULE(triadcal, m) {
     }
   });
   m.def("fit", &triadcal::Fit, "run"_a, py::kw_only(), "effects"_a = "", "epoch_s"_a = triadcal::kDefaultEpoch_s,
-        "rate_window_s"_a = 0.1, "init"_a = "rts", "robust"_a = "", "robust_scale"_a = 3.0,
-        "linear_solver"_a = "sparse_normal_cholesky", "covariance"_a = "schur", "threads"_a = 0,
+        "rate_window_s"_a = 0.1, "init"_a = "rts", "threads"_a = 0,
         "correlations"_a = false, "auto_hold"_a = true, "hold"_a = std::vector<std::string>{},
         "free"_a = std::vector<std::string>{},
         "Batch least-squares fit of a run (run.yaml path or dict); returns the OUT of "

@@ -436,10 +436,15 @@ TEST_F(CliInputErrors, CommandLineSyntaxIsOneLine) {
               "--help`)");
 }
 
-TEST_F(CliInputErrors, UnknownRobustLossIsAnInputError) {
-  // Under the sanitizer build this also checks that nothing leaks on the way out.
-  ExpectError("fit " + Path("run.yaml") + " -o " + Path("out.json") + " --robust bogus",
-              "--robust: unknown loss 'bogus' (huber, cauchy)");
+TEST_F(CliInputErrors, OptionsOfTheOldSolverPathsAreGone) {
+  // One solver path (batch_minimizer.h): no linear-solver, covariance or
+  // robust-loss choice left to make. Under the sanitizer build this also
+  // checks that nothing leaks on the way out.
+  for (const char* option : {"--robust", "--linear-solver", "--covariance"}) {
+    ExpectError("fit " + Path("run.yaml") + " -o " + Path("out.json") + " " + option + " x",
+                std::string("The following argument was not expected: ") + option +
+                    " (see `triadcal fit --help`)");
+  }
 }
 
 TEST_F(CliInputErrors, ReflectionMountingIsAnError) {

@@ -81,7 +81,7 @@ TEST_F(ProgressTest, CompareCoversFilterThenBatch) {
   const std::vector<int> pct = Percentages("compare");
   ExpectClimbs(pct, 100);
   EXPECT_NE(Err().find("compare: filter pass 2"), std::string::npos);
-  EXPECT_NE(Err().find("compare: fit relinearising pass 1"), std::string::npos);
+  EXPECT_NE(Err().find("compare: fit step 1: "), std::string::npos);
 }
 
 TEST_F(ProgressTest, DiagnoseMovesThroughTheCandidateFits) {

@@ -114,7 +114,8 @@ int RunDiagnose(const DiagnoseArgs& a) {
     const int ib = d.before_layout.IndexOf(p.name);
     const double va = d.after.estimate.theta[i] / f;
     const double sa = std::sqrt(std::max(0.0, d.after.estimate.cov(i, i))) / f;
-    const bool held = ra.held.count(p.name) > 0;
+    const bool considered = ra.consider.count(p.name) > 0;
+    const bool held = ra.held.count(p.name) > 0 || considered;
     if (ib >= 0) {
       const double vb = d.before.estimate.theta[ib] / f;
       const double sb = std::sqrt(std::max(0.0, d.before.estimate.cov(ib, ib))) / f;
@@ -140,7 +141,7 @@ int RunDiagnose(const DiagnoseArgs& a) {
       }
     }
     std::printf("  %s%s\n", p.unit.c_str(),
-                IsPinned(d.after, p.name) ? " (pinned)" : held ? " (held)" : "");
+                considered ? " (not determined)" : held ? " (held)" : "");
   }
   std::printf("wrote %s\n", a.out_json.c_str());
   return 0;

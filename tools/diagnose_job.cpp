@@ -18,7 +18,7 @@ nlohmann::json StateJson(const ParameterLayout& layout, const BatchResult& r,
   j["parameters"] = ParametersJson(layout, r.estimate.theta, r.estimate.cov, rep.not_estimable);
   MarkRelative(r.relative_to, &j["parameters"]);
   j["held"] = r.held;
-  AddPinnedJson(layout, r, &j);
+  AddConsiderJson(layout, r, &j);
   j["chi2_per_dof"] = r.chi2_per_dof;
   j["residual"] = ResidualReportJson(rr);
   j["residual_plot"] = ResidualPlotJson(rr);  // thinned series and spectrum for the report

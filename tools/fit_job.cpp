@@ -21,29 +21,20 @@ void CheckFitSettings(const FitSettings& s) {
 }
 
 std::string NoiseWarning(const std::string& run_yaml, const LoadedRun& run, const BatchResult& r) {
-  if (r.noise_check.consistent || run.description.noise_auto) return "";
+  if (r.noise_check.consistent || run.description.noise_auto || r.noise_source != "estimated") {
+    return "";
+  }
   const Eigen::Vector3d& d = r.noise_declared_mV;
   const Eigen::Vector3d& e = r.noise_check.estimated_mV;
   const Eigen::Vector3d& sd = r.noise_check.sd_mV;
+  const std::string unit = ReadingsUnitName();
   char w[600];
-  if (!r.noise_check.PerChannel()) {
-    std::snprintf(w, sizeof(w),
-                  "%s: triad.noise_mV: declared %.3g %.3g %.3g mV, chi2/dof %.3g; per channel the "
-                  "residuals hold %.3g %.3g %.3g mV with worst lag-1 %.2f, too unequal or not "
-                  "white to be noise alone: %s (run diagnose to find what the model lacks)",
-                  run_yaml.c_str(), d[0], d[1], d[2], r.chi2_per_dof, e[0], e[1], e[2],
-                  r.noise_check.lag1.cwiseAbs().maxCoeff(),
-                  r.sigma_method != "hac"          ? "sigma scaled by chi2/dof"
-                  : r.hac_floor == "per_channel_bound"
-                      ? "sigma from the HAC covariance, at least the bound of each channel's noise"
-                      : "sigma from the HAC covariance, at least the model's scaled by chi2/dof");
-    return w;
-  }
   std::snprintf(w, sizeof(w),
-                "%s: triad.noise_mV: declared %.3g %.3g %.3g mV, the residuals hold %.3g %.3g "
-                "%.3g mV (+- %.2g %.2g %.2g); sigma use the estimate (say noise_mV: auto to "
-                "silence this)",
-                run_yaml.c_str(), d[0], d[1], d[2], e[0], e[1], e[2], sd[0], sd[1], sd[2]);
+                "%s: triad.noise_mV: declared %.3g %.3g %.3g %s, the residuals hold %.3g %.3g "
+                "%.3g %s (+- %.2g %.2g %.2g); sigma rest on the estimate (noise_mV: auto says "
+                "so)",
+                run_yaml.c_str(), d[0], d[1], d[2], unit.c_str(), e[0], e[1], e[2], unit.c_str(),
+                sd[0], sd[1], sd[2]);
   return w;
 }
 
@@ -75,11 +66,7 @@ BatchOptions MakeBatchOptions(const FitSettings& a) {
   opt.epoch_s = a.epoch_s;
   opt.derivatives.half_window_s = a.rate_window_s;
   opt.init = a.init == "rts" ? BatchInit::kRts : BatchInit::kNominal;
-  opt.linear_solver = a.linear_solver;
-  opt.robust_loss = a.robust;
-  opt.robust_scale = a.robust_scale;
   opt.threads = a.threads;
-  opt.covariance_method = a.covariance;
   opt.sigma = a.sigma;
   opt.holding.auto_hold = !a.no_auto_hold;
   opt.holding.hold = SplitList(a.hold);
@@ -104,7 +91,6 @@ FitOutcome FitRun(const FitSettings& a, const std::string& run_yaml, const Loade
   f.json["samples"] = run.data.size();
   f.json["settings"]["init"] = a.init;
   f.json["settings"]["effects"] = a.effects;
-  f.json["settings"]["robust_loss"] = a.robust.empty() ? "none" : a.robust;
   // What the residual holds (whiteness, peaks) and, thinned, the residual
   // itself and its spectrum: what the HTML report draws.
   const ResidualReport rr = AnalyzeResiduals(run.description, run.data, f.layout, f.result);
@@ -120,15 +106,6 @@ void AddFitOptions(CLI::App* app, FitSettings* a) {
   app->add_option("--require", a->require,
                   "checks that must hold, else exit 5: converged, white (residuals), noise "
                   "(declared = estimated), pass (converged and white); e.g. converged,white");
-  app->add_option("--robust", a->robust, "robust loss on whitened residuals: huber or cauchy");
-  app->add_option("--robust-scale", a->robust_scale, "robust loss scale [whitened units]")
-      ->capture_default_str();
-  app->add_option("--linear-solver", a->linear_solver,
-                  "sparse_normal_cholesky (SuiteSparse), sparse_schur or dense_qr")
-      ->capture_default_str();
-  app->add_option("--covariance", a->covariance,
-                  "schur (Schur complement on theta) or ceres (SuiteSparse QR)")
-      ->capture_default_str();
   app->add_option("--sigma", a->sigma,
                   "which covariance gives sigma: auto (HAC when the residuals are not white), "
                   "white (the model's) or hac (sandwich robust to residuals correlated in time)")
@@ -143,11 +120,11 @@ void AddFitOptions(CLI::App* app, FitSettings* a) {
   app->add_flag("--correlations", a->correlations, "add the correlation matrix to OUT");
   app->add_option("--hold", a->hold, "parameters to hold at their nominal values, e.g. dpsi,Kxy");
   app->add_option("--free", a->free,
-                  "parameters to estimate even if the run barely supports them, and never pin");
+                  "parameters to estimate even if the run does not determine them");
   app->add_flag("--no-auto-hold", a->no_auto_hold,
-                "estimate every parameter (by default those the run's motion does not support "
-                "are held at nominal, and weakly determined ones that a first fit moves beyond 3 "
-                "prior sigma are pinned there and the run refitted)");
+                "estimate every parameter (by default those this run does not determine are "
+                "kept at nominal: structural nulls held, the others' prior uncertainty carried "
+                "into the estimated parameters' sigma)");
 }
 
 }  // namespace triadcal

@@ -17,11 +17,9 @@
 namespace triadcal {
 
 struct FitSettings {
-  std::string effects, init = "rts", robust;
-  std::string linear_solver = "sparse_normal_cholesky";
-  std::string covariance = "schur";
+  std::string effects, init = "rts";
   std::string sigma = "auto";  // auto | white | hac (BatchOptions::sigma)
-  double epoch_s = kDefaultEpoch_s, rate_window_s = 0.1, robust_scale = 3.0;
+  double epoch_s = kDefaultEpoch_s, rate_window_s = 0.1;
   int threads = 0;
   bool correlations = false, no_auto_hold = false;
   std::string hold, free;

@@ -216,9 +216,6 @@ nlohmann::json JointJson(const JointLayout& jl, const std::vector<JointRun>& run
 int RunJointFit(const FitSettings& s, const std::vector<std::string>& inputs,
                 const std::string& out_json, const std::string& report_html) {
   CheckFitSettings(s);
-  if (!s.robust.empty()) {
-    throw InputError("--robust: not available for a joint fit of several runs");
-  }
   if (!report_html.empty()) {
     throw InputError("--report: not available for a joint fit of several runs yet");
   }

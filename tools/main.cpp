@@ -83,9 +83,8 @@ int main(int argc, char** argv) {
   } catch (const triadcal::OptionError& e) {
     // A setting the estimators rejected, named by its flag here.
     static const std::map<std::string, std::string> kFlags = {
-        {"epoch_s", "--epoch-s"},           {"robust_loss", "--robust"},
-        {"linear_solver", "--linear-solver"}, {"covariance_method", "--covariance"},
-        {"hold_free", "--hold/--free"},       {"effects", "--effects"},
+        {"epoch_s", "--epoch-s"},           {"hold_free", "--hold/--free"},
+        {"effects", "--effects"},
         {"sigma", "--sigma"},               {"hold", "--hold"},
         {"free", "--free"}};
     const auto it = kFlags.find(e.option());

@@ -13,32 +13,22 @@
 namespace triadcal {
 namespace {
 
-// The fit of a layout, started from `start` (SI, in that layout), with the
-// given parameters held and every other base/current parameter kept free.
+// The fit of a layout under a decision (what is held, what is considered),
+// started from `start` (SI, in that layout). With `noise` the reading noise is
+// fixed there (the candidates of a round are compared at one noise, as the
+// likelihood ratio needs); without, it is estimated with the parameters.
 BatchResult FitLayout(const RunDescription& run, const RunData& data, const ParameterLayout& layout,
-                      const Eigen::VectorXd& start, const std::vector<std::string>& hold,
-                      const std::vector<std::string>& free, const BatchOptions& base,
-                      bool covariance) {
+                      const Eigen::VectorXd& start, const HoldDecision& decision,
+                      const BatchOptions& base, bool covariance,
+                      const Eigen::Vector3d* noise = nullptr) {
   BatchOptions o = base;
   o.init = BatchInit::kGiven;
   o.init_theta = start;
-  o.holding.hold = hold;
-  o.holding.free = free;
-  // Every parameter is named in hold or free: the score analysis decided
-  // which of the new effect's parameters the run supports.
-  o.holding.auto_hold = false;
+  o.decision = &decision;
   o.compute_covariance = covariance;
+  o.estimate_noise = noise == nullptr;
+  if (noise) o.noise_override = *noise;
   return SolveBatch(run, data, layout, o);
-}
-
-std::vector<std::string> FreeNames(const ParameterLayout& layout,
-                                   const std::vector<std::string>& held) {
-  std::vector<std::string> out;
-  for (int i = 0; i < layout.size(); ++i) {
-    const std::string& n = layout.info(i).name;
-    if (std::find(held.begin(), held.end(), n) == held.end()) out.push_back(n);
-  }
-  return out;
 }
 
 // theta of `from` (layout a) placed into layout b, zeros for the new entries.
@@ -130,30 +120,6 @@ double DecisionP(const CandidateTest& t) {
 }
 bool Significant(const CandidateTest& t, double threshold) { return DecisionP(t) < threshold; }
 
-// A refit (FitLayout: every parameter named held or free) makes no hold
-// decision of its own, so what the holds of the fit it starts from stand for
-// carries over: a parameter known only relative to a held one (beta_x to
-// dtheta_c on a single-axis run) is not reported as estimable on its own
-// after the loop either. So do the pins, and their uncertainty in the others'
-// sigma (the information at the start has no rows for a new effect: its
-// parameters get none of it). `to` holds every parameter of `from_layout`.
-void CarryOverHolds(const BatchResult& from, const ParameterLayout& from_layout,
-                    const ParameterLayout& to, BatchResult* r) {
-  r->relative_to = from.relative_to;
-  r->pinned = from.pinned;
-  r->unsupported_at_start = from.unsupported_at_start;
-  if (r->pinned.empty() || from.information_at_start.rows() != from_layout.size()) return;
-  r->information_at_start = Eigen::MatrixXd::Zero(to.size(), to.size());
-  for (int a = 0; a < from_layout.size(); ++a) {
-    for (int b = 0; b < from_layout.size(); ++b) {
-      r->information_at_start(to.IndexOf(from_layout.info(a).name),
-                              to.IndexOf(from_layout.info(b).name)) =
-          from.information_at_start(a, b);
-    }
-  }
-  AddPinnedUncertainty(to, r);
-}
-
 std::vector<Effect> WithEffect(std::vector<Effect> v, Effect e) {
   v.push_back(e);
   return v;
@@ -218,29 +184,13 @@ std::vector<HideCase> CouldHideOnProfile(const RunDescription& run, const RunDat
 
 DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data,
                          const DiagnoseOptions& options) {
-  // The likelihood-ratio tests compare fits under one noise model: the
-  // declared noise throughout (re-estimating it per candidate would let the
-  // noise absorb the very structure under test). With noise_mV: auto it is
-  // estimated from the base model's fit, then again after each selection,
-  // and held within each round.
-  DiagnoseOptions opt = options;
-  opt.fit.estimate_noise = false;
+  // The noise is estimated as fit estimates it, in every round's fit of the
+  // current model (run_evaluation.h); the candidates of a round are refitted
+  // at that fit's noise, so that their likelihood ratios compare costs at one
+  // noise (re-estimating it per candidate would let the noise absorb the
+  // very structure under test).
+  const DiagnoseOptions& opt = options;
   RunDescription run = declared_run;
-  const bool noise_auto = run.noise_auto;
-  if (run.noise_auto) {
-    if (opt.progress) opt.progress("estimating the reading noise (noise_mV: auto)");
-    BatchOptions noise_opt = options.fit;
-    noise_opt.estimate_noise = true;
-    noise_opt.fraction = nullptr;
-    noise_opt.compute_covariance = false;
-    const BatchResult base = SolveBatch(run, data, ParameterLayout(), noise_opt);
-    // With a variance factor (noise split judged misfit) every channel's
-    // declared noise times its root.
-    const Eigen::Vector3d noise = base.noise_used_mV * std::sqrt(base.variance_factor);
-    run.noise_channel_mV = noise;
-    run.noise_mV = std::sqrt(noise.squaredNorm() / 3.0);
-    run.noise_auto = false;
-  }
   auto say = [&](const std::string& s) {
     if (opt.progress) opt.progress(s);
   };
@@ -261,13 +211,9 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
   res.before_layout = ParameterLayout();
   res.before = SolveBatch(run, data, res.before_layout, first);
   res.before_residuals = AnalyzeResiduals(run, data, res.before_layout, res.before);
-  if (!res.before.pinned.empty()) {
-    res.notes.push_back(
-        "pinned at nominal after the declared model's first fit moved them (prior sigma; data "
-        "information at the nominal values in prior units): " +
-        DescribePins(res.before.pinned) +
-        "; held in every refit, their uncertainty kept in the other parameters' sigma");
-  }
+  // Every refit keeps what the declared model's fit decided (held and
+  // considered parameters); a candidate adds its own unsupported components.
+  const HoldDecision base_decision = DecisionOf(res.before);
 
   std::vector<Effect> current;
   ParameterLayout layout = res.before_layout;
@@ -342,16 +288,20 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
       for (std::size_t q = 0; q < c.supported.size(); ++q) {
         start[aug.offset(e) + c.supported[q]] += c.step_effect[q];
       }
-      std::vector<std::string> hold = held, free = FreeNames(layout, held);
+      HoldDecision decision = DecisionOf(fit);
       const EffectSpec& spec = GetEffectSpec(e);
-      for (int q : c.unsupported) hold.push_back(spec.name + "." + spec.params[q].name);
-      for (int q : c.supported) free.push_back(spec.name + "." + spec.params[q].name);
-      BatchResult r = FitLayout(run, data, aug, start, hold, free, fit_opt, true);
-      CarryOverHolds(fit, layout, aug, &r);
+      for (int q : c.unsupported) decision.held.push_back(spec.name + "." + spec.params[q].name);
+      for (const NotSeparable& ns : c.not_separable) {
+        decision.consider.push_back(spec.name + "." + spec.params[ns.component].name);
+      }
+      BatchResult r =
+          FitLayout(run, data, aug, start, decision, fit_opt, true, &fit.noise_used_mV);
       const int k = static_cast<int>(GetEffectSpec(e).params.size());
       int held_new = 0;
-      for (const std::string& h : r.held) {
-        if (aug.IndexOf(h) >= aug.offset(e) && aug.IndexOf(h) < aug.offset(e) + k) ++held_new;
+      for (const std::vector<std::string>* names : {&r.held, &r.consider}) {
+        for (const std::string& h : *names) {
+          if (aug.IndexOf(h) >= aug.offset(e) && aug.IndexOf(h) < aug.offset(e) + k) ++held_new;
+        }
       }
       t.refit = true;
       t.dof = k - held_new;
@@ -369,7 +319,7 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
         std::vector<int> free_e;
         for (int q = 0; q < k; ++q) {
           const int i = aug.offset(e) + q;
-          if (std::find(r.held.begin(), r.held.end(), aug.info(i).name) == r.held.end()) {
+          if (IsEstimated(r, aug.info(i).name)) {
             free_e.push_back(i);
           }
         }
@@ -456,6 +406,15 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
       if (t.dof == 0) {
         t.p_value = 1.0;
         t.note = "not supported by this run's motion";
+        if (!c.not_separable.empty()) {
+          // Every component the data reach, the base parameters explain.
+          const EffectSpec& spec = GetEffectSpec(e);
+          t.note = "not tested: not separable from the base parameters:";
+          for (const NotSeparable& ns : c.not_separable) {
+            t.note += " " + spec.name + "." + spec.params[ns.component].name + " from " +
+                      ns.with + " (rho " + FormatNumber(ns.rho) + ")";
+          }
+        }
         tests.push_back(t);
         refits.emplace_back();
         continue;
@@ -528,6 +487,13 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
         for (const auto& [q, why] : c.held_because) {
           res.notes.push_back(spec.name + "." + spec.params[q].name + " held, not tested: " + why);
         }
+        for (const NotSeparable& ns : c.not_separable) {
+          res.notes.push_back(spec.name + "." + spec.params[ns.component].name +
+                              " not tested: not separable from " + ns.with +
+                              " (multiple correlation " + FormatNumber(ns.rho) +
+                              " with the base parameters); at zero in a refit, its prior "
+                              "uncertainty carried into the others' sigma");
+        }
       }
     }
     // The weak components of every refitted candidate, once each.
@@ -593,41 +559,27 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
     const ParameterLayout next(current);
     // The selected candidate's refit (with its covariance) is the new fit.
     fit = std::move(refits[order[pick]]);
-    if (noise_auto) {
-      // noise_mV: auto: the noise estimated from the base model's fit holds
-      // the misfit of what the loop has since added (real medium roll run:
-      // chi2/dof 0.05 after the 8.6-ms latency and the drift), and every
-      // later test at that level would be blind by the same factor. The next
-      // round's tests, base fit and refits alike, use the noise of this fit's
-      // residual (and so does the final fit's sigma); within a round all
-      // fits share one noise, as the likelihood ratio needs.
-      say("round " + std::to_string(round) + ": re-estimating the reading noise with " +
-          GetEffectSpec(sorted[pick].effect).name + " added");
-      // As the batch solver decides (noise_estimation.h): each channel's
-      // figure when the residual is white and the channels alike, else one
-      // common level; then the fit at exactly that noise (the next round's
-      // likelihood ratios compare costs at one noise).
-      const NoiseEstimate& ne = fit.noise_check;
-      const Eigen::Vector3d noise =
-          ne.PerChannel() ? ne.estimated_mV
-                          : Eigen::Vector3d::Constant(std::sqrt(ne.estimated_mV.squaredNorm() / 3));
-      RunDescription next_run = run;
-      next_run.noise_channel_mV = noise;
-      next_run.noise_mV = std::sqrt(noise.squaredNorm() / 3.0);
+    {
+      // The new model fitted with its noise estimated, as fit does: the
+      // selected refit was at the round's noise, which still held the
+      // misfit of the effect just added (real medium roll run: chi2/dof 0.05
+      // after the 8.6-ms latency and the drift at the first fit's noise), and
+      // every later test at that level would be blind by the same factor.
+      say("round " + std::to_string(round) + ": refitting with " +
+          GetEffectSpec(chosen).name + " added, the reading noise estimated again");
       span_begin = span_end;
       span_end = round_end;
-      BatchResult r = FitLayout(next_run, data, next, fit.estimate.theta, fit.held,
-                                FreeNames(next, fit.held), fit_opt, true);
-      CarryOverHolds(fit, next, next, &r);
+      const Eigen::Vector3d before = fit.noise_used_mV;
+      BatchResult r = FitLayout(run, data, next, fit.estimate.theta, DecisionOf(fit), fit_opt, true,
+                                fit_opt.estimate_noise ? nullptr : &fit.noise_used_mV);
+      const Eigen::Vector3d& after = r.noise_used_mV;
       char figures[200];
       std::snprintf(figures, sizeof(figures),
-                    "round %d: reading noise re-estimated with %s added: %.3g %.3g %.3g mV "
-                    "(was %.3g %.3g %.3g mV)",
-                    round, GetEffectSpec(sorted[pick].effect).name.c_str(), noise[0], noise[1],
-                    noise[2], run.ChannelNoise_mV()[0], run.ChannelNoise_mV()[1],
-                    run.ChannelNoise_mV()[2]);
+                    "round %d: reading noise re-estimated with %s added: %.3g %.3g %.3g (was "
+                    "%.3g %.3g %.3g)",
+                    round, GetEffectSpec(chosen).name.c_str(), after[0], after[1], after[2],
+                    before[0], before[1], before[2]);
       res.notes.push_back(figures);
-      run = next_run;
       fit = std::move(r);
     }
     info_current = false;

@@ -53,8 +53,11 @@
 namespace triadcal {
 
 struct DiagnoseOptions {
-  BatchOptions fit;     // for every fit (hold/free and the noise are managed here:
-                        // the declared noise throughout, estimate_noise off)
+  // For every fit. The noise is estimated in every fit of the current model
+  // and fixed at that fit's in the round's candidate refits; with
+  // estimate_noise off the declared noise is kept throughout (noise-free
+  // simulations whose yardstick is the declared noise).
+  BatchOptions fit;
   double alpha = 0.01;  // family-wise false-selection rate per round
   int max_effects = 4;
   // Refit (likelihood ratio) the candidates whose score p-value is below

@@ -25,7 +25,7 @@
 //
 // Which of an effect's parameters the run supports is decided as the batch
 // solver's hold policy does (pivoted Cholesky of the data information in prior
-// units, keeping each with at least HoldPolicy::min_information_effects),
+// units, keeping each with at least kMinInformationSupported),
 // here conditional on the base parameters with their priors loosened 1e4
 // times and the held ones released the same way: a component that only a
 // base parameter's prior or hold determines (it rides on a direction the run
@@ -64,12 +64,28 @@ namespace triadcal {
 // paper profile at 50 Hz for weak, whose components the data know to
 // ~10 mm against a 20-mm prior, and rejected it in 20 of 20 seeds.)
 constexpr double kMinInformationFound = 1.0;
+// Below this (data information in prior units, given the base parameters) a
+// candidate's component is not supported by the run at all: held at zero.
+constexpr double kMinInformationSupported = 1e-2;
 
 // The information of one candidate relative to the current model.
+// A component of a candidate that the base parameters explain (|rho| >=
+// 0.99): index into the effect's params, the base parameter it leans on most,
+// and its multiple correlation with the base parameters.
+struct NotSeparable {
+  int component = 0;
+  std::string with;
+  double rho = 0.0;
+};
+
 struct CandidateInformation {
   Effect effect;
   std::vector<int> supported;    // indices into the effect's params the run supports
-  std::vector<int> unsupported;  // the others (held in a refit)
+  std::vector<int> unsupported;  // the others but the not separable ones (held in a refit)
+  // Supported by the data but not separable from the base parameters: not
+  // tested, kept at zero in a refit with their prior uncertainty carried into
+  // the others' sigma (considered, batch_solver.h).
+  std::vector<NotSeparable> not_separable;
   // Why components are held although their information alone would let them
   // be tested: the axis never reverses (EffectNeeds::both_signs_per_axis), or
   // the data support them only through a base parameter's prior or hold

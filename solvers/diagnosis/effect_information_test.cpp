@@ -94,6 +94,7 @@ const HideCase& FindHide(const DiagnosisResult& d, Effect e) {
 DiagnosisResult CouldHide(const Scenario& s) {
   DiagnoseOptions opt;
   opt.max_effects = 0;  // the declared model's reliability, no selection
+  opt.fit.estimate_noise = false;  // the declared noise: the yardstick of the noise-free runs
   return Diagnose(s.run, Simulate(s), opt);
 }
 
@@ -119,6 +120,7 @@ TEST(Reliability, MinimalDetectableEffectGivesItsNoncentrality) {
     opt.candidates = {e};
     opt.refit_factor = std::numeric_limits<double>::infinity();
     opt.max_effects = 1;
+    opt.fit.estimate_noise = false;  // noise-free: the declared noise is the yardstick
     const DiagnosisResult d = Diagnose(s.run, Simulate(s), opt);
     const CandidateTest& t = Find(d, e);
     ASSERT_TRUE(t.refit);

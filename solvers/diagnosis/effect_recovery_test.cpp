@@ -30,7 +30,10 @@ using testing_fixtures::PaperScenario;
 constexpr int kSeeds = 3;
 
 Scenario InjectTypical(const EffectSpec& e, std::uint64_t seed) {
-  Scenario s = PaperScenario(100.0, 40.0, 1.0, 15.0, seed);
+  // A drift's curvature needs minutes to be determined (its signal grows as
+  // the square of the span: on 40 s it is not determined, and not estimated).
+  const bool slow = e.id == Effect::kThermalDriftQuadratic;
+  Scenario s = PaperScenario(slow ? 20.0 : 100.0, slow ? 300.0 : 40.0, 1.0, 15.0, seed);
   s.truth_layout = ParameterLayout({e.id});
   Eigen::VectorXd t = Eigen::VectorXd::Zero(s.truth_layout.size());
   t.head(kNumBaseParams) = s.truth;
@@ -61,8 +64,8 @@ TEST(EffectRecovery, EveryRegisteredEffectIsRecoveredWithinItsSigma) {
       for (size_t j = 0; j < e.params.size(); ++j) {
         const int i = o + static_cast<int>(j);
         const std::string& name = s.truth_layout.info(i).name;
-        if (std::find(r.held.begin(), r.held.end(), name) != r.held.end()) {
-          detail << " " << name << " held(seed " << seed << ")";
+        if (!IsEstimated(r, name)) {
+          detail << " " << name << " not estimated(seed " << seed << ")";
           continue;
         }
         const double z = (r.estimate.theta[i] - s.truth[i]) / std::sqrt(r.estimate.cov(i, i));

@@ -1,41 +1,36 @@
-// The batch solver (docs/method.md): the whole run as one sparse nonlinear
-// least-squares problem, solved by Ceres.
+// The batch solver (docs/method.md section 5): the whole run as one sparse
+// nonlinear least-squares problem, solved on one path.
 //
 // Unknowns: theta (n) and the trajectory x_e = (V_e, S_e) of O in L at the
-// epochs t_e (every epoch_s, as in the filter). Residual blocks, each whitened
-// by its own noise (L^T L = covariance^-1):
+// epochs t_e. Residual blocks, each whitened by its own noise:
 //
-//   process, one per interval e -> e+1 (block B1 integrated, inertial_increments.h)
-//     r_p = L_Q [ V_{e+1} - V_e - dv_e(theta) ;  S_{e+1} - S_e - V_e T_e - ds_e(theta) ]
+//   process, one per interval e -> e+1 (block B1, the exact increments)
+//     r_p = V_{e+1} - V_e - dv_e(theta) ;  S_{e+1} - S_e - V_e T_e - ds_e(theta)
 //   measurement, one per epoch (block B2)
-//     r_m = L_R [ V_e - V_DU(lambda, lambda', theta) ;  S_e - S_DU(lambda, theta) ]
+//     r_m = V_e - V_DU(lambda, lambda', theta) ;  S_e - S_DU(lambda, theta)
 //   constraints of run.yaml:   (c . theta - value) / sigma
 //   weak priors:               (theta - nominal) / sigma_prior     (priors.h)
 //
-// dv_e, ds_e sum thousands of samples per interval, so they are evaluated once
-// per relinearisation and enter Ceres to first order about theta_lin:
+// The steps of SolveBatch:
 //
-//   dv_e(theta) ~ dv_e(theta_lin) + J_v,e (theta - theta_lin)
-//
-// (as inertial preintegration does). The outer loop relinearises at Ceres's
-// solution until the relinearisation changes the cost by less than
-// outer_tolerance; at that fixed point the linearisation is exact at the
-// solution, so it is the optimum of the full nonlinear problem (test:
-// exact_increments recomputes dv_e, ds_e in every Ceres evaluation instead).
-// B2, the constraints and the priors are evaluated exactly in every iteration.
-//
-// The Jacobian is block-banded in x plus a dense column block for theta:
-// SPARSE_NORMAL_CHOLESKY (SuiteSparse CHOLMOD) by default; SPARSE_SCHUR
-// eliminates every other epoch's state (the process residuals couple
-// neighbours, so Ceres can only eliminate an independent set).
-//
-// Covariance of theta from the final Jacobian: by default the Schur complement
-// on theta (schur_covariance.h, exploits the block-tridiagonal trajectory),
-// or Ceres's Covariance (SuiteSparse sparse QR; the only one that applies a
-// robust loss's weights). Ceres's default sparse QR fails on a rank-deficient
-// Jacobian; the weak priors keep ours full rank, so directions the data do not
-// determine come out with their prior sigma and are then named by
-// separability.h instead of failing the factorisation.
+//   1. What the run determines, decided before the fit (ChooseHeldParameters):
+//      the data information in prior units, by a pivoted Cholesky, at the
+//      nominal values (scale factors and offsets fitted) and the declared
+//      noise (or the readings' own with noise_mV: auto). A parameter the data determine at least as well as
+//      its prior is estimated; one they do not stays at its nominal value,
+//      its prior uncertainty carried into the others' sigma (a consider
+//      covariance, as in Schmidt-Kalman filtering); one the data know nothing
+//      about beyond the others (a structural null) is held and the others of
+//      its direction are estimated relative to it. No misfit can move a
+//      parameter that is not estimated.
+//   2. The start: the EKF + RTS smoother on the samples thinned to 100 Hz, or
+//      the nominal values.
+//   3. The minimum (batch_minimizer.h): Levenberg-Marquardt on theta with the
+//      trajectory solved for exactly at every step (run_evaluation.h) and the
+//      reading noise of each channel at its maximum likelihood.
+//   4. The covariance at the minimum: the model's (the inverse Gauss-Newton
+//      information), the HAC sandwich over the epoch scores (hac_covariance.h),
+//      and the consider term of step 1.
 #pragma once
 
 #include <array>
@@ -47,11 +42,11 @@
 #include <Eigen/Core>
 
 #include "core/model/angle_derivatives.h"
+#include "core/model/priors.h"
 #include "core/model/run_data.h"
 #include "core/model/run_description.h"
 #include "solvers/estimation/kalman_smoother.h"
 #include "solvers/estimation/noise_estimation.h"
-#include "core/model/priors.h"
 #include "solvers/estimation/run_problem.h"
 #include "solvers/estimation/separability.h"
 
@@ -59,86 +54,117 @@ namespace triadcal {
 
 enum class BatchInit { kRts, kNominal, kGiven };
 
-// Parameters held at their nominal values. auto_hold holds those the run's
-// motion does not support: a pivoted Cholesky of the data information (in
-// units of the prior) at the nominal values keeps, most informative first,
-// every parameter with at least min_information left once the kept ones are
-// known, and holds the rest. `hold` adds to the held set, `free` removes.
-// Only structural nulls are held: directions along which the data carry no
-// information at all (the inner-axis rotation without its constraint, a lever
-// arm along the only shaft). A parameter that is merely weakly determined is
-// estimated and gets its honest, large sigma.
+// Which parameters are estimated (ChooseHeldParameters). In prior units
+// (each parameter divided by its prior sigma) a pivoted Cholesky of the data
+// information at the nominal values (the scale factors and zero offsets
+// fitted first) keeps (SupportedByInformation) every parameter the data
+// determine, beyond the ones kept before it, with at least min_information
+// and separably: those are estimated. The rest are not determined by the
+// run: with less than null_information left they are structural nulls (held;
+// the others of their direction are estimated relative to them), else
+// consider parameters (held at nominal, their prior uncertainty in the
+// others' sigma). `hold` holds a parameter outright (no consider term: the
+// user knows it), `free` estimates one whatever its information.
 struct HoldPolicy {
   bool auto_hold = true;
-  // In prior units at the run's full rate: 0.01 is a data sigma ten times the
-  // prior's. A structural null has ~1e-4 or less at the nominal values
-  // (rounding and the K_ij coupling); a weak but real direction of a short or
-  // slow run has 1 or more.
-  double min_information = 1e-2;
-  double min_information_effects = 1e-2;
+  // 10: the data's sigma at most a third of the prior's. With 1 (the data
+  // merely as good as the prior) a misfit moves such a parameter as much as
+  // the data do: real single-axis runs, declared model, Kyz at 3 prior units
+  // to 0.85 /g (slow), Ky 1643 mV/g and Kyz 0.55 /g (pitch), Kxz 0.54 /g and
+  // Kx 743 mV/g (fast); with 10 none of them is estimated and nothing else
+  // moves beyond what its data say.
+  double min_information = 10.0;
+  double null_information = 1e-2;
   std::vector<std::string> hold, free;
-  // After the fit (auto_hold only): a parameter the data at the nominal
-  // values determine at most pin_max_information times as well as its prior
-  // (marginal data information in prior units, the held ones fixed) that the
-  // fit moves beyond pin_excursion_sigma prior sigma is pinned at its nominal
-  // value and the run refitted (SolveBatch). Under the model linearised at
-  // the nominal values such a parameter's estimate moves at most
-  // info/(1 + info) = 2/3 of the way to the data's value: 3 prior sigma
-  // would need a nominal value wrong by 4.5 prior sigma, or the model's
-  // nonlinearity following a misfit along a weak direction (real slow roll
-  // run: Kxy, Kzy at -57 prior sigma with Kx 1954 mV/g and a shaft tilt of
-  // 76 deg; fast run: Kxz, Kzz at +28, +22 with Kz 796 mV/g). A name in
-  // `free` is never pinned.
-  bool pin_weak_excursions = true;
-  // Held like `hold`, but pinned by that rule: no anchor of a `relative_to`
-  // (their uncertainty goes into the others' sigma instead, SolveBatch).
-  std::vector<std::string> pinned;
-  double pin_max_information = 2.0;
-  double pin_excursion_sigma = 3.0;
 };
 
-// A parameter pinned after the fit (HoldPolicy::pin_weak_excursions): how far
-// the fit had moved it, in prior sigma, and the data information about it at
-// the nominal values (in prior units).
-struct PinnedExcursion {
-  std::string name;
-  double z = 0.0;
-  double data_information = 0.0;
+// The decision of HoldPolicy (what fit does first; filter uses it too).
+struct HoldDecision {
+  std::vector<std::string> held;      // structural nulls and the user's holds
+  std::vector<std::string> consider;  // not determined: nominal, prior uncertainty carried
+  // The structural nulls at the decision point (information below
+  // null_information along them), before holding.
+  std::vector<WeakDirection> unsupported;
+  // Parameters of an undetermined direction that are estimated relative to
+  // the held ones of that direction (e.g. gamma_y, gamma_z relative to
+  // dlambda2 without the paper's constraint): not estimable on their own.
+  std::map<std::string, std::vector<std::string>> relative_to;
+  // The data information at the nominal values (n x n, full rate, prior
+  // units: parameter i divided by its prior sigma); empty without auto_hold.
+  Eigen::MatrixXd information;
+  // Per parameter: the data information left once the estimated ones are
+  // known (prior units), what the decision compared; 0 for user holds.
+  Eigen::VectorXd conditional_information;
+  // Where it was decided (empty without auto_hold).
+  Eigen::VectorXd theta;
 };
+
+// At the nominal values with the scale factors and zero offsets fitted, at
+// run's noise.
+HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data,
+                                  const ParameterLayout& layout, const HoldPolicy& policy,
+                                  double epoch_s, const AngleDerivativeOptions& derivatives,
+                                  int decimation_hz = 25, int threads = 0);
+
+// The rule behind HoldPolicy::auto_hold, for any parameter vector: a pivoted
+// Cholesky of the information in prior units (information, n x n: data and
+// constraints). It keeps, highest priority first and within a priority the
+// most informative first, every parameter with at least min_info[j] left
+// once the kept ones are known, provided the data separate it from them
+// (it keeps at least kMinSeparableShare of its own data information: one the
+// kept ones explain to |rho| >= 0.99 lies along a direction where the cost is
+// flat and curved, and a misfit moves it far -- real roll runs: W0y with the
+// shaft tilt dpsi, which then went to 18 deg) or the constraints
+// (constraint_information, may be null) give it min_info[j] by themselves.
+// Returns the kept indices; `left`, when given, receives each kept
+// parameter's information at its pick and each other's at the end.
+std::vector<int> SupportedByInformation(const Eigen::MatrixXd& information,
+                                        const Eigen::VectorXd& min_info,
+                                        const Eigen::VectorXd& priority,
+                                        Eigen::VectorXd* left = nullptr,
+                                        const Eigen::MatrixXd* constraint_information = nullptr);
+// 1 - 0.99^2: the share of its data information a parameter must keep once
+// the kept ones are known (its multiple correlation with them below 0.99).
+constexpr double kMinSeparableShare = 1.0 - 0.99 * 0.99;
+// The priority of base or effect parameter `index` of a layout, in the order
+// a calibration wants them where two explain the same data (an offset rather
+// than a scale factor on an axis that always reads 1 g; an offset rather than
+// a bench tilt): zero offsets 5, scale factors 4, misalignments and lever arm
+// 3, nonlinearity and cross-coupling 2, bench zeros and effects 1.
+double HoldPriority(int index);
 
 struct BatchOptions {
   double epoch_s = kDefaultEpoch_s;
   AngleDerivativeOptions derivatives;
   BatchInit init = BatchInit::kRts;
-  Eigen::VectorXd init_theta;   // for kGiven (SI, in the layout)
-  int init_decimation_hz = 100;  // the RTS initialiser runs on samples thinned to this rate
-  int max_outer_iterations = 10;
-  int max_ceres_iterations = 100;
-  double outer_tolerance = 1e-3;  // cost change on relinearisation, in 0.5 chi^2 units
-  std::string linear_solver = "sparse_normal_cholesky";  // | sparse_schur | dense_qr
-  std::string robust_loss;        // "" | huber | cauchy (on whitened process/measurement)
-  double robust_scale = 3.0;      // in whitened units
-  bool exact_increments = false;  // recompute B1 in every evaluation (slow; tests)
+  Eigen::VectorXd init_theta;    // for kGiven (SI, in the layout)
+  // The decision and the RTS start run on the samples thinned to this rate:
+  // their information and start need no more (the fit's own passes use every
+  // sample).
+  int init_decimation_hz = 25;
+  int max_iterations = 40;
+  // Converged when a Gauss-Newton step would lower 0.5 chi^2 by less than
+  // this (a step of sqrt(2 tolerance) sigma).
+  double tolerance = 1e-4;
   bool compute_covariance = true;
-  std::string covariance_method = "schur";  // | ceres (sparse QR; used with a robust loss)
   // Which covariance is the reported sigma (BatchResult::sigma_method):
   // "auto" (HAC when the whitened process residual is not white), "white"
-  // or "hac". HAC needs the Schur covariance (not with a robust loss).
+  // or "hac".
   std::string sigma = "auto";
-  double hac_bandwidth_epochs = -1.0;  // < 0: Andrews's plug-in (hac_covariance.h)
+  double hac_bandwidth_epochs = -1.0;      // < 0: Andrews's plug-in (hac_covariance.h)
   bool hac_kernel_bias_correction = true;  // hac_covariance.h
-  int threads = 0;                // 0: all cores
-  HoldPolicy holding;            // which parameters to hold at nominal
-  // Estimate the reading noise from the residuals (noise_estimation.h) and
-  // refit with it when run.yaml says `noise_mV: auto` or when the declared
-  // noise is not what the residuals hold.
+  int threads = 0;                         // 0: all cores
+  HoldPolicy holding;
+  // When set, the decision of step 1 is not made but taken from here (a
+  // refit of the loop keeps what the fit it starts from decided).
+  const HoldDecision* decision = nullptr;
+  // Estimate the reading noise of each channel with theta (maximum
+  // likelihood; run.yaml's noise_mV is the start). Off: the noise stays as
+  // given (declared, or noise_override).
   bool estimate_noise = true;
+  Eigen::Vector3d noise_override = Eigen::Vector3d::Zero();  // > 0: the noise to use [reading units]
   std::function<void(const std::string&)> progress;  // one line per stage
-  // Estimated fraction done, 0..1, at each stage and Ceres iteration: the
-  // parameter choice and start 0-0.3, relinearisation pass k from
-  // 0.3 + 0.65 (1 - 2^-k), the covariance 0.95-1 (shares measured on the
-  // paper's run; the number of passes is not known in advance).
-  std::function<void(double)> fraction;
+  std::function<void(double)> fraction;              // 0..1
 };
 
 struct ResidualStats {
@@ -154,42 +180,34 @@ struct ResidualStats {
 struct BatchResult {
   Estimate estimate;            // theta and its covariance (SI)
   Estimate initial;             // the starting point (with the RTS sigma when from RTS)
-  std::vector<std::string> held;  // held at nominal (their sigma is not an estimate)
-  // The held ones that were pinned after a first fit (HoldPolicy), in the
-  // order pinned; the estimate is the refit with them held.
-  std::vector<PinnedExcursion> pinned;
+  // Not estimated: the structural nulls and the user's holds (held), and the
+  // parameters the run does not determine (consider); both at nominal.
+  std::vector<std::string> held, consider;
   std::map<std::string, std::vector<std::string>> relative_to;  // HoldDecision
-  // The directions the run cannot determine, found at the nominal values
-  // before holding (what the held parameters stand for).
   std::vector<WeakDirection> unsupported_at_start;
-  Eigen::MatrixXd information_at_start;  // HoldDecision::information
+  Eigen::MatrixXd information_at_start;       // HoldDecision::information
+  Eigen::VectorXd conditional_information;    // HoldDecision::conditional_information
   Prior prior;
   double final_cost = 0.0;      // 0.5 sum r^2 over all blocks
   int residual_count = 0;
-  // 2 cost / (residuals - unknowns): 1 when the declared noise is right and the
-  // model complete (the diagnosis starts here).
+  // 2 cost / (residuals - unknowns): 1 when the noise is right and the model
+  // complete (the diagnosis starts here).
   int degrees_of_freedom = 0;
   double chi2_per_dof = 0.0;
-  int outer_iterations = 0, ceres_iterations = 0;
   bool converged = false;
-  std::string linear_solver;
+  std::string termination;      // why the minimiser stopped (batch_minimizer.h)
+  int iterations = 0, passes = 0;
   ResidualStats residuals;
-  // The reading noise per channel [mV]: as declared in run.yaml, as used for
-  // the final fit and its sigma, and where that came from ("declared" |
-  // "estimated" | "estimated_common"); noise_check compares the declared noise with the residuals
-  // of the first fit, noise_estimate is the last estimate made.
+  // The reading noise per channel [reading units]: as declared in run.yaml,
+  // as used for the final fit and its sigma, and where that came from
+  // ("declared" | "estimated"). noise_check compares the declared noise with
+  // the estimate (its sd and degrees of freedom).
   Eigen::Vector3d noise_declared_mV = Eigen::Vector3d::Zero();
-  // noise_mV: auto (noise_declared_mV is then run.yaml's default) and the
-  // level it started from (the readings' second differences, sample_noise.h).
-  bool noise_auto = false;
-  double noise_start_mV = 0.0;
+  bool noise_auto = false;        // noise_mV: auto
+  Eigen::Vector3d noise_start_mV = Eigen::Vector3d::Zero();  // where the estimate started
   Eigen::Vector3d noise_used_mV = Eigen::Vector3d::Zero();
   std::string noise_source = "declared";
-  // The covariance's a-posteriori variance factor: chi2/dof when the noise
-  // source is "estimated_common" (every noise of the run taken as
-  // sqrt(factor) times the declared one, the estimate unchanged), else 1.
-  double variance_factor = 1.0;
-  NoiseEstimate noise_check, noise_estimate;
+  NoiseEstimate noise_check;
   // Per epoch, for diagnosis: times, measurement and process residuals (raw,
   // V m/s then S m; the process residual of the interval ending at the epoch,
   // zero at the first), and their whitening.
@@ -199,121 +217,55 @@ struct BatchResult {
   std::vector<Eigen::Matrix<double, 6, 1>> measurement_whitened, process_whitened;
   // The autocorrelation (lags 1..20) that process_whitened has at this
   // solution when the model holds (ExpectedProcessAutocorrelation); empty
-  // without the covariance or with a robust loss. The whiteness tests
-  // subtract it.
+  // without the covariance. The whiteness tests subtract it.
   std::array<std::vector<double>, 6> process_whitened_expected_acf;
   // Ljung-Box on process_whitened (lags min(20, E/5), the expected
   // autocorrelation subtracted), Bonferroni over its 6 components; white when
   // p >= 0.01.
   double whiteness_p_value = 1.0;
   bool residual_white = true;
-  // The two covariances of theta (n x n, SI), both at the solution: "white",
-  // the inverse Fisher information of the model times variance_factor, and
-  // "hac", the sandwich over the epoch scores (hac_covariance.h), which stays
-  // honest when the residuals are correlated in time. estimate.cov is the one
-  // named by sigma_method: "white" when the residual is white and one weight
-  // fits its channels, else "hac", each parameter's variance then at least
-  // its hac_floor's (the rows and columns scaled, so the matrix stays
-  // positive semi-definite). cov_hac is
-  // empty with the Ceres covariance (robust loss).
+  // The covariances of theta (n x n, SI) at the solution, each with the
+  // consider term: "white", the inverse Gauss-Newton information, and "hac",
+  // the sandwich over the epoch scores (hac_covariance.h), honest when the
+  // residuals are correlated in time. estimate.cov is the one named by
+  // sigma_method ("hac" when the residual is not white, each variance then
+  // at least the white one's).
   std::string sigma_method = "white";
   Eigen::MatrixXd cov_white, cov_hac;
-  // With "hac": what each variance is kept at least at. "white": cov_white.
-  // "per_channel_bound": when one weight served channels whose residuals
-  // differ beyond kMaxChannelRatio (noise_source "estimated_common", channels
-  // unalike; sigma is then the HAC one even on a white residual), the
-  // Cramer-Rao bound with each channel's readings at the noise its residual
-  // holds (noise_check.estimated_mV) and the angles as declared.
-  std::string hac_floor;
-  // With pins: estimate.cov before their uncertainty was added (the
-  // covariance given the pinned values). Two fits that pin the same
-  // parameters at the same values share that part of their error, so their
-  // difference is judged on this one (the halves of a run). Empty without
-  // pins.
-  Eigen::MatrixXd cov_given_pinned;
-  // With pins, the consider model behind what was added (SI units, columns
-  // in the order of `pinned`): pinned_sensitivity (n x pins) is the change of
-  // each estimated parameter per unit change of a pinned one (zero rows for
-  // held ones), pinned_cov (pins x pins) the pinned ones' marginal posterior;
-  // the added covariance is S P S^T. Two fits that pin the same parameters
-  // differ by (S_a - S_b) delta from the pins, which their common error
-  // delta ~ P does not cancel.
-  Eigen::MatrixXd pinned_sensitivity, pinned_cov;
+  // estimate.cov without the consider term (the covariance given the consider
+  // parameters at their nominal values), and the consider model: the
+  // sensitivity of every parameter to each consider parameter (n x c, SI,
+  // columns in the order of `consider`) and their prior covariance (c x c);
+  // the consider term is S P S^T. Empty without consider parameters.
+  Eigen::MatrixXd cov_given_consider, consider_sensitivity, consider_cov;
+  // The Gauss-Newton information of the data and the constraints at the
+  // solution (n x n, SI, every parameter's column, no priors): what the
+  // consider term and the loop's separability test are read from.
+  Eigen::MatrixXd information;
   double hac_bandwidth_epochs = 0.0;  // the Bartlett bandwidth used, epochs
-  // Whether the HAC estimate's kernel bias was corrected (hac_covariance.h),
-  // and the largest factor that put on a parameter's sigma_hac.
   bool hac_kernel_bias_corrected = false;
   double hac_kernel_bias_factor_max = 1.0;
   double init_seconds = 0.0, solve_seconds = 0.0, covariance_seconds = 0.0;
   int epochs = 0;
 };
 
-// The fit. With holding.auto_hold and holding.pin_weak_excursions, a fit
-// that moves weakly determined parameters beyond holding.pin_excursion_sigma
-// prior sigma is repeated with them pinned at nominal (BatchResult::pinned;
-// at most three refits).
 BatchResult SolveBatch(const RunDescription& run, const RunData& data,
                        const ParameterLayout& layout, const BatchOptions& options);
 
-// The parameters of fit `r` that HoldPolicy::pin_weak_excursions pins: free,
-// not in policy.free, data information at the start at most
-// policy.pin_max_information, beyond policy.pin_excursion_sigma prior sigma;
-// largest excursion first.
-// A pinned parameter is not known: the data know it at most a few times its
-// prior. What its uncertainty does to the estimated parameters is added to
-// r's covariances (estimate, white, HAC): a consider covariance at the
-// nominal linearisation of the hold decision (r.information_at_start), the
-// marginal posterior of the estimated parameters with the pinned ones free
-// under their priors minus the conditional one. SolveBatch applies it.
-void AddPinnedUncertainty(const ParameterLayout& layout, BatchResult* r);
+// Whether r estimates parameter `name` (neither held nor considered).
+bool IsEstimated(const BatchResult& r, const std::string& name);
 
-// Per parameter of r's layout: the data information at the nominal values
-// from r.information_at_start, marginal (the other free parameters
-// estimated, r.held fixed), in prior units; 0 for a held one. Empty when the
-// fit made no hold decision.
-Eigen::VectorXd MarginalInformationAtStart(const ParameterLayout& layout, const BatchResult& r);
+// The decision a fit was made under, to refit another model under it (the
+// loop's refits keep what the declared model's fit decided).
+HoldDecision DecisionOf(const BatchResult& r);
 
-// "Kxy (-57.3, 0.21) Kzy (-56.8, 0.093)": each pin with where the first fit
-// had moved it (prior sigma) and its data information at the nominal values.
-std::string DescribePins(const std::vector<PinnedExcursion>& pinned);
-
-// Whether r pinned parameter `name`.
-bool IsPinned(const BatchResult& r, const std::string& name);
-
-std::vector<PinnedExcursion> WeakExcursions(const ParameterLayout& layout, const BatchResult& r,
-                                            const HoldPolicy& policy);
-
-// The hold decision alone (what fit does first; filter uses it too). Costs one
-// linearisation of the run thinned to decimation_hz.
-struct HoldDecision {
-  std::vector<std::string> held;
-  std::vector<WeakDirection> unsupported;  // at the nominal values, before holding
-  // Parameters of an undetermined direction that are estimated relative to
-  // the held ones of that direction (e.g. gamma_y, gamma_z relative to
-  // dlambda2 without the paper's constraint): not estimable on their own.
-  std::map<std::string, std::vector<std::string>> relative_to;
-  // The data information at the nominal values (n x n, full rate, prior
-  // units: parameter i divided by its prior sigma), held ones included;
-  // empty without auto_hold.
-  Eigen::MatrixXd information;
-};
-HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data,
-                                  const ParameterLayout& layout, const HoldPolicy& policy,
-                                  double epoch_s, const AngleDerivativeOptions& derivatives,
-                                  int decimation_hz = 100, int threads = 0);
-
-// The rule behind HoldPolicy::auto_hold, for any parameter vector: a pivoted
-// Cholesky of the data information in prior units (information, n x n: each
-// parameter divided by its prior sigma), most informative first, priority
-// breaking near-ties in favour of the primary parameters; keeps every
-// parameter with at least min_info[j] left once the kept ones are known and
-// returns the kept indices. ChooseHeldParameters and the joint problem of
-// several runs (solvers/multirun/) decide with it.
-std::vector<int> SupportedByInformation(const Eigen::MatrixXd& information,
-                                        const Eigen::VectorXd& min_info,
-                                        const Eigen::VectorXd& priority);
-// The priority of base or effect parameter `index` of a layout: scale
-// factors and zero offsets 4, misalignments and lever arm 2, the rest 1.
-double HoldPriority(int index);
+// The consider term of a covariance: the parameters `est` are estimated with
+// `info` (n x n, data and constraints, no priors) and their priors; the
+// parameters `consider` are at their prior means with prior_sigma. Returns the
+// sensitivity S (n x c: d estimate / d consider value, zero rows outside est)
+// and the term S P S^T (n x n).
+void ConsiderTerm(const Eigen::MatrixXd& info, const Eigen::VectorXd& prior_sigma,
+                  const std::vector<int>& est, const std::vector<int>& consider,
+                  Eigen::MatrixXd* sensitivity, Eigen::MatrixXd* term);
 
 }  // namespace triadcal

@@ -1,6 +1,7 @@
-// The batch solver: cost-function Jacobians against numeric derivatives, the
-// Schur covariance against Ceres's, noise-free recovery, bad starts, the
-// relinearised increments against exact ones, normalised errors over seeds,
+// The batch solver: the reduced cost's gradient and the noise's likelihood
+// against numeric derivatives, the consider term against the marginal
+// posterior, what the decision estimates, noise-free recovery, bad starts, the
+// answer whatever the start, normalised errors over seeds, the vertical shaft,
 // and the fit/compare commands.
 #include <algorithm>
 #include <cmath>
@@ -8,14 +9,13 @@
 #include <fstream>
 #include <random>
 
-#include <ceres/gradient_checker.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "solvers/estimation/batch_costs.h"
-#include "solvers/estimation/state_space_model.h"
+#include "core/model/errors.h"
 #include "solvers/estimation/batch_solver.h"
 #include "solvers/estimation/observability.h"
+#include "solvers/estimation/run_evaluation.h"
 #include "tests/sim_fixtures.h"
 
 namespace triadcal {
@@ -27,9 +27,11 @@ BatchResult Fit(const Scenario& s, const RunData& data, BatchOptions opt = {}) {
   return SolveBatch(s.run, data, ParameterLayout(), opt);
 }
 
+// Largest |estimate - truth| / sigma over the estimated base parameters.
 double MaxAbsZ(const BatchResult& r, const Eigen::VectorXd& truth, std::string* worst) {
   double m = 0.0;
   for (int i = 0; i < kNumBaseParams; ++i) {
+    if (!(r.estimate.cov(i, i) > 0.0) || !IsEstimated(r, ParameterLayout().info(i).name)) continue;
     const double z = (r.estimate.theta[i] - truth[i]) / std::sqrt(r.estimate.cov(i, i));
     if (std::abs(z) > m) {
       m = std::abs(z);
@@ -39,62 +41,187 @@ double MaxAbsZ(const BatchResult& r, const Eigen::VectorXd& truth, std::string* 
   return m;
 }
 
-// The Ceres costs (state-space model residuals) against numeric derivatives,
-// with every parameter free and with some held (absent from theta_free).
-TEST(BatchCosts, JacobiansMatchNumericDerivatives) {
-  const Scenario s = PaperScenario(100.0, 6.0, 2.0, 15.0, 1);
+// The reduced cost (the trajectory solved for) at theta, its gradient and
+// each channel's share against central differences of the cost and of the
+// channels' quadratic forms, with the noise weights of a fixed reference.
+TEST(RunEvaluation, GradientsMatchCentralDifferences) {
+  const Scenario s = PaperScenario(50.0, 20.0, 2.0, 15.0, 1);
   const RunData data = Simulate(s);
-  for (const bool some_held : {false, true}) {
-    RunProblem p = BuildRunProblem(s.run, data, ParameterLayout(), 0.2, {});
-    p.theta_held = s.truth;
-    if (some_held) p.Hold({kDlambda2, kKxy, kDz2});
-    const StateSpaceModel model(p);
-    const Eigen::VectorXd theta_free = model.Free(s.truth);
-    const ProcessStep step = model.Process(3, s.truth, true);
-    ASSERT_EQ(step.U.cols(), model.num_free());
-    Mat6 cov = Mat6::Identity() * 1e-6;
-    cov(0, 3) = cov(3, 0) = 3e-7;
-    const Mat6 L = WhiteningOf(cov);
-    EXPECT_LT((L.transpose() * L - cov.inverse()).norm(), 1e-6 * cov.inverse().norm());
-
-    std::vector<double> xa = {0.1, -0.2, 0.05, 0.13, 0.02, 0.03};
-    std::vector<double> xb = {0.12, -0.19, 0.04, 0.15, 0.01, 0.02};
-    Eigen::VectorXd th = theta_free;
-    th[0] += 1e-3;
-    th[5] += 1e-3;
-    ceres::NumericDiffOptions nd;
-    nd.relative_step_size = 1e-7;
-    for (const bool exact : {false, true}) {
-      ProcessCost cost(&step, &theta_free, &model, exact, 3);
-      ceres::GradientChecker checker(&cost, static_cast<const std::vector<const ceres::Manifold*>*>(nullptr), nd);
-      ceres::GradientChecker::ProbeResults results;
-      std::vector<const double*> params = {xa.data(), xb.data(), th.data()};
-      EXPECT_TRUE(checker.Probe(params.data(), 1e-6, &results)) << results.error_log;
+  const RunProblem p = BuildRunProblem(s.run, data, ParameterLayout(), 0.5, {});
+  const RunPass ref = EvaluatePass(p, p.prior.mean, false, 1);
+  // Away from the optimum, so that the residual is not noise alone.
+  Eigen::VectorXd theta = s.truth;
+  theta[kKx] *= 1.01;
+  theta[kAlphaY] += 1e-3;
+  theta[kDpsi] += 5e-4;
+  theta[kDx2] += 0.003;
+  const Eigen::Vector3d noise(2.0, 2.5, 1.8);
+  const RunReduction at = Reduce(p, EvaluatePass(p, theta, true, 1), noise, 1, &ref);
+  auto cost = [&](const Eigen::VectorXd& th, Eigen::Vector3d* q) {
+    const RunReduction r = Reduce(p, EvaluatePass(p, th, false, 1), noise, 1, &ref);
+    *q = r.channel_quadratic;
+    return r.cost;
+  };
+  for (int i : {kKx, kKz, kW0y, kAlphaY, kGammaZ, kKxz, kDpsi, kDlambda2, kDx2}) {
+    const double h = 1e-4 * std::max(std::abs(theta[i]), p.prior.sigma[i]);
+    Eigen::VectorXd a = theta, b = theta;
+    a[i] += h;
+    b[i] -= h;
+    Eigen::Vector3d qa, qb;
+    const double numeric = (cost(a, &qa) - cost(b, &qb)) / (2.0 * h);
+    EXPECT_NEAR(at.gradient[i], numeric, 1e-5 * std::abs(numeric) + 1e-3 / p.prior.sigma[i])
+        << ParameterLayout().info(i).name;
+    for (int c = 0; c < 3; ++c) {
+      const double nq = 0.5 * (qa[c] - qb[c]) / (2.0 * h);
+      EXPECT_NEAR(at.channel_gradient[c][i], nq, 1e-4 * std::abs(nq) + 1e-3 / p.prior.sigma[i])
+          << ParameterLayout().info(i).name << " channel " << c;
     }
-    MeasurementCost mcost(&model, 5, L);
-    ceres::GradientChecker mchecker(&mcost, static_cast<const std::vector<const ceres::Manifold*>*>(nullptr), nd);
-    ceres::GradientChecker::ProbeResults mres;
-    std::vector<const double*> mparams = {xa.data(), th.data()};
-    EXPECT_TRUE(mchecker.Probe(mparams.data(), 1e-6, &mres)) << mres.error_log;
   }
 }
 
-TEST(BatchSolver, SchurCovarianceEqualsCeresCovariance) {
+// The noise's part of the likelihood: d(-log L)/d log sigma_i = rho N_i - q_i
+// against a central difference of cost + rho log det, and the
+// variance-component update reaches the point where it vanishes.
+TEST(RunEvaluation, NoiseUpdateIsTheLikelihoodMaximum) {
   const Scenario s = PaperScenario(50.0, 30.0, 2.0, 15.0, 2);
   const RunData data = Simulate(s);
-  BatchOptions a, b;
-  b.covariance_method = "ceres";
-  const BatchResult ra = Fit(s, data, a), rb = Fit(s, data, b);
-  // The Schur path works on the normal equations, whose condition number is
-  // the square of the Jacobian's (~1e5 here, the priors against the um/s
-  // trajectory): agreement to ~1e-16 * 1e10 = 1e-6 relative is what double
-  // precision allows, so 1e-5 is the test.
-  for (int i = 0; i < kNumBaseParams; ++i) {
-    for (int j = 0; j < kNumBaseParams; ++j) {
-      const double scale = std::sqrt(rb.estimate.cov(i, i) * rb.estimate.cov(j, j));
-      EXPECT_NEAR(ra.estimate.cov(i, j), rb.estimate.cov(i, j), 1e-5 * scale);
-    }
+  const RunProblem p = BuildRunProblem(s.run, data, ParameterLayout(), 0.5, {});
+  const RunPass ref = EvaluatePass(p, p.prior.mean, false, 1);
+  const RunPass pass = EvaluatePass(p, s.truth, false, 1);
+  const int fitted = 27;
+  auto minus_log_l = [&](const Eigen::Vector3d& noise, RunReduction* out) {
+    *out = Reduce(p, pass, noise, 1, &ref);
+    return out->cost + NoiseDofShare(*out, fitted) * out->log_det;
+  };
+  const Eigen::Vector3d noise(3.0, 1.5, 2.2);
+  RunReduction r0;
+  minus_log_l(noise, &r0);
+  const double rho = NoiseDofShare(r0, fitted);
+  for (int i = 0; i < 3; ++i) {
+    const double h = 1e-4;
+    Eigen::Vector3d a = noise, b = noise;
+    a[i] *= std::exp(h);
+    b[i] *= std::exp(-h);
+    RunReduction ra, rb;
+    const double numeric = (minus_log_l(a, &ra) - minus_log_l(b, &rb)) / (2.0 * h);
+    const double analytic = rho * r0.channel_trace[i] - r0.channel_quadratic[i];
+    EXPECT_NEAR(analytic, numeric, 1e-4 * r0.channel_trace[i]) << i;
   }
+  Eigen::Vector3d at = noise;
+  RunReduction r;
+  for (int k = 0; k < 30; ++k) {
+    minus_log_l(at, &r);
+    at = NoiseFromReduction(r, fitted);
+  }
+  minus_log_l(at, &r);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(r.channel_quadratic[i], rho * r.channel_trace[i], 1e-6 * r.channel_trace[i]);
+    EXPECT_NEAR(at[i], 2.0, 0.15) << i;  // the simulated noise
+  }
+}
+
+// The consider term is the error covariance the estimate gets from a
+// parameter held at its prior mean that is in truth spread by its prior: for
+// a linear model y = J_a a + J_c c + n (a under its prior, c at c0), the
+// estimate's error is (J_a^T J_a + Pi_a)^-1 (J_a^T J_c (c - c0) + J_a^T n +
+// Pi_a (a0 - a)), whose covariance, written out here, must be the
+// conditional covariance plus the term. It exceeds the marginal posterior's
+// (which estimates c too) and is at least the conditional one.
+TEST(ConsiderTerm, IsTheErrorCovarianceOfTheEstimateWithTheParameterHeld) {
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> g;
+  const int n = 6;
+  Eigen::MatrixXd J(20, n);
+  for (int i = 0; i < J.rows(); ++i)
+    for (int j = 0; j < n; ++j) J(i, j) = g(rng);
+  const Eigen::MatrixXd info = J.transpose() * J;
+  const Eigen::VectorXd sigma = Eigen::VectorXd::LinSpaced(n, 0.5, 2.0);
+  const std::vector<int> est = {0, 1, 3, 5}, consider = {2, 4};
+  Eigen::MatrixXd S, term;
+  ConsiderTerm(info, sigma, est, consider, &S, &term);
+  const int k = static_cast<int>(est.size()), m = static_cast<int>(consider.size());
+  Eigen::MatrixXd Ja(J.rows(), k), Jc(J.rows(), m);
+  for (int a = 0; a < k; ++a) Ja.col(a) = J.col(est[a]);
+  for (int c = 0; c < m; ++c) Jc.col(c) = J.col(consider[c]);
+  Eigen::VectorXd pa(k), pc(m);
+  for (int a = 0; a < k; ++a) pa[a] = 1.0 / (sigma[est[a]] * sigma[est[a]]);
+  for (int c = 0; c < m; ++c) pc[c] = sigma[consider[c]] * sigma[consider[c]];
+  const Eigen::MatrixXd F = Ja.transpose() * Ja + Eigen::MatrixXd(pa.asDiagonal());
+  const Eigen::MatrixXd Fi = F.inverse();
+  const Eigen::MatrixXd M = Ja.transpose() * Jc;
+  const Eigen::MatrixXd error_cov =
+      Fi * (M * pc.asDiagonal() * M.transpose() + Ja.transpose() * Ja +
+            Eigen::MatrixXd(pa.asDiagonal())) * Fi;
+  for (int a = 0; a < k; ++a) {
+    for (int b = 0; b < k; ++b) {
+      EXPECT_NEAR(Fi(a, b) + term(est[a], est[b]), error_cov(a, b), 1e-12);
+    }
+    EXPECT_NEAR(S(est[a], 0), -(Fi * M)(a, 0), 1e-12);
+  }
+  for (int q : consider) EXPECT_EQ(term(q, q), 0.0);
+  // Between the conditional and no less than the marginal posterior.
+  Eigen::MatrixXd full = info;
+  full.diagonal() += sigma.cwiseAbs2().cwiseInverse();
+  const Eigen::MatrixXd marginal = full.inverse();
+  for (int a = 0; a < k; ++a) {
+    EXPECT_GE(Fi(a, a) + term(est[a], est[a]), marginal(est[a], est[a]) - 1e-12);
+    EXPECT_GE(term(est[a], est[a]), 0.0);
+  }
+}
+
+// The decision: on the paper's profile with its constraint everything is
+// estimated; on a single-axis run the parameters the motion cannot reach are
+// structural nulls (held, the others relative to them) or not determined
+// (considered), and a zero offset is kept ahead of the bench tilt it cannot
+// be told from.
+TEST(HoldDecision, EstimatesWhatTheRunDeterminesAndNamesTheRest) {
+  const Scenario paper = PaperScenario(50.0, 90.0, 2.0, 15.0, 3);
+  const HoldDecision all =
+      ChooseHeldParameters(paper.run, Simulate(paper), ParameterLayout(), {}, 0.5, {});
+  EXPECT_TRUE(all.held.empty());
+  EXPECT_TRUE(all.consider.empty());
+
+  Scenario s = PaperScenario(50.0, 60.0, 2.0, 15.0, 4);
+  s.profile.amplitude_rad[1] = 0.0;  // the outer axis alone
+  s.run.constraints.clear();
+  const HoldDecision d = ChooseHeldParameters(s.run, Simulate(s), ParameterLayout(), {}, 0.5, {});
+  std::vector<std::string> out = d.held;
+  out.insert(out.end(), d.consider.begin(), d.consider.end());
+  auto has = [&](const std::string& n) { return std::find(out.begin(), out.end(), n) != out.end(); };
+  EXPECT_TRUE(has("dtheta_c"));  // the rotation about the only axis
+  EXPECT_TRUE(has("dlambda2"));  // the inner zero, with no constraint and no inner motion
+  for (const char* p : {"W0x", "W0y", "W0z", "Kx", "Kz"}) EXPECT_FALSE(has(p)) << p;
+  // What a held one stands for.
+  ASSERT_TRUE(d.relative_to.count("beta_x"));
+  EXPECT_EQ(d.relative_to.at("beta_x"), std::vector<std::string>{"dtheta_c"});
+  // --hold and --free; both on one name is an error.
+  HoldPolicy hp;
+  hp.hold = {"dz2"};
+  hp.free = {"dlambda2"};
+  const HoldDecision u = ChooseHeldParameters(s.run, Simulate(s), ParameterLayout(), hp, 0.5, {});
+  EXPECT_NE(std::find(u.held.begin(), u.held.end(), "dz2"), u.held.end());
+  EXPECT_EQ(std::find(u.held.begin(), u.held.end(), "dlambda2"), u.held.end());
+  EXPECT_EQ(std::find(u.consider.begin(), u.consider.end(), "dlambda2"), u.consider.end());
+  hp.free = {"dz2"};
+  EXPECT_THROW(ChooseHeldParameters(s.run, Simulate(s), ParameterLayout(), hp, 0.5, {}),
+               OptionError);
+}
+
+// Two parameters that explain the same data to |rho| >= 0.99: the one of
+// higher priority is kept, the other is not separable from it.
+TEST(HoldDecision, KeepsTheHigherPriorityOfTwoThatCannotBeSeparated) {
+  Eigen::MatrixXd info(3, 3);
+  // Parameter 0 and 1 nearly collinear (rho 0.999), 2 independent.
+  info << 1e4, 0.999e4, 0, 0.999e4, 1e4, 0, 0, 0, 500;
+  Eigen::VectorXd min_info = Eigen::VectorXd::Constant(3, 100.0);
+  Eigen::VectorXd priority(3);
+  priority << 1, 5, 1;
+  Eigen::VectorXd left;
+  const std::vector<int> kept = SupportedByInformation(info, min_info, priority, &left);
+  ASSERT_EQ(kept.size(), 2u);
+  EXPECT_EQ(kept[0], 1);
+  EXPECT_EQ(kept[1], 2);
+  EXPECT_NEAR(left[0], 1e4 * (1 - 0.999 * 0.999), 1e-6);
 }
 
 TEST(BatchSolver, NoiseFreeDataRecoveredFarBelowSigma) {
@@ -103,22 +230,25 @@ TEST(BatchSolver, NoiseFreeDataRecoveredFarBelowSigma) {
   s.run.angle_noise_rad = 15.0 * kArcsecToRad;
   const RunData data = Simulate(s);
   // sigma from the declared noise (the yardstick here): with the noise
-  // estimated from these noise-free residuals sigma would shrink to the
-  // model's numerical floor (NoiseIsEstimatedFromTheResiduals checks that).
+  // estimated from these noise-free residuals sigma would shrink to the floor.
   BatchOptions opt;
   opt.estimate_noise = false;
   const BatchResult r = Fit(s, data, opt);
-  EXPECT_TRUE(r.converged);
+  EXPECT_TRUE(r.converged) << r.termination;
   // Not exactly 0: the weak priors pull by (sigma / sigma_prior)^2 * (truth -
   // nominal) / sigma, ~0.01 sigma for dy2 and gamma_y here, and the trapezoid
   // rule at 50 Hz leaves ~0.005 sigma. Anything model-related would be >> 0.05.
   std::string worst;
-  EXPECT_LT(MaxAbsZ(r, s.truth, &worst), 0.05) << worst;
+  EXPECT_LT(MaxAbsZ(r, s.truth, &worst), 0.05) << worst << " " << r.termination << " held " << r.held.size() << " consider " << r.consider.size();
+  for (const auto& c : r.consider) std::printf("consider %s\n", c.c_str());
+  for (const auto& c : r.held) std::printf("held %s\n", c.c_str());
 }
 
 // From the nominal values with the truth 3 deg away in misalignment and
-// levelling, the lever arm 20 mm off and the scale 5 % off.
-TEST(BatchSolver, ConvergesFromABadStart) {
+// levelling, the lever arm 20 mm off and the scale 5 % off; the same answer as
+// from the smoother's start (one minimum, whatever the path), in a handful of
+// passes over the samples.
+TEST(BatchSolver, ConvergesFromABadStartToTheSameAnswer) {
   Scenario s = PaperScenario(50.0, 90.0, 2.0, 15.0, 4);
   SetFromFileUnits(s.truth_layout,
                    {{"Kx", 174.0 * 0.95}, {"Ky", 174 * 1.05}, {"alpha_x", 180}, {"beta_z", -180},
@@ -129,35 +259,17 @@ TEST(BatchSolver, ConvergesFromABadStart) {
   BatchOptions opt;
   opt.init = BatchInit::kNominal;
   const BatchResult r = Fit(s, data, opt);
-  EXPECT_TRUE(r.converged);
+  EXPECT_TRUE(r.converged) << r.termination;
   std::string worst;
   EXPECT_LT(MaxAbsZ(r, s.truth, &worst), 4.0) << worst;
   EXPECT_NEAR(r.chi2_per_dof, 1.0, 4.0 * std::sqrt(2.0 / r.degrees_of_freedom));
-  // The same answer as from the smoother's start.
   const BatchResult r2 = Fit(s, data);
+  EXPECT_TRUE(r2.converged) << r2.termination;
+  EXPECT_LE(r2.passes, 6);
   for (int i = 0; i < kNumBaseParams; ++i) {
-    EXPECT_NEAR(r.estimate.theta[i], r2.estimate.theta[i], 0.01 * std::sqrt(r2.estimate.cov(i, i)))
+    EXPECT_NEAR(r.estimate.theta[i], r2.estimate.theta[i], 0.02 * std::sqrt(r2.estimate.cov(i, i)))
         << ParameterLayout().info(i).name;
   }
-}
-
-// The relinearised increments reach the optimum of the exact problem.
-TEST(BatchSolver, RelinearisedEqualsExactIncrements) {
-  const Scenario s = PaperScenario(25.0, 30.0, 2.0, 15.0, 6);
-  const RunData data = Simulate(s);
-  const BatchResult lin = Fit(s, data);
-  BatchOptions opt;
-  opt.exact_increments = true;
-  opt.init = BatchInit::kGiven;
-  opt.init_theta = lin.estimate.theta;
-  opt.compute_covariance = false;
-  const BatchResult ex = Fit(s, data, opt);
-  for (int i = 0; i < kNumBaseParams; ++i) {
-    EXPECT_NEAR(ex.estimate.theta[i], lin.estimate.theta[i],
-                0.01 * std::sqrt(lin.estimate.cov(i, i)))
-        << ParameterLayout().info(i).name;
-  }
-  EXPECT_NEAR(ex.final_cost, lin.final_cost, 1e-3 * lin.final_cost);
 }
 
 TEST(BatchSolver, NormalisedErrorsOverSeeds) {
@@ -169,6 +281,7 @@ TEST(BatchSolver, NormalisedErrorsOverSeeds) {
     SampleTruth(&s);
     const RunData data = Simulate(s);
     const BatchResult r = Fit(s, data);
+    EXPECT_TRUE(r.converged) << r.termination;
     // chi2/dof has standard deviation sqrt(2 / dof): allow 4 of them.
     EXPECT_NEAR(r.chi2_per_dof, 1.0, 4.0 * std::sqrt(2.0 / r.degrees_of_freedom));
     for (int i = 0; i < kNumBaseParams; ++i) {
@@ -198,45 +311,58 @@ TEST(BatchSolver, EstimatesAnEffect) {
   }
 }
 
+// Noise declared 4x too small and 3x too large: the fit estimates it with the
+// parameters, per channel, and sigma rest on the estimate.
+TEST(BatchSolver, EstimatesTheNoiseWhateverWasDeclared) {
+  for (const double factor : {0.25, 3.0}) {
+    Scenario s = PaperScenario(50.0, 90.0, 2.0, 15.0, 21);
+    s.run.noise_mV = 2.0 * factor;
+    const RunData data = Simulate(s);
+    const BatchResult r = Fit(s, data);
+    ASSERT_TRUE(r.converged) << r.termination;
+    for (int i = 0; i < 3; ++i) {
+      // The estimate's own sampling error: about 4 % here (sd of sigma from
+      // ~300 effective degrees of freedom a channel).
+      EXPECT_LT(r.noise_check.sd_mV[i], 0.1) << i;
+      EXPECT_NEAR(r.noise_used_mV[i], 2.0, 4.0 * r.noise_check.sd_mV[i]) << factor << " " << i;
+    }
+    EXPECT_FALSE(r.noise_check.consistent);
+    EXPECT_NEAR(r.chi2_per_dof, 1.0, 0.05);
+    std::string worst;
+    EXPECT_LT(MaxAbsZ(r, s.truth, &worst), 4.0) << worst;
+  }
+}
+
 std::string Slurp(const std::string& path) {
   std::ifstream in(path);
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
 // A vertical shaft: only the inner axis turns (lambda1 = 0), so gravity stays
-// on x and y, z see the bench's ~1 % g tilt and a few mg of motion. The scale
-// factors then lie along flat directions (K_y, K_z against the tilts, K_x
-// against W0x). The first-order increments let a scale step cancel the
-// readings' noise, and every K ran to the 5x bound with sigma ~2 mV/g
-// (state_space_model.h, c_e); now no scale factor leaves its nominal value
-// by more than its honest sigma, the fit converges with chi2/dof ~1, and the
-// analysis of its covariance names every scale factor and zero offset as
-// not determined by this motion.
-TEST(BatchSolver, VerticalShaftScaleFactorsStayAtThePriorAndAreNamed) {
+// on x and y, z sees the bench's ~1 % g tilt and a few mg of motion. The run
+// determines the zero offsets (and Kz 1 g + W0z), not the scale factors: they
+// stay at their nominal values, named as not determined, their prior
+// uncertainty in the offsets' sigma; nothing else moves far.
+TEST(BatchSolver, VerticalShaftScaleFactorsStayAtNominalAndAreNotDetermined) {
   const ParameterLayout layout;
   for (const unsigned seed : {2u, 7u, 11u}) {
     SCOPED_TRACE(seed);
     Scenario s = PaperScenario(50.0, 60.0, 2.0, 15.0, seed);
     s.profile.amplitude_rad[0] = 0.0;
     const RunData data = Simulate(s);
-    BatchOptions opt;
-    opt.estimate_noise = false;  // the declared noise is right: chi2/dof judges the fit
-    const BatchResult r = SolveBatch(s.run, data, layout, opt);
-    EXPECT_TRUE(r.converged);
+    const BatchResult r = SolveBatch(s.run, data, layout, {});
+    EXPECT_TRUE(r.converged) << r.termination;
     EXPECT_GT(r.chi2_per_dof, 0.8);
     EXPECT_LT(r.chi2_per_dof, 1.25);
     const Eigen::VectorXd nominal = NominalTheta(s.run, layout);
     for (int i = kKx; i <= kKz; ++i) {
-      const double sigma = std::sqrt(r.estimate.cov(i, i));
-      ASSERT_GT(sigma, 0.0) << layout.info(i).name;
-      EXPECT_LT(std::abs(r.estimate.theta[i] - nominal[i]), sigma) << layout.info(i).name;
-      // Determined by the prior, not by the data: sigma near the prior's.
-      EXPECT_GT(sigma, 0.5 * r.prior.sigma[i]) << layout.info(i).name;
+      EXPECT_FALSE(IsEstimated(r, layout.info(i).name)) << layout.info(i).name;
+      EXPECT_EQ(r.estimate.theta[i], nominal[i]) << layout.info(i).name;
     }
-    const std::vector<std::string> named =
-        ParametersIn(UnsupportedDirections(layout, r.estimate.cov, r.prior.sigma));
-    for (const char* p : {"Kx", "Ky", "Kz", "W0x", "W0y", "W0z"}) {
-      EXPECT_NE(std::find(named.begin(), named.end(), p), named.end()) << p;
+    for (int i = kW0x; i <= kW0z; ++i) {
+      EXPECT_TRUE(IsEstimated(r, layout.info(i).name)) << layout.info(i).name;
+      const double z = (r.estimate.theta[i] - s.truth[i]) / std::sqrt(r.estimate.cov(i, i));
+      EXPECT_LT(std::abs(z), 4.0) << layout.info(i).name;
     }
   }
 }
@@ -289,183 +415,39 @@ TEST(FitCommand, FitAndCompareWriteTheirOutputs) {
             "triadcal: error: --init: expected rts or nominal, got 'sideways'\n");
 }
 
-// A held parameter anchors the other members of its weak direction
-// (relative_to); a pinned one does not: its uncertainty goes into their sigma.
-// Single-axis run: dtheta_c with beta_x, beta_z.
-TEST(HoldDecision, APinIsNoAnchorOfRelativeTo) {
-  Scenario s = PaperScenario(50.0, 30.0, 2.0, 15.0, 4);
-  s.profile.amplitude_rad[1] = 0.0;
-  const RunData data = Simulate(s);
-  HoldPolicy held;
-  held.hold = {"dtheta_c"};
-  const HoldDecision h = ChooseHeldParameters(s.run, data, ParameterLayout(), held, 0.5, {});
-  ASSERT_TRUE(h.relative_to.count("beta_x"));
-  EXPECT_EQ(h.relative_to.at("beta_x"), std::vector<std::string>{"dtheta_c"});
-  HoldPolicy pinned;
-  pinned.pinned = {"dtheta_c"};
-  const HoldDecision p = ChooseHeldParameters(s.run, data, ParameterLayout(), pinned, 0.5, {});
-  EXPECT_NE(std::find(p.held.begin(), p.held.end(), "dtheta_c"), p.held.end());
-  EXPECT_FALSE(p.relative_to.count("beta_x"));
-  EXPECT_FALSE(p.relative_to.count("beta_z"));
-}
-
-// The sensitivity of the consider model (BatchResult::pinned_sensitivity)
-// is how the estimates follow the pinned value: dz2 pinned 20 mm (one prior
-// sigma) further -- the nominal lever arm moved by that, dz2 held at 0 --
-// moves the other estimates by up to 1.2 sigma, S times 20 mm. S is taken at
-// the hold decision's linearisation (the nominal values), as the added
-// covariance is: it predicts the change within 0.13 sigma (alpha_y -0.37
-// for -0.50). The fit's own information, at its estimate, predicts it within
-// 0.03 sigma (the regression on dz2 in the covariance of the fit with dz2
-// free): what S misses is the linearisation point, not the algebra.
-TEST(BatchSolver, PinnedSensitivityPredictsTheEstimatesAtAnotherPinnedValue) {
+// A parameter the run does not determine stays at its nominal value with its
+// prior uncertainty in the others' sigma: a 10-s paper run with a 20-mm prior
+// on dz2 and the lever arm 20 mm off there (one prior sigma). The others'
+// errors stay within their sigma (RMS z < 1.6, none beyond 4), their sigma
+// are the marginal ones (the consider term added to the covariance given dz2),
+// and the consider model's sensitivity predicts how they follow dz2.
+TEST(BatchSolver, ConsideredParameterCarriesItsUncertainty) {
   const ParameterLayout layout;
   Scenario s = PaperScenario(50.0, 10.0, 2.0, 15.0, 3);
   s.run.prior_sigma["dz2"] = 20.0;
+  s.truth[kDz2] = 0.02;
   const RunData data = Simulate(s);
   BatchOptions opt;
-  opt.estimate_noise = false;
   opt.sigma = "white";
-  opt.holding.hold = {"dz2"};
-  BatchResult r = Fit(s, data, opt);
-  ASSERT_TRUE(r.converged);
-  ASSERT_EQ(r.information_at_start.rows(), layout.size());
-  r.pinned = {PinnedExcursion{"dz2", 0.0, 0.0}};
-  AddPinnedUncertainty(layout, &r);
-  ASSERT_EQ(r.pinned_sensitivity.cols(), 1);
-  BatchOptions free_opt = opt;
-  free_opt.holding.hold = {};
-  free_opt.holding.pin_weak_excursions = false;
-  const BatchResult free_fit = Fit(s, data, free_opt);
-  const double delta = 0.02;
-  Scenario moved = s;
-  moved.run.lever_arm0_m.z() += delta;
-  const BatchResult r_moved = Fit(moved, data, opt);
-  double miss_nominal = 0.0, miss_estimate = 0.0, largest = 0.0;
+  opt.holding.min_information = 1e6;  // dz2 (and whatever else is weak) considered
+  opt.holding.free = {"Kx", "Ky", "Kz", "W0x", "W0y", "W0z"};
+  const BatchResult r = Fit(s, data, opt);
+  ASSERT_TRUE(r.converged) << r.termination;
+  ASSERT_NE(std::find(r.consider.begin(), r.consider.end(), "dz2"), r.consider.end());
+  EXPECT_EQ(r.estimate.theta[kDz2], 0.0);
+  ASSERT_EQ(r.cov_given_consider.rows(), layout.size());
+  double sum = 0.0;
+  int count = 0;
   for (int i = 0; i < kNumBaseParams; ++i) {
-    if (i == kDz2 || r.cov_given_pinned(i, i) <= 0.0) continue;
-    const double sigma = std::sqrt(r.cov_given_pinned(i, i));
-    const double change = (r_moved.estimate.theta[i] - r.estimate.theta[i]) / sigma;
-    const double by_s = r.pinned_sensitivity(i, 0) * delta / sigma;
-    const double by_fit =
-        free_fit.estimate.cov(i, kDz2) / free_fit.estimate.cov(kDz2, kDz2) * delta / sigma;
-    miss_nominal = std::max(miss_nominal, std::abs(change - by_s));
-    miss_estimate = std::max(miss_estimate, std::abs(change - by_fit));
-    largest = std::max(largest, std::abs(change));
+    if (!IsEstimated(r, layout.info(i).name)) continue;
+    const double z = (r.estimate.theta[i] - s.truth[i]) / std::sqrt(r.estimate.cov(i, i));
+    EXPECT_LT(std::abs(z), 4.0) << layout.info(i).name;
+    EXPECT_GE(r.estimate.cov(i, i), r.cov_given_consider(i, i)) << layout.info(i).name;
+    sum += z * z;
+    ++count;
   }
-  std::printf("largest change %.2f sigma; missed by S %.3f sigma, by the fit's own %.3f sigma\n",
-              largest, miss_nominal, miss_estimate);
-  EXPECT_GT(largest, 1.0);  // the test has teeth
-  EXPECT_LT(miss_nominal, 0.15);
-  EXPECT_LT(miss_estimate, 0.03);
+  EXPECT_LT(std::sqrt(sum / count), 1.6);
 }
-
-// A parameter the data know less than twice its prior that the fit moves
-// beyond 3 prior sigma is pinned at nominal and the run refitted; what its
-// uncertainty does to the others is added to their covariance, so their sigma
-// stay those of the fit with it free. A 10-s paper run at 2 mV with a 20-mm
-// prior on dz2 knows it at about 0.6 of that prior; a lever arm 250 mm off
-// (12.5 prior sigma, the model is linear in it) draws the estimate to about
-// 0.6 / 1.6 of that, beyond 3 prior sigma (a nominal value this wrong is the
-// price of the rule, docs/method.md).
-TEST(BatchSolver, WeakParameterMovedFarIsPinnedAndItsUncertaintyKept) {
-  const ParameterLayout layout;
-  Scenario s = PaperScenario(50.0, 10.0, 2.0, 15.0, 3);
-  s.run.prior_sigma["dz2"] = 20.0;
-  s.truth[kDz2] = 0.25;
-  const RunData data = Simulate(s);
-  // The model's sigma, compared between fits whose misfit differs (the held
-  // fits miss 250 mm of lever arm): no noise estimate, no HAC.
-  BatchOptions pin_opt;
-  pin_opt.estimate_noise = false;
-  pin_opt.sigma = "white";
-  BatchOptions free_opt = pin_opt;
-  free_opt.holding.pin_weak_excursions = false;
-  const BatchResult free_fit = Fit(s, data, free_opt);
-  ASSERT_TRUE(free_fit.converged);
-  // The progress of the fit and its refit only climbs, to 1.
-  std::vector<double> fractions;
-  BatchOptions watched = pin_opt;
-  watched.fraction = [&fractions](double x) { fractions.push_back(x); };
-  const BatchResult pinned = Fit(s, data, watched);
-  ASSERT_TRUE(pinned.converged);
-  ASSERT_FALSE(fractions.empty());
-  for (std::size_t i = 1; i < fractions.size(); ++i) {
-    EXPECT_GE(fractions[i], fractions[i - 1]) << i;
-  }
-  EXPECT_EQ(fractions.front(), 0.0);
-  EXPECT_EQ(fractions.back(), 1.0);
-  BatchOptions hold_opt = free_opt;
-  hold_opt.holding.hold = {"dz2"};
-  const BatchResult held = Fit(s, data, hold_opt);
-
-  const double z_free = free_fit.estimate.theta[kDz2] / free_fit.prior.sigma[kDz2];
-  std::printf("free dz2 %.4f m (%.1f prior sigma), information %.3f\n",
-              free_fit.estimate.theta[kDz2], z_free, MarginalInformationAtStart(layout, free_fit)[kDz2]);
-  ASSERT_GT(z_free, 3.0);
-  ASSERT_LT(MarginalInformationAtStart(layout, free_fit)[kDz2], 2.0);
-  EXPECT_TRUE(WeakExcursions(layout, free_fit, HoldPolicy{}).size() >= 1);
-  ASSERT_FALSE(pinned.pinned.empty());
-  EXPECT_EQ(pinned.pinned[0].name, "dz2");
-  EXPECT_NEAR(pinned.pinned[0].z, z_free, 1e-6 * std::abs(z_free));
-  EXPECT_NE(std::find(pinned.held.begin(), pinned.held.end(), "dz2"), pinned.held.end());
-  EXPECT_EQ(pinned.estimate.theta[kDz2], 0.0);
-  // The estimate is the held fit's; the sigma are the free fit's (to the
-  // linearisation), not the held fit's.
-  double worst_free = 0.0, most_shrunk = 1.0;
-  std::string shrunk;
-  for (int i = 0; i < kNumBaseParams; ++i) {
-    if (i == kDz2 || pinned.estimate.cov(i, i) <= 0.0) continue;
-    EXPECT_NEAR(pinned.estimate.theta[i], held.estimate.theta[i],
-                1e-6 * std::sqrt(held.estimate.cov(i, i)))
-        << layout.info(i).name;
-    const double s_pin = std::sqrt(pinned.estimate.cov(i, i));
-    const double s_free = std::sqrt(free_fit.estimate.cov(i, i));
-    const double s_held = std::sqrt(held.estimate.cov(i, i));
-    // Given the pinned value, the sigma are the held fit's.
-    EXPECT_NEAR(std::sqrt(pinned.cov_given_pinned(i, i)), s_held, 1e-3 * s_held)
-        << layout.info(i).name;
-    worst_free = std::max(worst_free, std::abs(std::log(s_pin / s_free)));
-    if (s_held / s_free < most_shrunk) {
-      most_shrunk = s_held / s_free;
-      shrunk = layout.info(i).name;
-    }
-  }
-  std::printf("sigma / sigma of the free fit: pinned within %.3f (log), held down to %.3f (%s)\n",
-              worst_free, most_shrunk, shrunk.c_str());
-  EXPECT_LT(most_shrunk, 0.8) << shrunk;  // holding alone would hide the uncertainty
-  EXPECT_LT(worst_free, std::log(1.1));
-
-  // The consider model behind the added covariance: S P S^T is what was
-  // added (PinnedSensitivityPredictsTheEstimatesAtAnotherPinnedValue checks S).
-  const Eigen::MatrixXd& S = pinned.pinned_sensitivity;
-  ASSERT_EQ(S.rows(), layout.size());
-  ASSERT_EQ(S.cols(), 1);
-  ASSERT_EQ(pinned.pinned_cov.rows(), 1);
-  const Eigen::MatrixXd added = pinned.estimate.cov - pinned.cov_given_pinned;
-  const Eigen::MatrixXd consider = S * pinned.pinned_cov * S.transpose();
-  for (int i = 0; i < kNumBaseParams; ++i) {
-    if (pinned.estimate.cov(i, i) <= 0.0) continue;
-    for (int j = 0; j < kNumBaseParams; ++j) {
-      if (pinned.estimate.cov(j, j) <= 0.0) continue;
-      const double scale = std::sqrt(pinned.estimate.cov(i, i) * pinned.estimate.cov(j, j));
-      EXPECT_NEAR(consider(i, j), added(i, j), 1e-9 * scale)
-          << layout.info(i).name << " " << layout.info(j).name;
-    }
-  }
-  EXPECT_EQ(S(kDz2, 0), 0.0);  // held: no row
-
-  // Named free, it is not pinned.
-  BatchOptions keep = pin_opt;
-  keep.holding.free = {"dz2"};
-  EXPECT_TRUE(Fit(s, data, keep).pinned.empty());
-}
-
-}  // namespace
-}  // namespace triadcal
-
-namespace triadcal {
-namespace {
 
 // A missing output folder is reported before any work, in one line.
 TEST(FitCommand, MissingOutputFolderFailsFirst) {

@@ -6,7 +6,7 @@
 #include <chrono>
 #include <cmath>
 
-#include "solvers/estimation/batch_linearization.h"
+#include "solvers/estimation/run_evaluation.h"
 #include "solvers/estimation/parallel.h"
 
 namespace triadcal {
@@ -69,22 +69,10 @@ Eigen::MatrixXd RowEchelon(Eigen::MatrixXd B) {
 
 Eigen::MatrixXd DataInformation(const RunProblem& p, const Eigen::VectorXd& theta, int threads) {
   if (threads <= 0) threads = DefaultThreads();
-  const BatchLinearization lin = Linearize(p, theta, true, threads);
-  Eigen::MatrixXd A;
-  Eigen::VectorXd b;
-  ThetaRows(p, false, &A, &b);  // the priors alone
-  const Eigen::MatrixXd cov0 = ThetaCovariance(p, lin, theta, A, threads);
-  // In prior units cov0 = (I~ + 1)^-1: invert by its eigen-decomposition and
-  // take the prior's unit information off.
-  const Eigen::VectorXd& s = p.prior.sigma;
-  const Eigen::VectorXd sinv = s.cwiseInverse();
-  const Eigen::MatrixXd Pn = Symmetric(sinv.asDiagonal() * cov0 * sinv.asDiagonal());
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Pn);
-  const Eigen::VectorXd mu = es.eigenvalues().cwiseMax(1e-300);
-  const Eigen::VectorXd info = mu.cwiseInverse().array() - 1.0;
-  const Eigen::MatrixXd In =
-      es.eigenvectors() * info.asDiagonal() * es.eigenvectors().transpose();
-  return Symmetric(sinv.asDiagonal() * In * sinv.asDiagonal());
+  // The noise weights' shape at the nominal values, as the fit's (run_evaluation.h).
+  const RunPass weights = EvaluatePass(p, p.prior.mean, false, threads);
+  const RunPass pass = EvaluatePass(p, theta, true, threads);
+  return Symmetric(Reduce(p, pass, p.noise_mV, threads, &weights).information);
 }
 
 void ClassifyDirections(const ParameterLayout& layout, const Eigen::MatrixXd& information,

@@ -144,23 +144,24 @@ TEST(Observability, SigmaFallsAsOneOverSqrtSamples) {
   }
 }
 
-// The information is the batch solver's: the CRB of a noise-free fit.
+// The information is the batch solver's: the CRB at a noise-free fit is the
+// fit's own covariance (the declared noise, every parameter estimated).
 TEST(Observability, DataInformationPlusPriorsIsTheBatchCovariance) {
   const Scenario s = NoiseFreeScenario(PaperScenario(20.0, 30.0, 2.0, 15.0, 1));
   const RunData data = Simulate(s);
   const ParameterLayout layout;
+  BatchOptions opt;
+  opt.epoch_s = 0.2;
+  opt.estimate_noise = false;
+  opt.holding.auto_hold = false;
+  opt.sigma = "white";
+  const BatchResult fit = SolveBatch(s.run, data, layout, opt);
+  ASSERT_TRUE(fit.converged) << fit.termination;
   const RunProblem p = BuildRunProblem(s.run, data, layout, 0.2, {});
-  const Eigen::VectorXd theta = TruthInLayout(s, layout);
-  const ObservabilityResult r = AnalyseObservability(s.run, p, theta);
-  // Direct: ThetaCovariance with priors and constraints.
-  const BatchLinearization lin = Linearize(p, theta, true, 1);
-  Eigen::MatrixXd A;
-  Eigen::VectorXd b;
-  ThetaRows(p, true, &A, &b);
-  const Eigen::MatrixXd cov = ThetaCovariance(p, lin, theta, A, 1);
+  const ObservabilityResult r = AnalyseObservability(s.run, p, fit.estimate.theta);
   for (int i = 0; i < layout.size(); ++i) {
-    EXPECT_NEAR(std::sqrt(r.with_constraints.cov(i, i)), std::sqrt(cov(i, i)),
-                1e-6 * std::sqrt(cov(i, i)))
+    EXPECT_NEAR(std::sqrt(r.with_constraints.cov(i, i)), std::sqrt(fit.estimate.cov(i, i)),
+                1e-6 * std::sqrt(fit.estimate.cov(i, i)))
         << layout.info(i).name;
   }
 }

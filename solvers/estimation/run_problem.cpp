@@ -99,14 +99,6 @@ RunProblem BuildRunProblem(const RunDescription& run, const RunData& data,
   return p;
 }
 
-void RunProblem::ScaleNoise(double variance_factor) {
-  const double s = std::sqrt(variance_factor);
-  noise_mV *= s;
-  isotropic_var *= variance_factor;
-  sigma_angle *= s;
-  sigma_rate *= s;
-}
-
 void RunProblem::Hold(const std::vector<int>& indices) {
   std::vector<bool> is_held(n, false);
   for (int i : indices) is_held.at(i) = true;

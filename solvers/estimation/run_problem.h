@@ -54,10 +54,6 @@ struct RunProblem {
   // Holds these parameters (indices into the layout) at theta_held; the
   // others are free.
   void Hold(const std::vector<int>& indices);
-  // Every noise of the run (readings, angles, rates) times sqrt(factor): the
-  // same fit, its information divided by factor (an a-posteriori variance
-  // factor, BatchResult::variance_factor).
-  void ScaleNoise(double variance_factor);
 };
 
 // The run's constraints as rows over the layout's theta. Throws InputError

@@ -48,6 +48,7 @@ TEST(StateSpaceModel, FilterAndBatchCoincideOnALinearGaussianRun) {
 
   BatchOptions bo;
   bo.init = BatchInit::kNominal;
+  bo.estimate_noise = false;  // the filter's declared noise
   bo.holding.auto_hold = false;
   bo.holding.hold = held;
   const BatchResult br = SolveBatch(s.run, data, layout, bo);
@@ -58,7 +59,10 @@ TEST(StateSpaceModel, FilterAndBatchCoincideOnALinearGaussianRun) {
     const int i = layout.IndexOf(name);
     const double sigma = std::sqrt(br.estimate.cov(i, i));
     ASSERT_GT(sigma, 0.0) << name;
-    EXPECT_LT(std::abs(fr.rts.theta[i] - br.estimate.theta[i]) / sigma, 1e-6) << name;
+    // The same to 1e-4 sigma: the batch takes its noise weights' shape at the
+    // nominal values (run_evaluation.h), the filter at its estimate, and the
+    // B2 weight follows the lever arm (here 18 mm from nominal): 5e-6 sigma.
+    EXPECT_LT(std::abs(fr.rts.theta[i] - br.estimate.theta[i]) / sigma, 1e-4) << name;
     EXPECT_LT(std::abs(std::sqrt(fr.rts.cov(i, i)) / sigma - 1.0), 1e-6) << name;
     // And both recover the truth within their sigma's usual range.
     EXPECT_LT(std::abs(br.estimate.theta[i] - s.truth[i]) / sigma, 4.0) << name;

@@ -9,9 +9,9 @@
 
 #include "core/model/errors.h"
 #include "solvers/statistics/statistics.h"
-#include "solvers/estimation/levenberg_marquardt.h"
+#include "solvers/estimation/batch_minimizer.h"
+#include "solvers/estimation/batch_objective.h"
 #include "solvers/estimation/parallel.h"
-#include "solvers/estimation/reduced_run.h"
 #include "solvers/estimation/run_problem.h"
 
 namespace triadcal {
@@ -21,86 +21,50 @@ double Seconds(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// The joint cost at phi over the free unknowns F: sum of the runs' reduced
-// costs, the priors and the constraints, with gradient and Gauss-Newton
-// information.
-struct JointEvaluation {
-  Eigen::VectorXd phi;           // where
-  double cost = 0.0;
-  Eigen::VectorXd gradient;      // over F
-  Eigen::MatrixXd information;   // over F, with priors and constraints
-  std::vector<ReducedRun> runs;  // information over each run's whole layout
-  std::vector<Eigen::MatrixXd> data_information;  // T_rF^T I_r T_rF
-};
-
-class JointProblem {
- public:
-  JointProblem(const JointLayout& jl, const std::vector<RunProblem>& problems,
-               const std::vector<int>& free, int threads)
-      : jl_(jl), problems_(problems), free_(free), threads_(threads) {
-    for (int r = 0; r < jl.runs(); ++r) {
-      Eigen::MatrixXd T(jl.layout().size(), free.size());
-      for (std::size_t k = 0; k < free.size(); ++k) T.col(k) = jl.map(r).col(free[k]);
-      map_free_.push_back(T);
-    }
-  }
-
-  const Eigen::MatrixXd& map_free(int r) const { return map_free_[r]; }
-
-  JointEvaluation Evaluate(const Eigen::VectorXd& phi) const {
-    const int nf = static_cast<int>(free_.size());
-    JointEvaluation ev;
-    ev.phi = phi;
-    ev.gradient = Eigen::VectorXd::Zero(nf);
-    ev.information = Eigen::MatrixXd::Zero(nf, nf);
-    for (int r = 0; r < jl_.runs(); ++r) {
-      const Eigen::VectorXd theta = jl_.ThetaOfRun(r, phi);
-      ReducedRun red = ReduceRun(problems_[r], theta, threads_);
-      const Eigen::MatrixXd& T = map_free_[r];
-      ev.cost += red.cost;
-      ev.gradient.noalias() += T.transpose() * red.gradient;
-      Eigen::MatrixXd D = T.transpose() * red.information * T;
-      ev.information += D;
-      ev.data_information.push_back(std::move(D));
-      // Each run's pseudo-measurements, over its parameters.
-      for (const ConstraintRow& c : problems_[r].constraints) {
-        const double res = (c.c.dot(theta) - c.value) / c.sigma;
-        const Eigen::VectorXd row = T.transpose() * c.c / c.sigma;
-        ev.cost += 0.5 * res * res;
-        ev.gradient += res * row;
-        ev.information += row * row.transpose();
-      }
-      ev.runs.push_back(std::move(red));
-    }
-    for (int k = 0; k < nf; ++k) {
-      const JointParam& p = jl_.param(free_[k]);
-      const double res = (phi[free_[k]] - p.prior_mean) / p.prior_sigma;
-      ev.cost += 0.5 * res * res;
-      ev.gradient[k] += res / p.prior_sigma;
-      ev.information(k, k) += 1.0 / (p.prior_sigma * p.prior_sigma);
-    }
-    return ev;
-  }
-
- private:
-  const JointLayout& jl_;
-  const std::vector<RunProblem>& problems_;
-  std::vector<int> free_;
-  int threads_;
-  std::vector<Eigen::MatrixXd> map_free_;
-};
-
-// Scale factors stay within [1/5, 5] of their nominal values (as in the batch
-// solver's bounds).
-void KeepScalesInBounds(const JointLayout& jl, Eigen::VectorXd* phi) {
-  for (int j = 0; j < jl.size(); ++j) {
+// The priors over phi and each run's constraints mapped onto phi, whitened:
+// A phi - b (theta_r = offset_r + T_r phi).
+void JointRows(const JointLayout& jl, const std::vector<RunProblem>& problems, Eigen::MatrixXd* A,
+               Eigen::VectorXd* b) {
+  const int m = jl.size();
+  int k = 0;
+  for (const RunProblem& p : problems) k += static_cast<int>(p.constraints.size());
+  A->setZero(m + k, m);
+  b->resize(m + k);
+  for (int j = 0; j < m; ++j) {
     const JointParam& p = jl.param(j);
-    if (p.base < kKx || p.base > kKz || p.degree != 0) continue;
-    const double k0 = std::abs(p.prior_mean);
-    const double lo = p.prior_mean < 0 ? -5.0 * k0 : 0.2 * k0;
-    const double hi = p.prior_mean < 0 ? -0.2 * k0 : 5.0 * k0;
-    (*phi)[j] = std::clamp((*phi)[j], lo, hi);
+    (*A)(j, j) = 1.0 / p.prior_sigma;
+    (*b)[j] = p.prior_mean / p.prior_sigma;
   }
+  int row = m;
+  for (int r = 0; r < jl.runs(); ++r) {
+    for (const ConstraintRow& c : problems[r].constraints) {
+      A->row(row) = (jl.map(r).transpose() * c.c).transpose() / c.sigma;
+      (*b)[row] = (c.value - c.c.dot(jl.offset(r))) / c.sigma;
+      ++row;
+    }
+  }
+}
+
+BatchObjective MakeJointObjective(const JointLayout& jl, const std::vector<RunProblem>& problems,
+                                  int threads) {
+  std::vector<LinkedRun> linked;
+  for (int r = 0; r < jl.runs(); ++r) linked.push_back({&problems[r], jl.offset(r), jl.map(r)});
+  Eigen::MatrixXd A;
+  Eigen::VectorXd b;
+  JointRows(jl, problems, &A, &b);
+  return BatchObjective(std::move(linked), std::move(A), std::move(b), jl.Nominal(), threads);
+}
+
+// The information of the constraints alone over phi.
+Eigen::MatrixXd ConstraintInformationOverPhi(const BatchObjective& obj, int m) {
+  const Eigen::MatrixXd rows = obj.rows().bottomRows(obj.rows().rows() - m);
+  return rows.transpose() * rows;
+}
+
+Eigen::MatrixXd MapFree(const JointLayout& jl, int r, const std::vector<int>& free) {
+  Eigen::MatrixXd T(jl.layout().size(), free.size());
+  for (std::size_t k = 0; k < free.size(); ++k) T.col(k) = jl.map(r).col(free[k]);
+  return T;
 }
 
 // The phi index whose column moves run-layout parameter i the most among the
@@ -126,13 +90,14 @@ int SharedSourceOf(const JointLayout& jl, int r, int i) {
 // runs agree", I_r - I_r T Sigma_J T^T I_r (the part of run r's information
 // the joint solution did not use up).
 RunConsistency TestConsistency(const JointLayout& jl, int r, const BatchResult& alone,
-                               const ReducedRun& at_joint, const Eigen::MatrixXd& map_free,
+                               const RunReduction& at_joint, const Eigen::MatrixXd& map_free,
                                const Eigen::MatrixXd& cov_free, double alpha) {
   RunConsistency out;
   const ParameterLayout& layout = jl.layout();
   const int n = layout.size();
   std::vector<bool> held(n, false);
   for (const std::string& name : alone.held) held[layout.IndexOf(name)] = true;
+  for (const std::string& name : alone.consider) held[layout.IndexOf(name)] = true;
   std::vector<int> f;
   for (int i = 0; i < n; ++i) {
     if (!held[i]) f.push_back(i);
@@ -229,40 +194,56 @@ std::vector<int> JointIndicesOf(const JointLayout& jl, const std::string& name,
 }
 
 // The hold rule (SupportedByInformation, as a single run's fit) on the
-// combined information at the nominal values, with --hold/--free on top.
-// *ev_out, when given, gets that evaluation (over every unknown).
-std::vector<bool> HeldByRule(const JointLayout& jl, const std::vector<RunProblem>& problems,
-                             const JointOptions& opt, int threads, JointEvaluation* ev_out) {
+// combined information at the nominal values, with --hold/--free on top:
+// 0 estimated, 1 consider (not determined: nominal, prior uncertainty
+// carried), 2 held. *pt_out, when given, gets that evaluation.
+std::vector<int> HeldByRule(const JointLayout& jl, const std::vector<RunProblem>& problems,
+                            const JointOptions& opt, int threads,
+                            BatchObjective::Point* pt_out) {
   const int m = jl.size();
-  std::vector<int> all(m);
-  for (int j = 0; j < m; ++j) all[j] = j;
-  const JointProblem full(jl, problems, all, threads);
-  JointEvaluation ev = full.Evaluate(jl.Nominal());
+  const BatchObjective objective = MakeJointObjective(jl, problems, threads);
+  std::vector<Eigen::Vector3d> noise;
+  for (const RunProblem& p : problems) noise.push_back(p.noise_mV);
+  BatchObjective::Point pt = objective.Evaluate(jl.Nominal(), noise, true);
   const Eigen::VectorXd sigma = jl.PriorSigma();
-  // Data and constraint information in prior units (the priors' identity removed).
-  Eigen::MatrixXd info = sigma.asDiagonal() * ev.information * sigma.asDiagonal();
-  info.diagonal().array() -= 1.0;
-  Eigen::VectorXd min_info(m), priority(m);
+  // Data and constraint information in prior units.
+  const Eigen::MatrixXd info =
+      sigma.asDiagonal() *
+      (pt.data_information + ConstraintInformationOverPhi(objective, m)) * sigma.asDiagonal();
+  Eigen::VectorXd min_info =
+      Eigen::VectorXd::Constant(m, opt.batch.holding.min_information);
+  Eigen::VectorXd priority(m);
   for (int j = 0; j < m; ++j) {
     const JointParam& p = jl.param(j);
-    const bool base = p.base >= 0 && p.base < kNumBaseParams;
-    min_info[j] = base || p.base < 0 ? opt.batch.holding.min_information
-                                     : opt.batch.holding.min_information_effects;
     priority[j] = p.base >= 0 ? HoldPriority(p.base) : 2.0;
   }
-  std::vector<bool> held(m, false);
-  if (opt.batch.holding.auto_hold) {
-    held.assign(m, true);
-    for (int j : SupportedByInformation(info, min_info, priority)) held[j] = false;
-  }
+  std::vector<int> kind(m, 0);
+  std::vector<bool> user_hold(m, false), user_free(m, false);
   for (const std::string& name : opt.batch.holding.hold) {
-    for (int j : JointIndicesOf(jl, name, "hold")) held[j] = true;
+    for (int j : JointIndicesOf(jl, name, "hold")) user_hold[j] = true;
   }
   for (const std::string& name : opt.batch.holding.free) {
-    for (int j : JointIndicesOf(jl, name, "free")) held[j] = false;
+    for (int j : JointIndicesOf(jl, name, "free")) user_free[j] = true;
   }
-  if (ev_out) *ev_out = std::move(ev);
-  return held;
+  if (opt.batch.holding.auto_hold) {
+    for (int j = 0; j < m; ++j) {
+      if (user_free[j]) min_info[j] = 0.0;
+      if (user_hold[j]) min_info[j] = std::numeric_limits<double>::infinity();
+    }
+    Eigen::VectorXd left;
+    const std::vector<int> kept = SupportedByInformation(info, min_info, priority, &left);
+    kind.assign(m, 1);
+    for (int j : kept) kind[j] = 0;
+    for (int j = 0; j < m; ++j) {
+      if (kind[j] == 1 && left[j] < opt.batch.holding.null_information) kind[j] = 2;
+    }
+  }
+  for (int j = 0; j < m; ++j) {
+    if (user_hold[j]) kind[j] = 2;
+    if (user_free[j]) kind[j] = 0;
+  }
+  if (pt_out) *pt_out = std::move(pt);
+  return kind;
 }
 
 // The free unknowns that no run determines alone: for each, the run-layout
@@ -307,37 +288,31 @@ JointInformation JointInformationAtNominal(const std::vector<JointRun>& runs,
                                        opt.batch.derivatives));
   }
   JointInformation out;
-  JointEvaluation ev;
-  const std::vector<bool> held = HeldByRule(jl, problems, opt, threads, &ev);
-  out.information = ev.information;
+  BatchObjective::Point pt;
+  const std::vector<int> kind = HeldByRule(jl, problems, opt, threads, &pt);
+  out.information = pt.information;
   std::vector<int> free;
-  for (int j = 0; j < m; ++j) (held[j] ? out.held : free).push_back(j);
+  for (int j = 0; j < m; ++j) (kind[j] != 0 ? out.held : free).push_back(j);
   const int nf = static_cast<int>(free.size());
   Eigen::MatrixXd H(nf, nf);
   for (int a = 0; a < nf; ++a)
-    for (int b = 0; b < nf; ++b) H(a, b) = ev.information(free[a], free[b]);
+    for (int b = 0; b < nf; ++b) H(a, b) = pt.information(free[a], free[b]);
   out.cov = ExpandFree(H.ldlt().solve(Eigen::MatrixXd::Identity(nf, nf)), free, m);
-  // The evaluation is over every unknown: its data information restricted to the free ones.
   std::vector<Eigen::MatrixXd> data_free;
-  for (const Eigen::MatrixXd& D : ev.data_information) {
-    Eigen::MatrixXd F(nf, nf);
-    for (int a = 0; a < nf; ++a)
-      for (int b = 0; b < nf; ++b) F(a, b) = D(free[a], free[b]);
-    data_free.push_back(F);
+  for (int r = 0; r < R; ++r) {
+    const Eigen::MatrixXd T = MapFree(jl, r, free);
+    data_free.push_back(T.transpose() * pt.reductions[r].information * T);
   }
   out.share = InformationShare(data_free, free, m);
   // Each run alone by the same rule, over its own layout at its nominal values.
   for (int r = 0; r < R; ++r) {
     const RunProblem& p = problems[r];
-    Eigen::MatrixXd info = ev.runs[r].information;
+    Eigen::MatrixXd info = pt.reductions[r].information;
     for (const ConstraintRow& c : p.constraints) info += c.c * c.c.transpose() / (c.sigma * c.sigma);
     info = p.prior.sigma.asDiagonal() * info * p.prior.sigma.asDiagonal();
-    Eigen::VectorXd min_info(n), priority(n);
-    for (int i = 0; i < n; ++i) {
-      min_info[i] = i < kNumBaseParams ? opt.batch.holding.min_information
-                                       : opt.batch.holding.min_information_effects;
-      priority[i] = HoldPriority(i);
-    }
+    const Eigen::VectorXd min_info = Eigen::VectorXd::Constant(n, opt.batch.holding.min_information);
+    Eigen::VectorXd priority(n);
+    for (int i = 0; i < n; ++i) priority[i] = HoldPriority(i);
     std::vector<bool> kept(n, false);
     for (int i : SupportedByInformation(info, min_info, priority)) kept[i] = true;
     std::vector<std::string> h;
@@ -381,7 +356,7 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
   per_run_names(opt.batch.holding.hold, "hold", &hold_alone);
   per_run_names(opt.batch.holding.free, "free", &free_alone);
 
-  // 1. Each run alone: its estimate, held set and noise.
+  // 1. Each run alone: its estimate, what it determines, its noise.
   const auto t_alone = std::chrono::steady_clock::now();
   std::vector<RunProblem> problems;
   for (int r = 0; r < R; ++r) {
@@ -402,10 +377,6 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
     RunProblem p = BuildRunProblem(runs[r].run, runs[r].data, layout, opt.batch.epoch_s,
                                    opt.batch.derivatives);
     p.noise_mV = rr.alone.noise_used_mV;
-    // A run whose residual split is misfit enters with its variance factor
-    // on every noise (its information divided by it), as its own sigma.
-    p.ScaleNoise(rr.alone.variance_factor);
-    rr.noise_mV = p.noise_mV;
     problems.push_back(std::move(p));
   }
   res.seconds_alone = Seconds(t_alone);
@@ -414,9 +385,9 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
   // 2. What the runs together determine, at the nominal values.
   Eigen::VectorXd phi = jl.Nominal();
   say("joint: choosing the parameters the runs determine together");
-  const std::vector<bool> held = HeldByRule(jl, problems, opt, threads, nullptr);
+  const std::vector<int> kind = HeldByRule(jl, problems, opt, threads, nullptr);
   std::vector<int> free;
-  for (int j = 0; j < m; ++j) (held[j] ? res.held : free).push_back(j);
+  for (int j = 0; j < m; ++j) (kind[j] != 0 ? res.held : free).push_back(j);
 
   // 3. The start: each run's own estimate, the shared unknowns as the
   // precision-weighted mean of what the runs say about them.
@@ -426,7 +397,7 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
       const BatchResult& a = res.runs[r].alone;
       for (int i = 0; i < layout.size(); ++i) {
         const double var = a.estimate.cov(i, i);
-        if (!(var > 0.0)) continue;
+        if (!(var > 0.0) || !IsEstimated(a, layout.info(i).name)) continue;
         // The unknown that carries parameter i in this run, if one does alone.
         int source = -1;
         double weight = 0.0;
@@ -441,7 +412,7 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
             weight = w;
           }
         }
-        if (source < 0 || held[source]) continue;
+        if (source < 0 || kind[source] != 0) continue;
         num[source] += a.estimate.theta[i] / weight / var;
         den[source] += 1.0 / var;
       }
@@ -449,48 +420,49 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
     for (int j = 0; j < m; ++j) {
       if (den[j] > 0.0) phi[j] = num[j] / den[j];
     }
-    KeepScalesInBounds(jl, &phi);
   }
 
-  // 4. Levenberg-Marquardt on the free unknowns.
-  const JointProblem problem(jl, problems, free, threads);
-  const int nf = static_cast<int>(free.size());
-  JointEvaluation ev = problem.Evaluate(phi);
-  const LmOutcome lm = MinimiseLevenbergMarquardt(
-      &ev, [&](const Eigen::VectorXd& trial) { return problem.Evaluate(trial); },
-      [&](const JointEvaluation& from, const Eigen::VectorXd& step) {
-        Eigen::VectorXd trial = from.phi;
-        for (int k = 0; k < nf; ++k) trial[free[k]] += step[k];
-        KeepScalesInBounds(jl, &trial);
-        return trial;
-      },
-      [&](int it, const JointEvaluation& at, double predicted) {
-        char line[160];
-        std::snprintf(line, sizeof(line),
-                      "joint: iteration %d, chi2 %.6g, predicted decrease %.3g", it + 1,
-                      2.0 * at.cost, predicted);
-        say(line);
-        if (opt.batch.fraction) {
-          opt.batch.fraction((R + 1.0 - std::pow(0.7, it + 1)) / (R + 1.0));
-        }
-      },
-      opt.max_iterations, opt.tolerance);
-  res.converged = lm.converged;
-  res.iterations = lm.iterations;
-  phi = ev.phi;
+  // 4. The minimum: the one minimiser of the batch problem over the runs
+  // together, each run's noise estimated with the parameters.
+  const BatchObjective objective = MakeJointObjective(jl, problems, threads);
+  MinimizerOptions mo;
+  mo.max_iterations = opt.max_iterations;
+  mo.tolerance = opt.tolerance;
+  mo.estimate_noise.assign(R, opt.batch.estimate_noise);
+  mo.progress = [&](const std::string& s) { say("joint: " + s); };
+  if (opt.batch.fraction) {
+    mo.fraction = [&](double f) { opt.batch.fraction((R + f) / (R + 1.0)); };
+  }
+  BatchMinimizer minimizer(objective, free, mo);
+  std::vector<Eigen::Vector3d> noise;
+  for (const RunProblem& p : problems) noise.push_back(p.noise_mV);
+  MinimizerSummary summary;
+  const BatchObjective::Point pt = minimizer.Minimize(phi, noise, &summary);
+  res.converged = summary.converged;
+  res.iterations = summary.iterations;
+  phi = pt.phi;
   res.phi = phi;
-  res.cost = ev.cost;
-  const Eigen::MatrixXd cov_free =
-      ev.information.ldlt().solve(Eigen::MatrixXd::Identity(nf, nf));
+  res.cost = pt.cost;
+  const int nf = static_cast<int>(free.size());
+  Eigen::MatrixXd H(nf, nf);
+  for (int a = 0; a < nf; ++a)
+    for (int b = 0; b < nf; ++b) H(a, b) = pt.information(free[a], free[b]);
+  const Eigen::MatrixXd cov_free = H.ldlt().solve(Eigen::MatrixXd::Identity(nf, nf));
   res.cov = ExpandFree(cov_free, free, m);
 
   // Degrees of freedom and each run's share.
-  res.share = InformationShare(ev.data_information, free, m);
+  std::vector<Eigen::MatrixXd> data_free;
+  for (int r = 0; r < R; ++r) {
+    const Eigen::MatrixXd T = MapFree(jl, r, free);
+    data_free.push_back(T.transpose() * pt.reductions[r].information * T);
+  }
+  res.share = InformationShare(data_free, free, m);
   for (int r = 0; r < R; ++r) {
     JointRunResult& rr = res.runs[r];
     rr.theta = jl.ThetaOfRun(r, phi);
-    rr.degrees_of_freedom = ev.runs[r].degrees_of_freedom;
-    rr.chi2_per_dof = 2.0 * ev.runs[r].cost / std::max(1, rr.degrees_of_freedom);
+    rr.noise_mV = pt.reductions[r].noise_mV;
+    rr.degrees_of_freedom = pt.reductions[r].degrees_of_freedom;
+    rr.chi2_per_dof = 2.0 * pt.reductions[r].cost / std::max(1, rr.degrees_of_freedom);
     res.degrees_of_freedom += rr.degrees_of_freedom + static_cast<int>(problems[r].constraints.size());
   }
   res.chi2_per_dof = 2.0 * res.cost / std::max(1, res.degrees_of_freedom);
@@ -498,14 +470,19 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
   // Determined together, by no run alone.
   {
     std::vector<std::vector<std::string>> held_alone;
-    for (const JointRunResult& rr : res.runs) held_alone.push_back(rr.alone.held);
+    for (const JointRunResult& rr : res.runs) {
+      std::vector<std::string> h = rr.alone.held;
+      h.insert(h.end(), rr.alone.consider.begin(), rr.alone.consider.end());
+      held_alone.push_back(h);
+    }
     res.jointly_only = JointlyOnly(jl, free, held_alone);
   }
 
   // 5. Each run against the joint solution.
   for (int r = 0; r < R; ++r) {
-    res.runs[r].consistency = TestConsistency(jl, r, res.runs[r].alone, ev.runs[r],
-                                              problem.map_free(r), cov_free, opt.consistency_alpha);
+    res.runs[r].consistency = TestConsistency(jl, r, res.runs[r].alone, pt.reductions[r],
+                                              MapFree(jl, r, free), cov_free,
+                                              opt.consistency_alpha);
   }
   res.seconds_joint = Seconds(t_joint);
   return res;

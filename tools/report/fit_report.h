@@ -18,6 +18,7 @@ struct FitReport {
   std::vector<WeakDirection> weak;
   std::set<std::string> not_estimable;  // held, or in a weak direction
   std::set<std::string> held;
+  std::set<std::string> consider;  // not determined: nominal, prior uncertainty carried
   // > 3 prior sigma from the nominal value, largest |z| first (JSON
   // "at_prior_bound" and verdict.beyond_prior: their names).
   std::vector<PriorExcursion> beyond_prior;
@@ -39,11 +40,11 @@ constexpr int kExitRequirementFailed = 5;
 FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r);
 nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, const FitReport& rep,
                        bool correlations);
-// out["pinned"]: r.pinned as [{parameter, prior_sigmas, data_information,
-// sigma, correlation, sensitivity}] (the last three, the consider model of
-// BatchResult::pinned_sensitivity and pinned_cov, in file units), and
-// "pinned": true on each in out["parameters"] (which must be written).
-void AddPinnedJson(const ParameterLayout& layout, const BatchResult& r, nlohmann::json* out);
+// out["consider"]: r.consider as [{parameter, prior_sigma, data_information,
+// sensitivity}] (the consider model in file units), and on each in
+// out["parameters"] (which must be written) its prior sigma as "sigma",
+// "determined": false and "considered": true.
+void AddConsiderJson(const ParameterLayout& layout, const BatchResult& r, nlohmann::json* out);
 void PrintParameterTable(const ParameterLayout& layout, const BatchResult& r, const FitReport& rep);
 std::string ResidualsCsv(const BatchResult& r);
 

@@ -1,5 +1,7 @@
 #include "tools/report/fit_report.h"
 
+#include <cmath>
+
 #include <gtest/gtest.h>
 
 namespace triadcal {
@@ -27,7 +29,10 @@ BatchResult Solution(const ParameterLayout& layout) {
   return r;
 }
 
-TEST(FitReport, UndeterminedParameterFarFromItsPriorIsNotCalledThePriorsValue) {
+// A parameter far from its nominal value is named with how far; one the
+// covariance finds undetermined is named not separable; the table gives an
+// undetermined parameter no value of its own.
+TEST(FitReport, NamesWhatIsBeyondThePriorAndWhatIsNotSeparable) {
   const ParameterLayout layout;
   const BatchResult r = Solution(layout);
   const FitReport rep = MakeFitReport(layout, r);
@@ -39,26 +44,17 @@ TEST(FitReport, UndeterminedParameterFarFromItsPriorIsNotCalledThePriorsValue) {
                              "W0x (-4.0)"),
             std::string::npos)
       << rep.verdict;
-  EXPECT_NE(rep.verdict.find("NOT SEPARABLE in this run (values are the prior's): Ky;"),
-            std::string::npos)
-      << rep.verdict;
-  EXPECT_NE(rep.verdict.find("MOVED beyond 3 prior sigma by the misfit (values neither the "
-                             "prior's nor estimates): Kx"),
-            std::string::npos)
-      << rep.verdict;
+  EXPECT_NE(rep.verdict.find("NOT SEPARABLE in this run: Kx Ky"), std::string::npos) << rep.verdict;
   const nlohmann::json j = FitJson(layout, r, rep, false);
   EXPECT_EQ(j["verdict"]["beyond_prior"], (std::vector<std::string>{"Kx", "W0x"}));
   EXPECT_EQ(j["at_prior_bound"], (std::vector<std::string>{"Kx", "W0x"}));
-  // The table: the misfit's value is not called the prior's.
   ::testing::internal::CaptureStdout();
   PrintParameterTable(layout, r, rep);
   const std::string table = ::testing::internal::GetCapturedStdout();
-  EXPECT_NE(table.find("(not estimable, moved +9.5 prior sigma by misfit)"), std::string::npos)
-      << table;
   const std::size_t ky = table.find("\nKy ");
   ASSERT_NE(ky, std::string::npos) << table;
   const std::string ky_line = table.substr(ky, table.find('\n', ky + 1) - ky);
-  EXPECT_NE(ky_line.find("(not estimable: prior value)"), std::string::npos) << table;
+  EXPECT_NE(ky_line.find("(not estimable on its own)"), std::string::npos) << table;
 }
 
 TEST(FitReport, NothingBeyondThePriorSaysSo) {
@@ -67,73 +63,62 @@ TEST(FitReport, NothingBeyondThePriorSaysSo) {
   r.estimate.theta.setZero();
   const FitReport rep = MakeFitReport(layout, r);
   EXPECT_TRUE(rep.beyond_prior.empty());
-  EXPECT_NE(rep.verdict.find("no parameter at a prior bound"), std::string::npos);
-  EXPECT_EQ(rep.verdict.find("MOVED"), std::string::npos);
+  EXPECT_NE(rep.verdict.find("no parameter beyond 3 prior sigma"), std::string::npos);
 }
 
-// A parameter pinned after a first fit is reported as pinned, with where that
-// fit had moved it, not as held for want of motion.
-TEST(FitReport, PinnedParameterIsNamedWithHowFarTheFirstFitMovedIt) {
+// A parameter the run does not determine (considered) is shown as not
+// determined: at its nominal value, no sigma of its own in the table, its
+// prior sigma in OUT with "determined": false, and the consider model.
+TEST(FitReport, ConsideredParameterIsShownAsNotDetermined) {
   const ParameterLayout layout;
   BatchResult r = Solution(layout);
   r.estimate.theta.setZero();
-  const int kxy = layout.IndexOf("Kxy"), dy2 = layout.IndexOf("dy2");
+  const int kx = layout.IndexOf("Kx"), kxy = layout.IndexOf("Kxy"), dy2 = layout.IndexOf("dy2");
   for (int i : {kxy, dy2}) {
     r.estimate.cov.row(i).setZero();
     r.estimate.cov.col(i).setZero();
   }
-  r.held = {"Kxy", "dy2"};
-  r.pinned = {{"Kxy", -57.3, 0.21}};
-  r.cov_given_pinned = 0.25 * r.estimate.cov;
-  // The consider model in SI: Kx follows Kxy by 2 mV/g per 1/g (0.002 V/g
-  // per 1/g), Kxy's posterior sigma 0.02 /g.
-  const int kx = layout.IndexOf("Kx");
-  r.pinned_sensitivity = Eigen::MatrixXd::Zero(layout.size(), 1);
-  r.pinned_sensitivity(kx, 0) = 2.0 * layout.info(kx).si_per_unit / layout.info(kxy).si_per_unit;
-  r.pinned_cov = Eigen::MatrixXd::Constant(1, 1, std::pow(0.02 * layout.info(kxy).si_per_unit, 2));
+  r.prior.sigma[kxy] = 0.02 * layout.info(kxy).si_per_unit;
+  r.held = {"dy2"};
+  r.consider = {"Kxy"};
+  r.conditional_information = Eigen::VectorXd::Zero(layout.size());
+  r.conditional_information[kxy] = 0.21;
+  r.cov_given_consider = 0.25 * r.estimate.cov;
+  // Kx follows Kxy by 2 mV/g per 1/g.
+  r.consider_sensitivity = Eigen::MatrixXd::Zero(layout.size(), 1);
+  r.consider_sensitivity(kx, 0) = 2.0 * layout.info(kx).si_per_unit / layout.info(kxy).si_per_unit;
+  r.consider_cov = Eigen::MatrixXd::Constant(1, 1, std::pow(r.prior.sigma[kxy], 2));
   const FitReport rep = MakeFitReport(layout, r);
-  EXPECT_NE(rep.verdict.find("PINNED at nominal after a first fit (value - nominal there in prior "
-                             "sigma, data information at the nominal values in prior units): "
-                             "Kxy (-57.3, 0.21): "),
+  EXPECT_NE(rep.verdict.find("NOT DETERMINED by this run (kept at nominal, their prior "
+                             "uncertainty carried into the other parameters' sigma): Kxy"),
             std::string::npos)
       << rep.verdict;
-  EXPECT_NE(rep.verdict.find("held at nominal (this run's motion does not determine them): dy2"),
-            std::string::npos)
-      << rep.verdict;
+  EXPECT_NE(rep.verdict.find("held at nominal: dy2"), std::string::npos) << rep.verdict;
   const nlohmann::json j = FitJson(layout, r, rep, false);
-  EXPECT_EQ(j["verdict"]["pinned"], (std::vector<std::string>{"Kxy"}));
-  ASSERT_EQ(j["pinned"].size(), 1u);
-  EXPECT_EQ(j["pinned"][0]["parameter"], "Kxy");
-  EXPECT_DOUBLE_EQ(j["pinned"][0]["prior_sigmas"].get<double>(), -57.3);
-  EXPECT_DOUBLE_EQ(j["pinned"][0]["data_information"].get<double>(), 0.21);
-  EXPECT_NEAR(j["pinned"][0]["sigma"].get<double>(), 0.02, 1e-15);
-  EXPECT_TRUE(j["pinned"][0]["correlation"].empty());
-  ASSERT_EQ(j["pinned"][0]["sensitivity"].size(), 1u);
-  EXPECT_NEAR(j["pinned"][0]["sensitivity"]["Kx"].get<double>(), 2.0, 1e-12);
-  EXPECT_TRUE(j["parameters"]["Kxy"]["pinned"].get<bool>());
-  EXPECT_TRUE(j["parameters"]["Kxy"]["sigma"].is_null());
-  EXPECT_FALSE(j["parameters"]["dy2"].contains("pinned"));
-  EXPECT_DOUBLE_EQ(j["parameters"]["Kx"]["sigma_given_pinned"].get<double>(),
+  EXPECT_EQ(j["verdict"]["not_determined"], (std::vector<std::string>{"Kxy"}));
+  ASSERT_EQ(j["consider"].size(), 1u);
+  EXPECT_EQ(j["consider"][0]["parameter"], "Kxy");
+  EXPECT_NEAR(j["consider"][0]["prior_sigma"].get<double>(), 0.02, 1e-15);
+  EXPECT_DOUBLE_EQ(j["consider"][0]["data_information"].get<double>(), 0.21);
+  EXPECT_NEAR(j["consider"][0]["sensitivity"]["Kx"].get<double>(), 2.0, 1e-12);
+  EXPECT_FALSE(j["parameters"]["Kxy"]["determined"].get<bool>());
+  EXPECT_TRUE(j["parameters"]["Kxy"]["considered"].get<bool>());
+  EXPECT_FALSE(j["parameters"]["Kxy"]["estimable"].get<bool>());
+  EXPECT_NEAR(j["parameters"]["Kxy"]["sigma"].get<double>(), 0.02, 1e-15);
+  EXPECT_TRUE(j["parameters"]["dy2"]["sigma"].is_null());
+  EXPECT_TRUE(j["parameters"]["Kx"]["determined"].get<bool>());
+  EXPECT_DOUBLE_EQ(j["parameters"]["Kx"]["sigma_given_consider"].get<double>(),
                    0.5 * j["parameters"]["Kx"]["sigma"].get<double>());
-  // --correlations: also the correlation given the pins (here the same
-  // matrix, the covariance given the pins being a quarter of the reported).
-  EXPECT_FALSE(j.contains("correlation_given_pinned"));
   const nlohmann::json jc = FitJson(layout, r, rep, true);
-  ASSERT_TRUE(jc.contains("correlation_given_pinned"));
-  EXPECT_EQ(jc["correlation_given_pinned"]["names"], jc["correlation"]["names"]);
-  const auto& given = jc["correlation_given_pinned"]["matrix"];
-  const auto& whole = jc["correlation"]["matrix"];
-  for (int a : {0, kx, kxy}) {
-    for (int b : {0, kx, 5}) {
-      EXPECT_NEAR(given[a][b].get<double>(), whole[a][b].get<double>(), 1e-12) << a << " " << b;
-    }
-  }
+  ASSERT_TRUE(jc.contains("correlation_given_consider"));
   ::testing::internal::CaptureStdout();
   PrintParameterTable(layout, r, rep);
   const std::string table = ::testing::internal::GetCapturedStdout();
-  EXPECT_NE(table.find("(pinned at nominal: a first fit moved it -57.3 prior sigma)"),
-            std::string::npos)
-      << table;
+  const std::size_t at = table.find("\nKxy ");
+  ASSERT_NE(at, std::string::npos) << table;
+  const std::string line = table.substr(at, table.find('\n', at + 1) - at);
+  EXPECT_NE(line.find(" - "), std::string::npos) << line;
+  EXPECT_NE(line.find("(not determined: nominal, prior +-0.02 carried)"), std::string::npos) << line;
 }
 
 }  // namespace

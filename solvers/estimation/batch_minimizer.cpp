@@ -1,0 +1,287 @@
+#include "solvers/estimation/batch_minimizer.h"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace triadcal {
+namespace {
+
+// Variance-component steps of the noise at the start (reductions only).
+constexpr int kNoiseSteps = 30;
+constexpr double kNoiseTolerance = 1e-6;  // in log sigma
+constexpr double kMaxNoiseStep = 2.0;     // in log sigma, one Newton step
+// A measured curvature outside this factor of the model's is not trusted.
+constexpr double kCurvatureRange = 10.0;
+// No reading is better than this share of its nominal scale factor (1 ug):
+// keeps a noise-free run's estimated noise finite.
+constexpr double kNoiseFloorOfScale = 1e-6;
+
+}  // namespace
+
+BatchMinimizer::BatchMinimizer(const BatchObjective& objective, std::vector<int> free,
+                               MinimizerOptions options)
+    : objective_(objective), free_(std::move(free)), options_(std::move(options)) {
+  options_.estimate_noise.resize(objective_.runs(), false);
+  for (int r = 0; r < objective_.runs(); ++r) {
+    if (options_.estimate_noise[r]) noisy_.push_back(r);
+  }
+}
+
+int BatchMinimizer::FittedFor(int r) const {
+  const Eigen::MatrixXd T = objective_.MapOf(r);
+  int k = 0;
+  for (int j : free_) k += T.col(j).cwiseAbs().maxCoeff() > 0.0 ? 1 : 0;
+  return k;
+}
+
+void BatchMinimizer::Say(const std::string& line) const {
+  if (options_.progress) options_.progress(line);
+}
+
+double BatchMinimizer::NoiseFloor(int r, int i) const {
+  const RunProblem& p = *objective_.run(r).problem;
+  return kNoiseFloorOfScale * std::abs(p.prior.mean[kKx + i]);
+}
+
+double BatchMinimizer::Objective(const BatchObjective::Point& pt) const {
+  double f = pt.cost;
+  for (std::size_t k = 0; k < noisy_.size(); ++k) f += rho_[k] * pt.reductions[noisy_[k]].log_det;
+  return f;
+}
+
+void BatchMinimizer::Model(const BatchObjective::Point& pt, Eigen::VectorXd* g,
+                           Eigen::MatrixXd* H) const {
+  const int nf = static_cast<int>(free_.size());
+  const int m = nf + 3 * static_cast<int>(noisy_.size());
+  g->setZero(m);
+  H->setZero(m, m);
+  for (int a = 0; a < nf; ++a) {
+    (*g)[a] = pt.gradient[free_[a]];
+    for (int b = 0; b < nf; ++b) (*H)(a, b) = pt.information(free_[a], free_[b]);
+  }
+  Eigen::MatrixXd coupling = Eigen::MatrixXd::Zero(m, m);
+  for (std::size_t k = 0; k < noisy_.size(); ++k) {
+    const int r = noisy_[k];
+    const RunReduction& red = pt.reductions[r];
+    const Eigen::MatrixXd T = objective_.MapOf(r);
+    for (int i = 0; i < 3; ++i) {
+      const int c = nf + 3 * static_cast<int>(k) + i;
+      (*g)[c] = rho_[k] * red.channel_trace[i] - red.channel_quadratic[i];
+      const Eigen::Matrix3d Hs = NoiseHessian(red, rho_[k]);
+      for (int j = 0; j < 3; ++j) (*H)(c, nf + 3 * static_cast<int>(k) + j) = Hs(i, j);
+      if (red.channel_gradient[i].size() == 0) continue;
+      const Eigen::VectorXd gi = T.transpose() * red.channel_gradient[i];
+      for (int a = 0; a < nf; ++a) coupling(a, c) = coupling(c, a) = -2.0 * gi[free_[a]];
+    }
+  }
+  // The coupling where it keeps the model convex: far from the minimum a
+  // misfit's channel gradients can outweigh the information (the profile
+  // likelihood is not convex there), and the block-diagonal model (Fisher
+  // scoring: the coupling's expectation is zero) steps towards it instead.
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(*H + coupling);
+  if (ldlt.info() == Eigen::Success && ldlt.isPositive() && ldlt.vectorD().minCoeff() > 0.0) {
+    *H += coupling;
+  }
+}
+
+BatchObjective::Point BatchMinimizer::Minimize(const Eigen::VectorXd& phi0,
+                                               const std::vector<Eigen::Vector3d>& noise0,
+                                               MinimizerSummary* summary) {
+  summary_ = MinimizerSummary{};
+  noise_ = noise0;
+  rho_.clear();
+  IterationZero(phi0);
+  while (ComputeStep()) {
+    if (summary_.iterations >= options_.max_iterations) {
+      char why[200];
+      std::snprintf(why, sizeof(why),
+                    "not converged after %d steps: a Newton step would still lower -log L by "
+                    "%.3g (a step of about %.2g sigma)",
+                    summary_.iterations, summary_.newton_decrement,
+                    std::sqrt(2.0 * summary_.newton_decrement));
+      summary_.termination = why;
+      break;
+    }
+    TryStep();
+    if (mu_ > 1e10) {
+      summary_.termination =
+          "not converged: no step along the gradient lowers the cost (the damping reached "
+          "1e10; the cost is not smooth here, or a parameter has left the model's range)";
+      break;
+    }
+    if (options_.fraction) options_.fraction(1.0 - std::pow(0.7, summary_.iterations));
+  }
+  summary_.final_cost = current_.cost;
+  *summary = summary_;
+  return current_;
+}
+
+void BatchMinimizer::IterationZero(const Eigen::VectorXd& phi0) {
+  current_ = objective_.Evaluate(phi0, noise_, true);
+  summary_.passes += 1;
+  summary_.initial_cost = current_.cost;
+  for (int r : noisy_) {
+    rho_.push_back(NoiseDofShare(current_.reductions[r], FittedFor(r)));
+  }
+  if (current_.finite()) MaximiseNoise(&current_, &noise_);
+}
+
+void BatchMinimizer::MaximiseNoise(BatchObjective::Point* pt,
+                                   std::vector<Eigen::Vector3d>* noise) const {
+  // Newton's method in s = log sigma at pt's theta (each run's noise apart:
+  // at fixed theta they do not interact), with halving where -log L would
+  // rise; reductions without the theta part, then one with it at the result.
+  if (noisy_.empty()) return;
+  double f = Objective(*pt);
+  for (int step = 0; step < kNoiseSteps; ++step) {
+    std::vector<Eigen::Vector3d> trial_noise = *noise;
+    double largest = 0.0;
+    for (std::size_t k = 0; k < noisy_.size(); ++k) {
+      const int r = noisy_[k];
+      const RunReduction& red = pt->reductions[r];
+      const Eigen::Vector3d g = rho_[k] * red.channel_trace - red.channel_quadratic;
+      Eigen::Matrix3d H = NoiseHessian(red, rho_[k]);
+      Eigen::LDLT<Eigen::Matrix3d> ldlt(H);
+      if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || !(ldlt.vectorD().minCoeff() > 0)) {
+        H = (2.0 * red.channel_quadratic.cwiseMax(1e-300)).asDiagonal();
+        ldlt.compute(H);
+      }
+      Eigen::Vector3d ds = -ldlt.solve(g);
+      const double big = ds.cwiseAbs().maxCoeff();
+      if (big > kMaxNoiseStep) ds *= kMaxNoiseStep / big;  // e^2: the exponential bends fast
+      largest = std::max(largest, ds.cwiseAbs().maxCoeff());
+      for (int i = 0; i < 3; ++i) {
+        trial_noise[r][i] = std::max((*noise)[r][i] * std::exp(ds[i]), NoiseFloor(r, i));
+      }
+    }
+    if (largest < kNoiseTolerance) break;
+    bool lowered = false;
+    for (int halving = 0; halving < 20 && !lowered; ++halving) {
+      BatchObjective::Point trial = *pt;
+      objective_.Reweight(&trial, trial_noise, false);
+      const double ft = Objective(trial);
+      if (std::isfinite(ft) && ft <= f) {
+        *pt = std::move(trial);
+        *noise = trial_noise;
+        f = ft;
+        lowered = true;
+        continue;
+      }
+      for (std::size_t k = 0; k < noisy_.size(); ++k) {
+        const int r = noisy_[k];
+        trial_noise[r] = ((*noise)[r].array() * trial_noise[r].array()).sqrt().matrix();
+      }
+    }
+    if (!lowered) break;  // at the maximum to rounding
+  }
+  objective_.Reweight(pt, *noise, true);
+}
+
+bool BatchMinimizer::ComputeStep() {
+  if (!current_.finite()) {
+    if (summary_.termination.empty()) summary_.termination = "the cost is not finite";
+    return false;
+  }
+  if (free_.empty() && noisy_.empty()) {
+    summary_.converged = true;
+    summary_.termination = "nothing to estimate";
+    return false;
+  }
+  Eigen::VectorXd g;
+  Eigen::MatrixXd H;
+  Model(current_, &g, &H);
+  const Eigen::LDLT<Eigen::MatrixXd> newton(H);
+  summary_.newton_decrement = 0.5 * g.dot(newton.solve(g));
+  if (!std::isfinite(summary_.newton_decrement)) {
+    summary_.termination = "the information matrix is singular";
+    return false;
+  }
+  if (std::abs(summary_.newton_decrement) < options_.tolerance) {
+    summary_.converged = true;
+    char why[160];
+    std::snprintf(why, sizeof(why),
+                  "converged in %d steps (%d passes over the samples): the next step would be "
+                  "%.2g sigma",
+                  summary_.accepted, summary_.passes,
+                  std::sqrt(2.0 * std::abs(summary_.newton_decrement)));
+    summary_.termination = why;
+    return false;
+  }
+  // The model of -log L: the Hessian above plus the curvature the last step
+  // measured (MeasureCurvature), damped until positive definite.
+  Eigen::MatrixXd B = H;
+  if (secant_.rows() == H.rows()) B += secant_;
+  const Eigen::VectorXd scale = H.diagonal().cwiseAbs().cwiseMax(1e-300);
+  for (;;) {
+    Eigen::MatrixXd D = B;
+    D.diagonal() += mu_ * scale;
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(D);
+    if (ldlt.info() == Eigen::Success && ldlt.isPositive() && ldlt.vectorD().minCoeff() > 0.0) {
+      step_ = -ldlt.solve(g);
+      predicted_ = -(g.dot(step_) + 0.5 * step_.dot(B * step_));
+      if (predicted_ > 0.0) break;
+    }
+    mu_ = std::max(mu_ * nu_, 1e-4);
+    nu_ *= 2.0;
+    if (mu_ > 1e10) return true;  // Minimize reports it
+  }
+  return true;
+}
+
+void BatchMinimizer::MeasureCurvature(const BatchObjective::Point& trial) {
+  // Along the step just taken: the curvature -log L showed, s^T (g_trial -
+  // g), against the model's at the new point, s^T H s. A misfit's residuals
+  // bend the cost away from Gauss-Newton's model, which then converges
+  // linearly (real medium roll run: 0.55 a step along Kz, Kzz, W0z). The
+  // next model is corrected along s alone: a rank-one secant term, replaced
+  // at every step, never accumulated.
+  Eigen::VectorXd g0, g1;
+  Eigen::MatrixXd H0, H1;
+  Model(current_, &g0, &H0);
+  Model(trial, &g1, &H1);
+  const Eigen::VectorXd Hs = H1 * step_;
+  const double model = step_.dot(Hs), actual = step_.dot(g1 - g0);
+  secant_.resize(0, 0);
+  if (!(model > 0.0) || !std::isfinite(actual)) return;
+  const double gamma = actual / model;
+  if (gamma < 1.0 / kCurvatureRange || gamma > kCurvatureRange) return;
+  secant_ = (gamma - 1.0) * Hs * Hs.transpose() / model;
+}
+
+bool BatchMinimizer::TryStep() {
+  const int nf = static_cast<int>(free_.size());
+  Eigen::VectorXd phi = current_.phi;
+  for (int k = 0; k < nf; ++k) phi[free_[k]] += step_[k];
+  // The trial's noise at its conditional maximum there (the step's own
+  // change of log sigma is Newton's on an exponential, and overshoots where
+  // a channel's residual changed much): -log L profiled over the noise.
+  std::vector<Eigen::Vector3d> noise = noise_;
+  BatchObjective::Point trial = objective_.Evaluate(phi, noise, true);
+  if (trial.finite()) MaximiseNoise(&trial, &noise);
+  summary_.iterations += 1;
+  summary_.passes += 1;
+  const double before = Objective(current_), after = Objective(trial);
+  const double actual = before - after;
+  char line[200];
+  std::snprintf(line, sizeof(line),
+                "step %d: -log L %.10g -> %.10g (predicted decrease %.4g; Newton decrement %.3g)",
+                summary_.iterations, before, after, predicted_, summary_.newton_decrement);
+  Say(line);
+  if (trial.finite() && actual > 0.0) {
+    MeasureCurvature(trial);
+    const double rho = actual / predicted_;
+    mu_ = std::max(mu_ * std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3)), 1e-12);
+    nu_ = 2.0;
+    current_ = std::move(trial);
+    noise_ = noise;
+    summary_.accepted += 1;
+    return true;
+  }
+  mu_ = std::max(mu_ * nu_, 1e-4);
+  nu_ *= 2.0;
+  return false;
+}
+
+}  // namespace triadcal

@@ -1,0 +1,91 @@
+#include "solvers/estimation/batch_objective.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace triadcal {
+
+bool BatchObjective::Point::finite() const {
+  return std::isfinite(cost) && (gradient.size() == 0 || gradient.allFinite());
+}
+
+BatchObjective::BatchObjective(std::vector<LinkedRun> runs, Eigen::MatrixXd A, Eigen::VectorXd b,
+                               const Eigen::VectorXd& weights_phi, int threads)
+    : runs_(std::move(runs)), A_(std::move(A)), b_(std::move(b)), threads_(threads) {
+  m_ = static_cast<int>(A_.cols());
+  for (const LinkedRun& r : runs_) {
+    if (!r.problem) throw std::logic_error("BatchObjective: a run without its problem");
+    const int n = r.problem->n;
+    if (r.map.size() == 0 ? n != m_ : (r.map.rows() != n || r.map.cols() != m_)) {
+      throw std::logic_error("BatchObjective: a run's map does not fit its layout");
+    }
+  }
+  for (int r = 0; r < this->runs(); ++r) {
+    weights_.push_back(EvaluatePass(*runs_[r].problem, ThetaOf(r, weights_phi), false, threads_));
+  }
+}
+
+Eigen::VectorXd BatchObjective::ThetaOf(int r, const Eigen::VectorXd& phi) const {
+  const LinkedRun& lr = runs_[r];
+  Eigen::VectorXd theta = lr.map.size() == 0 ? phi : Eigen::VectorXd(lr.map * phi);
+  if (lr.offset.size() > 0) theta += lr.offset;
+  return theta;
+}
+
+Eigen::MatrixXd BatchObjective::MapOf(int r) const {
+  const LinkedRun& lr = runs_[r];
+  return lr.map.size() == 0 ? Eigen::MatrixXd::Identity(m_, m_) : lr.map;
+}
+
+BatchObjective::Point BatchObjective::Evaluate(const Eigen::VectorXd& phi,
+                                               const std::vector<Eigen::Vector3d>& noise,
+                                               bool with_jacobian) const {
+  Point pt;
+  pt.phi = phi;
+  pt.passes.reserve(runs_.size());
+  for (int r = 0; r < runs(); ++r) {
+    pt.passes.push_back(EvaluatePass(*runs_[r].problem, ThetaOf(r, phi), with_jacobian, threads_));
+  }
+  Reweight(&pt, noise);
+  return pt;
+}
+
+void BatchObjective::Reweight(Point* pt, const std::vector<Eigen::Vector3d>& noise,
+                              bool theta_part) const {
+  pt->reductions.clear();
+  for (int r = 0; r < runs(); ++r) {
+    pt->reductions.push_back(Reduce(*runs_[r].problem, pt->passes[r], noise[r], threads_,
+                                    &weights_[r], theta_part));
+  }
+  Assemble(pt);
+}
+
+void BatchObjective::Assemble(Point* pt) const {
+  const Eigen::VectorXd res = A_ * pt->phi - b_;
+  pt->data_cost = 0.0;
+  for (const RunReduction& red : pt->reductions) pt->data_cost += red.cost;
+  pt->cost = pt->data_cost + 0.5 * res.squaredNorm();
+  const bool with_jacobian = !pt->reductions.empty() && pt->reductions[0].gradient.size() > 0;
+  if (!with_jacobian) {
+    pt->gradient.resize(0);
+    pt->information.resize(0, 0);
+    pt->data_information.resize(0, 0);
+    return;
+  }
+  pt->gradient = A_.transpose() * res;
+  pt->data_information = Eigen::MatrixXd::Zero(m_, m_);
+  for (int r = 0; r < runs(); ++r) {
+    const RunReduction& red = pt->reductions[r];
+    if (runs_[r].map.size() == 0) {
+      pt->gradient += red.gradient;
+      pt->data_information += red.information;
+    } else {
+      const Eigen::MatrixXd& T = runs_[r].map;
+      pt->gradient.noalias() += T.transpose() * red.gradient;
+      pt->data_information.noalias() += T.transpose() * red.information * T;
+    }
+  }
+  pt->information = pt->data_information + A_.transpose() * A_;
+}
+
+}  // namespace triadcal

@@ -1,0 +1,83 @@
+// The batch problem of one or several runs as a function of the parameters
+// alone: what the minimiser (batch_minimizer.h) minimises, and what every
+// covariance, score test and consistency check is read from.
+//
+// The unknowns phi (m) reach each run r's parameter vector affinely,
+// theta_r = offset_r + T_r phi (one run: phi = theta, T = I; several runs of
+// one IMU: solvers/multirun/joint_layout.h). Each run keeps its own reading
+// noise sigma_r (per channel, run_evaluation.h) and its trajectory, solved
+// for at every evaluation. With the priors and the runs' constraints as rows
+// over phi (whitened: r = A phi - b),
+//
+//   cost(phi) = sum_r cost_r(theta_r(phi); sigma_r) + 0.5 |A phi - b|^2
+//   gradient  = sum_r T_r^T g_r + A^T (A phi - b)
+//   H         = sum_r T_r^T I_r T_r + A^T A          (Gauss-Newton)
+//
+// An evaluation is one pass over every run's samples (run_evaluation.h); a
+// new noise needs only the reductions again (Reweight).
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "solvers/estimation/run_evaluation.h"
+#include "solvers/estimation/run_problem.h"
+
+namespace triadcal {
+
+struct LinkedRun {
+  const RunProblem* problem = nullptr;  // must outlive the objective; holds nothing
+  Eigen::VectorXd offset;               // n_r; empty: zero
+  Eigen::MatrixXd map;                  // n_r x m; empty: identity (n_r = m)
+};
+
+class BatchObjective {
+ public:
+  // rows: A (k x m) and b (k): the whitened priors and constraints over phi.
+  // The noise weights' shape of every evaluation is the one at weights_phi
+  // (the nominal values; run_evaluation.h): one pass without Jacobians here.
+  BatchObjective(std::vector<LinkedRun> runs, Eigen::MatrixXd A, Eigen::VectorXd b,
+                 const Eigen::VectorXd& weights_phi, int threads);
+
+  struct Point {
+    Eigen::VectorXd phi;
+    std::vector<RunPass> passes;            // per run
+    std::vector<RunReduction> reductions;   // per run, at its noise
+    double cost = 0.0;                      // 0.5 chi^2: data, priors, constraints
+    double data_cost = 0.0;                 // the runs' part
+    Eigen::VectorXd gradient;               // m (empty without the Jacobian)
+    Eigen::MatrixXd data_information;       // m x m, sum_r T_r^T I_r T_r
+    Eigen::MatrixXd information;            // m x m, with A^T A
+    bool finite() const;
+  };
+
+  int size() const { return m_; }
+  int runs() const { return static_cast<int>(runs_.size()); }
+  const LinkedRun& run(int r) const { return runs_[r]; }
+  const Eigen::MatrixXd& rows() const { return A_; }
+  const Eigen::VectorXd& rhs() const { return b_; }
+  Eigen::VectorXd ThetaOf(int r, const Eigen::VectorXd& phi) const;
+  // T_r (identity when the run's map is empty).
+  Eigen::MatrixXd MapOf(int r) const;
+
+  // One pass over every run's samples at phi, each reduced at noise[r].
+  Point Evaluate(const Eigen::VectorXd& phi, const std::vector<Eigen::Vector3d>& noise,
+                 bool with_jacobian) const;
+  // The same point at other noises (no pass over the samples); without
+  // theta_part, only the costs and the noises' parts (no gradient).
+  void Reweight(Point* pt, const std::vector<Eigen::Vector3d>& noise,
+                bool theta_part = true) const;
+
+ private:
+  void Assemble(Point* pt) const;
+
+  std::vector<LinkedRun> runs_;
+  std::vector<RunPass> weights_;  // per run, at weights_phi
+  Eigen::MatrixXd A_;
+  Eigen::VectorXd b_;
+  int m_ = 0;
+  int threads_ = 1;
+};
+
+}  // namespace triadcal

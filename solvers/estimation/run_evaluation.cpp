@@ -1,0 +1,275 @@
+#include "solvers/estimation/run_evaluation.h"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <stdexcept>
+
+#include "solvers/estimation/parallel.h"
+
+namespace triadcal {
+namespace {
+
+// s_i^2 = (g sigma_i / K_i)^2 [m^2/s^4], the acceleration noise of channel i.
+Eigen::Vector3d ChannelVariance(const RunProblem& p, const Eigen::VectorXd& theta,
+                                const Eigen::Vector3d& noise) {
+  Eigen::Vector3d var;
+  for (int i = 0; i < 3; ++i) {
+    const double s = p.cfg.g_mps2 * noise[i] / std::abs(theta[kKx + i]);
+    var[i] = s * s;
+  }
+  return var;
+}
+
+}  // namespace
+
+Mat6 ProcessCovariance(const RunProblem& p, const ProcessStep& s, const Eigen::VectorXd& theta,
+                       const Eigen::Vector3d& noise_mV) {
+  const Eigen::Vector3d var = ChannelVariance(p, theta, noise_mV);
+  Mat6 Q = s.Q_iso;
+  for (int i = 0; i < 3; ++i) Q += var[i] * s.channel_weight[i];
+  return Q;
+}
+
+RunPass EvaluatePass(const RunProblem& p, const Eigen::VectorXd& theta, bool with_jacobian,
+                     int threads) {
+  if (!p.held.empty()) throw std::logic_error("EvaluatePass: the problem holds parameters");
+  const StateSpaceModel model(p);
+  const std::size_t E = p.epochs.size();
+  RunPass pass;
+  pass.theta = theta;
+  pass.with_jacobian = with_jacobian;
+  pass.process.resize(E - 1);
+  pass.measurement.resize(E);
+  pass.LR.resize(E);
+  ParallelFor(E, threads, [&](std::size_t e) {
+    if (e + 1 < E) pass.process[e] = model.Process(e, theta, with_jacobian);
+    pass.measurement[e] = model.Measurement(e, theta, with_jacobian, true);
+    pass.LR[e] = WhiteningOf(pass.measurement[e].R);
+  });
+  return pass;
+}
+
+RunReduction Reduce(const RunProblem& p, const RunPass& pass, const Eigen::Vector3d& noise_mV,
+                    int threads, const RunPass* weights, bool theta_part) {
+  const RunPass& wp = weights ? *weights : pass;
+  const std::size_t E = pass.measurement.size();
+  const int n = pass.with_jacobian ? static_cast<int>(pass.theta.size()) : 0;
+  const Eigen::VectorXd& theta = pass.theta;
+  const Eigen::Vector3d var = ChannelVariance(p, theta, noise_mV);
+  RunReduction out;
+  out.noise_mV = noise_mV;
+  out.degrees_of_freedom = static_cast<int>(6 * (E - 1));
+
+  // 1. The trajectory for this theta: the residuals are affine in the states,
+  // formed about the B2 reference motion (small numbers: about x = 0 the
+  // cost would be the difference of two numbers ~1e10 times larger).
+  std::vector<Mat6> LQ(E - 1);
+  std::vector<Vec6> raw0(E - 1);  // raw process residual at the reference motion
+  std::vector<ProcessBlock> pb(E - 1);
+  std::vector<MeasurementBlock> mb(E);
+  ParallelFor(E, threads, [&](std::size_t e) {
+    const Vec6& h = pass.measurement[e].h;
+    mb[e].M = wp.LR[e];
+    mb[e].N.resize(6, 0);
+    mb[e].r0.setZero();  // x = h: the measurement residual is zero there
+    if (e + 1 < E) {
+      const ProcessStep& s = pass.process[e];
+      const ProcessStep& w = wp.process[e];
+      Mat6 Q = w.Q_iso;
+      for (int i = 0; i < 3; ++i) Q += var[i] * w.channel_weight[i];
+      LQ[e] = WhiteningOf(Q);
+      raw0[e] = pass.measurement[e + 1].h - s.F() * h - s.u;
+      pb[e].A = -LQ[e] * s.F();
+      pb[e].B = LQ[e];
+      pb[e].C.resize(6, 0);
+      pb[e].r0 = LQ[e] * raw0[e];
+    }
+  });
+  const ReducedOverStates at_states = ReduceOverStates(pb, mb, true);
+  out.cost = at_states.cost;
+  out.states.resize(E);
+  out.process_residual.assign(E, Vec6::Zero());
+  out.measurement_residual.resize(E);
+  for (std::size_t e = 0; e < E; ++e) {
+    const Vec6& dx = at_states.states[e];
+    out.states[e] = pass.measurement[e].h + dx;
+    out.measurement_residual[e] = dx;
+    if (e > 0) {
+      const ProcessStep& s = pass.process[e - 1];
+      out.process_residual[e] = raw0[e - 1] + dx - s.F() * at_states.states[e - 1];
+    }
+  }
+
+  // 2. The reading noise's part of the likelihood at the optimal states. With
+  // s_i = log sigma_i, d cost / d s_i = -q_i, q_i = r^T Q^-1 Q_i Q^-1 r; the
+  // log-determinant 0.5 sum_e log det Q_e(s) is taken with the scale factors
+  // of the weights' reference (the readings' own noise does not depend on
+  // theta), so that d/ds_i of it is N_i = sum_e tr(Q_e^-1 Q_i,e) there.
+  const Eigen::Vector3d var_ref = ChannelVariance(p, wp.theta, noise_mV);
+  // Per interval: q_i, N_i, log det, and the 3 x 3 q_ij = (Q_i w)^T Q^-1 (Q_j w)
+  // and tr(A_i A_j) (A_i = Q^-1 Q_i) of the noise's second derivatives.
+  struct Parts {
+    Eigen::Vector3d q, N;
+    double log_det = 0.0;
+    Eigen::Matrix3d qq, tt;
+  };
+  std::vector<Parts> comp(E - 1);
+  // Q_i Q^-1 r per channel, for step 3.
+  std::array<std::vector<Vec6>, 3> QiQinv_r;
+  for (auto& v : QiQinv_r) v.resize(E - 1);
+  ParallelFor(E - 1, threads, [&](std::size_t e) {
+    const ProcessStep& s = wp.process[e];
+    Mat6 Q = s.Q_iso, Q_ref = s.Q_iso;
+    for (int i = 0; i < 3; ++i) {
+      Q += var[i] * s.channel_weight[i];
+      Q_ref += var_ref[i] * s.channel_weight[i];
+    }
+    const Eigen::LDLT<Mat6> ldlt(Q), ldlt_ref(Q_ref);
+    const Vec6 w = ldlt.solve(out.process_residual[e + 1]);
+    Parts& c = comp[e];
+    std::array<Mat6, 3> A;
+    std::array<Vec6, 3> QinvQiw;
+    for (int i = 0; i < 3; ++i) {
+      A[i] = ldlt_ref.solve(var_ref[i] * s.channel_weight[i]);
+      QiQinv_r[i][e] = var[i] * (s.channel_weight[i] * w);
+      QinvQiw[i] = ldlt.solve(QiQinv_r[i][e]);
+      c.q[i] = w.dot(QiQinv_r[i][e]);
+      c.N[i] = A[i].trace();
+    }
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) {
+        c.qq(i, j) = QiQinv_r[i][e].dot(QinvQiw[j]);
+        c.tt(i, j) = (A[i] * A[j]).trace();
+      }
+    }
+    c.log_det = 0.5 * ldlt_ref.vectorD().array().log().sum();
+  });
+  for (const Parts& c : comp) {
+    out.channel_quadratic += c.q;
+    out.channel_trace += c.N;
+    out.channel_trace2 += c.tt.diagonal();
+    out.channel_cross_quadratic += c.qq;
+    out.channel_cross_trace += c.tt;
+    out.log_det += c.log_det;
+  }
+  if (!pass.with_jacobian || !theta_part) return out;
+
+  // 3. The theta part at the optimal states: the whitened Jacobians (the
+  // process whitening's derivative by K_i acts on the residual there), the
+  // gradient J_theta^T r (J_x^T r = 0 at the optimal states) and the
+  // information with the states eliminated. With them, each channel's
+  // gradient g_i = 0.5 d q_i / d theta (the states optimal, their response
+  // by an adjoint solve): what couples theta and the noise (batch_minimizer.h).
+  // direct[e][i]: interval e's part of 0.5 d q_i / d theta at fixed states:
+  // through the increments, -U^T Q^-1 Q_i Q^-1 r, and through the weight's
+  // scale factors, 0.5 d q_i / d K_j = -(v_j / K_j) (delta_ij w^T W_i w -
+  // 2 w^T W_j Q^-1 Q_i w), v_j = (g sigma_j / K_j)^2, w = Q^-1 r.
+  std::vector<std::array<Eigen::VectorXd, 3>> direct(E - 1);
+  ParallelFor(E, threads, [&](std::size_t e) {
+    const MeasurementStep& m = pass.measurement[e];
+    mb[e].N = -wp.LR[e] * m.H;
+    mb[e].r0 = wp.LR[e] * out.measurement_residual[e];
+    if (e + 1 == E) return;
+    const ProcessStep& s = pass.process[e];
+    const Vec6& r = out.process_residual[e + 1];
+    const ProcessStep& w = wp.process[e];
+    pb[e].C = -LQ[e] * s.U;
+    pb[e].r0 = LQ[e] * r;
+    Mat6 Q = w.Q_iso;
+    for (int i = 0; i < 3; ++i) Q += var[i] * w.channel_weight[i];
+    const Eigen::LDLT<Mat6> ldlt(Q);
+    const Vec6 wr = ldlt.solve(r);
+    for (int i = 0; i < 3; ++i) {
+      const Vec6 QinvQiw = ldlt.solve(QiQinv_r[i][e]);
+      direct[e][i] = -s.U.transpose() * QinvQiw;
+      for (int j = 0; j < 3; ++j) {
+        double d = -2.0 * wr.dot(w.channel_weight[j] * QinvQiw);
+        if (i == j) d += wr.dot(w.channel_weight[i] * wr);
+        direct[e][i][kKx + j] += -(var[j] / theta[kKx + j]) * d;
+      }
+    }
+    for (int i = 0; i < 3; ++i) {
+      // d var_i / d K_i = -2 var_i / K_i; dL / d var_i by a central
+      // difference of the 6 x 6 whitening (exact to ~1e-8 relative).
+      const double h = 1e-4 * var[i];
+      const Mat6 dL = (WhiteningOf(Q + h * w.channel_weight[i]) -
+                       WhiteningOf(Q - h * w.channel_weight[i])) /
+                      (2.0 * h) * (-2.0 * var[i] / theta[kKx + i]);
+      pb[e].C.col(kKx + i) += dL * r;
+    }
+  });
+  out.information = ThetaInformationBySchur(pb, mb, Eigen::MatrixXd::Zero(0, n));
+  out.gradient = Eigen::VectorXd::Zero(n);
+  for (std::size_t e = 0; e < E; ++e) {
+    out.gradient.noalias() += mb[e].N.transpose() * mb[e].r0;
+    if (e + 1 < E) out.gradient.noalias() += pb[e].C.transpose() * pb[e].r0;
+  }
+  // The adjoint: u_i = H_xx^-1 (0.5 dq_i/dx). With r0_i = -L Q_i Q^-1 r the
+  // elimination's right-hand side J_x^T r0_i is -0.5 dq_i/dx, so its states
+  // are u_i; then g_i = direct_i - H_theta,x u_i.
+  std::vector<ProcessBlock> pb_states(E - 1);
+  std::vector<MeasurementBlock> mb_states(E);
+  for (std::size_t e = 0; e < E; ++e) {
+    mb_states[e].M = mb[e].M;
+    mb_states[e].N.resize(6, 0);
+    mb_states[e].r0.setZero();
+    if (e + 1 < E) {
+      pb_states[e].A = pb[e].A;
+      pb_states[e].B = pb[e].B;
+      pb_states[e].C.resize(6, 0);
+    }
+  }
+  for (int i = 0; i < 3; ++i) {
+    for (std::size_t e = 0; e + 1 < E; ++e) pb_states[e].r0 = -LQ[e] * QiQinv_r[i][e];
+    const std::vector<Vec6> u = ReduceOverStates(pb_states, mb_states, true).states;
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
+    for (std::size_t e = 0; e < E; ++e) {
+      g.noalias() -= mb[e].N.transpose() * (mb[e].M * u[e]);
+      if (e + 1 < E) {
+        g += direct[e][i];
+        g.noalias() -= pb[e].C.transpose() * (pb[e].A * u[e] + pb[e].B * u[e + 1]);
+      }
+    }
+    out.channel_gradient[i] = g;
+  }
+  out.process_blocks = std::move(pb);
+  out.measurement_blocks = std::move(mb);
+  return out;
+}
+
+Eigen::Matrix3d NoiseHessian(const RunReduction& r, double rho) {
+  Eigen::Matrix3d H = 4.0 * r.channel_cross_quadratic - 2.0 * rho * r.channel_cross_trace;
+  for (int i = 0; i < 3; ++i) H(i, i) += -2.0 * r.channel_quadratic[i] + 2.0 * rho * r.channel_trace[i];
+  return 0.5 * (H + H.transpose());
+}
+
+double NoiseDofShare(const RunReduction& r, int fitted_parameters) {
+  return std::clamp(1.0 - fitted_parameters / std::max(1.0, double(r.degrees_of_freedom)), 0.1,
+                    1.0);
+}
+
+Eigen::Vector3d NoiseFromReduction(const RunReduction& r, int fitted_parameters) {
+  const double rho = NoiseDofShare(r, fitted_parameters);
+  Eigen::Vector3d out = r.noise_mV;
+  for (int i = 0; i < 3; ++i) {
+    if (r.channel_trace[i] > 0.0) {
+      out[i] *= std::sqrt(std::max(r.channel_quadratic[i], 0.0) / (rho * r.channel_trace[i]));
+    }
+  }
+  return out;
+}
+
+Eigen::Vector3d NoiseDegreesOfFreedom(const RunReduction& r, int fitted_parameters) {
+  const double rho = NoiseDofShare(r, fitted_parameters);
+  Eigen::Vector3d dof = Eigen::Vector3d::Zero();
+  for (int i = 0; i < 3; ++i) {
+    if (r.channel_trace2[i] > 0.0) {
+      dof[i] = rho * r.channel_trace[i] * r.channel_trace[i] / r.channel_trace2[i];
+    }
+  }
+  return dof;
+}
+
+}  // namespace triadcal
