@@ -11,7 +11,6 @@
 
 #include "core/model/errors.h"
 #include "core/model/sample_noise.h"
-#include "solvers/estimation/batch_linearization.h"
 #include "solvers/estimation/batch_minimizer.h"
 #include "solvers/estimation/batch_objective.h"
 #include "solvers/estimation/hac_covariance.h"

@@ -6,7 +6,6 @@
 
 #include "core/model/errors.h"
 #include "solvers/estimation/inertial_increments.h"
-#include "solvers/estimation/batch_linearization.h"
 #include "solvers/estimation/run_problem.h"
 #include "solvers/estimation/state_space_model.h"
 
@@ -174,7 +173,7 @@ PassResult ForwardPass(const StateSpaceModel& model, const Eigen::VectorXd* thet
 // with zero covariance) from the free part.
 Estimate FullEstimate(const StateSpaceModel& model, const Eigen::VectorXd& theta_free,
                       const Eigen::MatrixXd& cov_free) {
-  return Estimate{model.Expand(theta_free), ExpandCovariance(model.problem(), cov_free)};
+  return Estimate{model.Expand(theta_free), model.ExpandCovariance(cov_free)};
 }
 
 // Fixed-interval RTS smoother; returns the smoothed state and covariance at

@@ -29,4 +29,31 @@ WhitenessSummary ProcessWhiteness(const std::vector<Vec6>& process_whitened,
   return out;
 }
 
+std::array<std::vector<double>, 6> ExpectedProcessAutocorrelation(
+    const std::vector<Eigen::MatrixXd>& C, const Eigen::MatrixXd& cov_free, int lags) {
+  std::array<std::vector<double>, 6> rho;
+  const std::size_t T = C.size();
+  if (T == 0 || cov_free.rows() == 0) return rho;
+  for (int c = 0; c < 6; ++c) {
+    std::vector<Eigen::VectorXd> a(T);  // cov j_t
+    double trace_rest = 0.0;
+    for (std::size_t t = 0; t < T; ++t) {
+      a[t] = cov_free * C[t].row(c).transpose();
+      trace_rest += 1.0 - C[t].row(c).dot(a[t]);
+    }
+    rho[c].assign(lags, 0.0);
+    // When the fit takes most of a channel's residual (few epochs for the
+    // parameters: a 10-s run has 20), its share is not a small correction
+    // and the ratio below is unstable (it reached -200): nothing is
+    // subtracted then.
+    if (trace_rest < 0.5 * static_cast<double>(T)) continue;
+    for (int k = 1; k <= lags && static_cast<std::size_t>(k) < T; ++k) {
+      double h = 0.0;
+      for (std::size_t t = 0; t + k < T; ++t) h += C[t + k].row(c).dot(a[t]);
+      rho[c][k - 1] = std::clamp(-h / trace_rest, -1.0, 1.0);
+    }
+  }
+  return rho;
+}
+
 }  // namespace triadcal

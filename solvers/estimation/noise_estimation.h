@@ -52,4 +52,14 @@ struct WhitenessSummary {
 WhitenessSummary ProcessWhiteness(const std::vector<Vec6>& process_whitened,
                                   const std::array<std::vector<double>, 6>& expected_acf);
 
+// The autocorrelation at lags 1..lags that the whitened process residuals
+// (6 channels) have at a least-squares solution even when the model holds:
+// r = (I - H) w with H(t, u) = j_t^T cov j_u, j_t the whitened residual's
+// derivative by the free parameters (C[t], 6 x n_free) and cov their
+// covariance; rho_k = -sum_t H(t, t+k) / sum_t (1 - H(t, t)). Smooth
+// regressors make it negative at short lags, about -(parameters a channel
+// carries) / (epochs); the whiteness tests subtract it.
+std::array<std::vector<double>, 6> ExpectedProcessAutocorrelation(
+    const std::vector<Eigen::MatrixXd>& C, const Eigen::MatrixXd& cov_free, int lags);
+
 }  // namespace triadcal

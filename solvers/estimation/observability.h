@@ -2,14 +2,12 @@
 // run cannot determine, from the Fisher information of the batch model
 // (docs/method.md) -- the same linearisation the estimators use.
 //
-// Fisher information. batch_linearization.h linearises every process (B1),
-// measurement (B2) and theta-only row of the batch problem at a theta;
-// eliminating the trajectory (Schur complement, schur_covariance.h) gives
-//
-//   cov_0 = (I_data + P^-1)^-1,     P = diag(prior sigma^2)
-//
-// whence the information of the data alone, I_data = cov_0^-1 - P^-1. Every
-// variant below reuses it: with the constraints c_j . theta = v_j +- s_j,
+// Fisher information. run_evaluation.h evaluates every process (B1) and
+// measurement (B2) of the run at a theta and eliminates the trajectory
+// exactly (the same reduction the batch solver steps with); what is left is
+// I_data, the information of the data alone about theta. Every variant below
+// reuses it: with the constraints c_j . theta = v_j +- s_j, P = diag(prior
+// sigma^2),
 //
 //   I_V   = I_data + sum_{j in V} c_j c_j^T / s_j^2     (data + constraints)
 //   CRB_V = (I_V + P^-1)^-1                               (what an estimator reports)

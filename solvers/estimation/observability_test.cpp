@@ -16,7 +16,6 @@
 #include "core/model/errors.h"
 #include "core/io/file_util.h"
 #include "core/io/run_io.h"
-#include "solvers/estimation/batch_linearization.h"
 #include "solvers/analysis/experiment_design.h"
 #include "solvers/analysis/monte_carlo.h"
 #include "solvers/estimation/observability.h"

@@ -33,6 +33,13 @@ Eigen::VectorXd StateSpaceModel::Expand(const Eigen::VectorXd& theta_free) const
   return theta;
 }
 
+Eigen::MatrixXd StateSpaceModel::ExpandCovariance(const Eigen::MatrixXd& cov_free) const {
+  Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(p_.n, p_.n);
+  for (std::size_t a = 0; a < p_.free.size(); ++a)
+    for (std::size_t b = 0; b < p_.free.size(); ++b) cov(p_.free[a], p_.free[b]) = cov_free(a, b);
+  return cov;
+}
+
 Eigen::VectorXd StateSpaceModel::Free(const Eigen::VectorXd& theta) const {
   Eigen::VectorXd f(p_.free.size());
   for (std::size_t j = 0; j < p_.free.size(); ++j) f[j] = theta[p_.free[j]];
@@ -57,12 +64,6 @@ ProcessStep StateSpaceModel::Process(std::size_t e, const Eigen::VectorXd& theta
     Eigen::MatrixXd U(6, theta.size());
     U << inc.ddv_dtheta, inc.dds_dtheta;
     s.U = FreeColumns(U);
-    for (std::size_t j = 0; j < p_.free.size(); ++j) {
-      const int i = p_.free[j];
-      if (i >= kKx && i <= kKz) s.scale_col[i - kKx] = static_cast<int>(j);
-      if (i >= kW0x && i <= kW0z) s.zero_col[i - kW0x] = static_cast<int>(j);
-    }
-    for (int i = 0; i < 3; ++i) s.scale_lin[i] = theta[kKx + i];
   }
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
   s.Q.block<3, 3>(0, 0) = p_.isotropic_var * inc.sum_alpha2 * I;
@@ -76,8 +77,7 @@ ProcessStep StateSpaceModel::Process(std::size_t e, const Eigen::VectorXd& theta
   const Eigen::Vector3d var = ChannelVariance(theta);
   for (int i = 0; i < 3; ++i) {
     s.channel_weight[i] = inc.channel_weight[i];
-    s.channel_Q[i] = var[i] * inc.channel_weight[i];
-    s.Q += s.channel_Q[i];
+    s.Q += var[i] * inc.channel_weight[i];
   }
   return s;
 }
@@ -93,27 +93,6 @@ MeasurementStep StateSpaceModel::Measurement(std::size_t e, const Eigen::VectorX
     m.R = ReferenceNoiseCovariance(p_.cfg, theta, recorded, p_.sigma_angle, p_.sigma_rate);
   }
   return m;
-}
-
-Mat6 StateSpaceModel::ProcessWhitening(const ProcessStep& s, const Eigen::VectorXd& theta,
-                                       std::vector<Mat6>* dL) const {
-  const Eigen::Vector3d var = ChannelVariance(theta);
-  Mat6 Q = s.Q_iso;
-  for (int i = 0; i < 3; ++i) Q += var[i] * s.channel_weight[i];
-  const Mat6 L = WhiteningOf(Q);
-  if (!dL) return L;
-  dL->assign(p_.free.size(), Mat6::Zero());
-  for (std::size_t j = 0; j < p_.free.size(); ++j) {
-    const int i = p_.free[j] - kKx;
-    if (i < 0 || i > 2) continue;
-    // d var_i / d K_i = -2 var_i / K_i; dL / d var_i by a central difference
-    // of the 6 x 6 whitening (exact to ~1e-8 relative).
-    const double h = 1e-4 * var[i];
-    const Mat6 Lp = WhiteningOf(Q + h * s.channel_weight[i]);
-    const Mat6 Lm = WhiteningOf(Q - h * s.channel_weight[i]);
-    (*dL)[j] = (Lp - Lm) / (2.0 * h) * (-2.0 * var[i] / theta[kKx + i]);
-  }
-  return L;
 }
 
 Mat6 StateSpaceModel::ProcessCrossCovariance(const ProcessStep& a, const ProcessStep& b,
@@ -161,49 +140,6 @@ Vec6 StateSpaceModel::PredictLinear(const ProcessStep& s, const Vec6& xa,
   Vec6 x = s.F() * xa + s.u;
   if (s.U.size() > 0 && dtheta_free.size() > 0) x += s.U * dtheta_free;
   return x;
-}
-
-Vec6 StateSpaceModel::Predict(const ProcessStep& s, const Vec6& xa,
-                              const Eigen::VectorXd& dtheta_free) {
-  Vec6 x = PredictLinear(s, xa, dtheta_free);
-  if (s.U.size() == 0 || dtheta_free.size() == 0) return x;
-  for (int i = 0; i < 3; ++i) {
-    const int k = s.scale_col[i];
-    if (k < 0) continue;
-    const double K0 = s.scale_lin[i];
-    const double dK = dtheta_free[k];
-    const double f = K0 / (K0 + dK);
-    x += (f - 1.0 + dK / K0) * (-K0 * s.U.col(k));
-    const int z = s.zero_col[i];
-    if (z >= 0) x += (f - 1.0) * dtheta_free[z] * s.U.col(z);
-  }
-  return x;
-}
-
-Eigen::MatrixXd StateSpaceModel::PredictThetaJacobian(const ProcessStep& s,
-                                                      const Eigen::VectorXd& dtheta_free) {
-  Eigen::MatrixXd J = s.U;
-  if (s.U.size() == 0 || dtheta_free.size() == 0) return J;
-  for (int i = 0; i < 3; ++i) {
-    const int k = s.scale_col[i];
-    if (k < 0) continue;
-    const double K0 = s.scale_lin[i];
-    const double K = K0 + dtheta_free[k];
-    const double f = K0 / K;
-    const double df = -K0 / (K * K);  // d f / d K
-    J.col(k) += (df + 1.0 / K0) * (-K0 * s.U.col(k));
-    const int z = s.zero_col[i];
-    if (z >= 0) {
-      J.col(k) += df * dtheta_free[z] * s.U.col(z);
-      J.col(z) += (f - 1.0) * s.U.col(z);
-    }
-  }
-  return J;
-}
-
-Vec6 StateSpaceModel::ProcessResidual(const ProcessStep& s, const Vec6& xa, const Vec6& xb,
-                                      const Eigen::VectorXd& dtheta_free) {
-  return xb - Predict(s, xa, dtheta_free);
 }
 
 void StateSpaceModel::ThetaRows(bool with_constraints, Eigen::MatrixXd* A,

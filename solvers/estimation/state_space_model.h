@@ -1,9 +1,9 @@
 // The estimation model of a run, written once for every estimator (SPEC
-// section 6, paper blocks B1 and B2). The batch solver wraps these residuals in
-// Ceres costs (batch_costs.h), the EKF predicts and updates with them
-// (kalman_smoother.h), the Fisher-information analyses linearise them
-// (batch_linearization.h, observability.h), and the static method takes the
-// prior and constraint rows. (GTSAM's lesson: the filter and the batch
+// section 6, paper blocks B1 and B2). The batch solver evaluates and reduces
+// them over a whole run (run_evaluation.h), the EKF predicts and updates with
+// them (kalman_smoother.h), the Fisher-information analyses use the same
+// reduction (observability.h), and the static method takes the prior and
+// constraint rows. (GTSAM's lesson: the filter and the batch
 // smoother consume the same factors.)
 //
 // State at epoch e: x_e = (V_e, S_e), velocity and position of O in L.
@@ -24,28 +24,11 @@
 // noise sigma_i [mV] through the scale factor K_i of theta, so the weight
 // follows the estimate: inflating a scale factor cannot shrink the whitened
 // residual), c_ij = C_L2(t_j) e_i its sensitive axis in L, and s_iso the
-// angle noise rotating g. To first order about
-// theta_lin (u_e sums thousands of samples, so it is evaluated once per
-// linearisation, as inertial preintegration does):
+// angle noise rotating g. The batch solver evaluates the increments exactly
+// at every theta it tries (run_evaluation.h); the filter propagates them to
+// first order about its linearisation point theta_lin:
 //
-//   r_p = x_{e+1} - F_e x_e - u_e(theta_lin) - U_e (theta - theta_lin) - c_e(theta)
-//
-// except for one exact part, c_e: channel i's share of u_e is proportional to
-// 1 / K_i (the readings enter as (u_i - W0_i) / K_i), and a first-order
-// expansion in K_i turns the noise of the readings into something a scale
-// step can cancel: (u - W0) (1 - dK / K_lin) / K_lin is zero at dK = K_lin.
-// On motion that hardly excites an axis (a vertical shaft: the scale factors
-// ride along a flat direction) the linearised cost then falls below the noise
-// as K grows and the scale factors ran to their bounds. c_e restores the
-// exact 1 / K_i dependence of channel i's share u_i = -K_lin,i dU/dK_i and of
-// its zero-offset term:
-//
-//   c_e = sum_i (f_i - 1 + dK_i / K_lin,i) u_i + (f_i - 1) U_W0i dW0_i,
-//   f_i = K_lin,i / K_i
-//
-// (second order in dK; what stays linearised are the cross terms of K_i with
-// the angles and the lever arm, which move the gravity and motion parts, not
-// the noise).
+//   x_{e+1} = F_e x_e + u_e(theta_lin) + U_e (theta - theta_lin) + w_e
 //
 // Measurement, epoch e (B2 from the recorded angles alone):
 //
@@ -76,20 +59,14 @@ struct ProcessStep {
   Vec6 u = Vec6::Zero();  // (dv [m/s], ds [m]) at theta_lin
   Eigen::MatrixXd U;      // 6 x n_free, du/dtheta (empty when not asked)
   Mat6 Q = Mat6::Zero();  // covariance of w_e
-  // The part of Q due to each channel's reading noise (the rest is the
-  // isotropic part): the variance components of noise_estimation.h.
-  std::array<Mat6, 3> channel_Q;
-  // Q's make-up, to re-evaluate it at another theta: the isotropic part and
-  // each channel's weight per unit variance (Q = Q_iso + sum_i s_i^2 W_i).
+  // Q's make-up, to evaluate it at another theta or noise: the isotropic
+  // part and each channel's weight per unit variance (Q = Q_iso + sum_i
+  // s_i^2 W_i).
   Mat6 Q_iso = Mat6::Zero();
   std::array<Mat6, 3> channel_weight;
-  // The exact 1 / K_i part (c_e above): free-column index of K_i and W0_i
-  // (-1 when held or when U was not asked) and K_i at theta_lin.
-  std::array<int, 3> scale_col{{-1, -1, -1}}, zero_col{{-1, -1, -1}};
   // The shares of the first and last sample in the noise (inertial_increments.h).
   std::array<Vec6, 3> first_channel, last_channel;
   Eigen::Vector2d first_weight = Eigen::Vector2d::Zero(), last_weight = Eigen::Vector2d::Zero();
-  Eigen::Vector3d scale_lin = Eigen::Vector3d::Ones();
   Mat6 F() const;         // transition of x
 };
 
@@ -114,24 +91,15 @@ class StateSpaceModel {
   // theta (all n parameters) from the free ones; held ones at theta_held.
   Eigen::VectorXd Expand(const Eigen::VectorXd& theta_free) const;
   Eigen::VectorXd Free(const Eigen::VectorXd& theta) const;
+  // A free-parameter covariance placed in an n x n matrix (zero rows and
+  // columns for the held parameters).
+  Eigen::MatrixXd ExpandCovariance(const Eigen::MatrixXd& cov_free) const;
 
   // Interval e -> e+1 at the full theta. with_jacobian fills U.
   ProcessStep Process(std::size_t e, const Eigen::VectorXd& theta, bool with_jacobian) const;
   // Epoch e at the full theta. with_jacobian fills H, with_noise R.
   MeasurementStep Measurement(std::size_t e, const Eigen::VectorXd& theta, bool with_jacobian,
                               bool with_noise) const;
-
-  // The whitening of the step's process residual at theta (all n), with
-  // Q(theta) = Q_iso + sum_i s_i(theta)^2 W_i, and when asked its derivatives
-  // by the free parameters that are scale factors (dL[j] for free index j;
-  // zero for the others). Whitening with the weight of the current
-  // estimate makes the whitened residual the reading-unit residual
-  // (K_i r_i / (g sigma_i)): the noisy readings are then not a regressor whose
-  // noise shrinks as the scale grows, which removes the errors-in-variables
-  // pull on the scale factors and their runaway on motion that hardly
-  // excites an axis.
-  Mat6 ProcessWhitening(const ProcessStep& s, const Eigen::VectorXd& theta,
-                        std::vector<Mat6>* dL_dtheta_free) const;
 
   // cov(w_e, w_{e+1}) of consecutive steps at theta: the sample at their
   // common epoch ends one and starts the other (trapezoid), so their noises
@@ -151,24 +119,10 @@ class StateSpaceModel {
                                           const std::vector<Vec6>& residuals,
                                           const Eigen::VectorXd& theta) const;
 
-  // The process prediction x_{e+1} = F_e x_e + u_e + U_e dtheta_free for the
-  // step linearised at theta_lin, dtheta_free = theta - theta_lin.
-  static Vec6 Predict(const ProcessStep& s, const Vec6& xa, const Eigen::VectorXd& dtheta_free);
-  // The purely linear prediction F x_a + u + U dtheta (without c_e): the
-  // iterated filter's model about its linearisation point, whose RTS pass is
-  // then the Gauss-Newton step of the batch problem (c_e and its derivative
-  // vanish at dtheta = 0, where the two meet).
+  // The filter's prediction about its linearisation point, F x_a + u + U
+  // dtheta_free (dtheta_free = theta - theta_lin over the free parameters).
   static Vec6 PredictLinear(const ProcessStep& s, const Vec6& xa,
                             const Eigen::VectorXd& dtheta_free);
-  // d Predict / d theta_free at dtheta_free: U_e plus the derivative of c_e
-  // (U_e itself at dtheta_free = 0).
-  static Eigen::MatrixXd PredictThetaJacobian(const ProcessStep& s,
-                                              const Eigen::VectorXd& dtheta_free);
-  // r_p = x_{e+1} - Predict(x_e).
-  static Vec6 ProcessResidual(const ProcessStep& s, const Vec6& xa, const Vec6& xb,
-                              const Eigen::VectorXd& dtheta_free);
-  // d r_p / d x_a = -F_e, d r_p / d x_b = I, d r_p / d theta = -PredictThetaJacobian.
-  static Mat6 ProcessJacobianXa(const ProcessStep& s) { return -s.F(); }
   static Vec6 MeasurementResidual(const MeasurementStep& m, const Vec6& x) { return x - m.h; }
 
   // Whitened rows over the free parameters: the priors (n_free rows) and, when

@@ -165,48 +165,6 @@ TEST(HoldDecision, HoldsTheStructuralNullOnlyAndNamesWhatIsRelative) {
   EXPECT_TRUE(dc.relative_to.empty());
 }
 
-// The exact 1/K part of the linearised increments (c_e in state_space_model.h):
-// with a scale factor 20 % and a zero offset 30 mV away from the
-// linearisation point, Predict stays within a small fraction of the exact
-// increments where the purely linear prediction is off by the size of the
-// step squared; and PredictThetaJacobian is Predict's derivative.
-TEST(StateSpaceModel, PredictKeepsTheExactInverseScaleOfEachChannel) {
-  Scenario s = PaperScenario(50.0, 10.0, 2.0, 15.0, 3);
-  const ParameterLayout layout;
-  const RunData data = Simulate(s);
-  const RunProblem p = BuildRunProblem(s.run, data, layout, 0.5, AngleDerivativeOptions());
-  const StateSpaceModel model(p);
-  const Eigen::VectorXd theta_lin = s.truth;
-  const std::size_t e = 7;
-  const ProcessStep lin = model.Process(e, theta_lin, true);
-  Vec6 xa = Vec6::Zero();
-  for (const double rel : {-0.2, 0.2}) {
-    SCOPED_TRACE(rel);
-    Eigen::VectorXd theta = theta_lin;
-    for (int i = 0; i < 3; ++i) {
-      theta[kKx + i] *= 1.0 + rel * (i + 1) / 3.0;
-      theta[kW0x + i] += 0.03 * (i - 1);  // -30, 0, +30 mV (SI: V)
-    }
-    const Eigen::VectorXd d = model.Free(theta) - model.Free(theta_lin);
-    const ProcessStep exact = model.Process(e, theta, false);
-    const Vec6 want = exact.F() * xa + exact.u;
-    const double err = (StateSpaceModel::Predict(lin, xa, d) - want).norm();
-    const double err_linear = (StateSpaceModel::PredictLinear(lin, xa, d) - want).norm();
-    EXPECT_LT(err, 0.02 * err_linear);
-    EXPECT_LT(err, 1e-3 * (want - lin.u).norm());
-    // Derivative by central differences of Predict.
-    const Eigen::MatrixXd J = StateSpaceModel::PredictThetaJacobian(lin, d);
-    for (int j = 0; j < model.num_free(); ++j) {
-      const double h = 1e-6 * std::max(1.0, std::abs(theta[p.free[j]]));
-      Eigen::VectorXd dp = d, dm = d;
-      dp[j] += h;
-      dm[j] -= h;
-      const Vec6 num = (StateSpaceModel::Predict(lin, xa, dp) - StateSpaceModel::Predict(lin, xa, dm)) / (2 * h);
-      EXPECT_LT((J.col(j) - num).norm(), 1e-6 * (1.0 + num.norm())) << layout.info(p.free[j]).name;
-    }
-  }
-}
-
 // Neighbouring intervals share the sample at their common epoch, so their
 // process noises are correlated (about -3/(4N) for S given V, N samples an
 // interval). Reading noise alone, integrated by the model over many draws:
