@@ -37,8 +37,18 @@ int RunCompare(const CompareArgs& a) {
   CheckOverwrite(a.out_json);  // before the long work
   const ParameterLayout layout(ParseEffectList(a.effects, run.data));
 
+  // One decision of what the run determines, for both estimators: the filter
+  // holds what fit holds or considers (at nominal).
+  BatchOptions bo;
+  bo.epoch_s = a.epoch_s;
+  const HoldDecision hd = ChooseHeldParameters(run.description, run.data, layout, bo.holding,
+                                               bo.epoch_s, bo.derivatives, bo.init_decimation_hz,
+                                               bo.threads);
+  bo.decision = &hd;
   FilterOptions fo;
   fo.epoch_s = a.epoch_s;
+  fo.held = hd.held;
+  fo.held.insert(fo.held.end(), hd.consider.begin(), hd.consider.end());
   // Progress: the filter's passes the first half, the batch the second.
   StageProgress progress("compare: ");
   const int passes = std::max(1, fo.smoother_iterations);
@@ -50,8 +60,6 @@ int RunCompare(const CompareArgs& a) {
   const FilterResult fr = RunFilterSmoother(run.description, run.data, layout, fo);
   const double filter_s = Seconds(t0);
 
-  BatchOptions bo;
-  bo.epoch_s = a.epoch_s;
   bo.init = BatchInit::kGiven;  // start the batch at the smoother's answer
   bo.init_theta = fr.rts.theta;
   bo.progress = [&](const std::string& s) { progress.Stage("fit " + s); };
@@ -80,9 +88,20 @@ int RunCompare(const CompareArgs& a) {
   // Each estimate to the digit of its own sigma; the batch's sigma printed.
   std::printf("%-26s %16s %16s %16s %10s %9s %9s  %s\n", "parameter", "EKF", "RTS", "batch",
               "sigma", "RTS-EKF", "bat-RTS", "unit");
+  const std::set<std::string> nominal(fo.held.begin(), fo.held.end());
   for (int i = 0; i < layout.size(); ++i) {
     const ParameterInfo& p = layout.info(i);
     const double f = p.si_per_unit;
+    if (nominal.count(p.name)) {
+      // Held at nominal by all three: no estimate, no difference.
+      diff[p.name] = {{"rts_minus_ekf", nullptr}, {"batch_minus_rts", nullptr},
+                      {"batch_minus_ekf", nullptr}, {"unit", "batch sigma"}};
+      const ValueText v = FormatWithSigma(br.estimate.theta[i] / f, 0.0);
+      std::printf("%-26s %16s %16s %16s %10s %9s %9s  %s (not determined: nominal)\n",
+                  p.name.c_str(), v.value.c_str(), v.value.c_str(), v.value.c_str(), "-", "-", "-",
+                  p.unit.c_str());
+      continue;
+    }
     const double s = std::sqrt(std::max(br.estimate.cov(i, i), 1e-300));
     const double d_re = (fr.rts.theta[i] - fr.ekf.theta[i]) / s;
     const double d_br = (br.estimate.theta[i] - fr.rts.theta[i]) / s;

@@ -81,9 +81,11 @@ int RunFilter(const FilterArgs& a) {
                  (pass - 1 + f) / passes);
   };
   if (a.iterations < 1) throw InputError("--iterations: must be >= 1");
-  // The same hold decision as fit: parameters the run's motion does not
-  // determine are held at their nominal values (removed from the filter's
-  // state), so that the filter does not wander along flat directions.
+  // The same decision as fit: what the run does not determine (held as a
+  // structural null, or kept at nominal and considered in fit) is held at its
+  // nominal value (removed from the filter's state), so that the filter does
+  // not wander along flat directions. The filter carries no consider
+  // covariance: its sigma of the others are conditional on the held values.
   HoldDecision hd;
   const Prior prior = MakePrior(run.description, layout);
   if (!a.no_auto_hold || !a.hold.empty()) {
@@ -93,6 +95,7 @@ int RunFilter(const FilterArgs& a) {
     hp.free = SplitList(a.free);
     hd = ChooseHeldParameters(run.description, run.data, layout, hp, a.epoch_s, opt.derivatives);
     opt.held = hd.held;
+    opt.held.insert(opt.held.end(), hd.consider.begin(), hd.consider.end());
   }
   const FilterResult r = RunFilterSmoother(run.description, run.data, layout, opt);
   EndProgress();
@@ -102,10 +105,10 @@ int RunFilter(const FilterArgs& a) {
   // Against the run's own prior: held parameters come out determined there.
   const std::vector<WeakDirection> weak = UnsupportedDirections(layout, r.rts.cov, prior.sigma);
   std::vector<std::string> held = ParametersIn(weak);
-  held.insert(held.end(), hd.held.begin(), hd.held.end());
+  held.insert(held.end(), opt.held.begin(), opt.held.end());
   for (const auto& [name, anchors] : hd.relative_to) held.push_back(name);
   const std::set<std::string> held_set(held.begin(), held.end());
-  const std::set<std::string> pinned(hd.held.begin(), hd.held.end());
+  const std::set<std::string> pinned(opt.held.begin(), opt.held.end());
 
   nlohmann::json out;
   out["command"] = "filter";
@@ -127,6 +130,7 @@ int RunFilter(const FilterArgs& a) {
   out["unobservable"] = WeakDirectionsJson(unobservable);
   out["not_estimable"] = held;
   out["held"] = hd.held;
+  out["not_determined"] = hd.consider;
   out["unobservable_at_nominal"] = WeakDirectionsJson(hd.unsupported);
   out["settings"] = {{"epoch_s", a.epoch_s},
                      {"epochs", r.epochs},
@@ -150,16 +154,32 @@ int RunFilter(const FilterArgs& a) {
               run.data.size(), r.epochs, a.epoch_s, r.passes, seconds);
   std::printf("%-26s %16s %10s %16s %10s  %s\n", "parameter", "EKF", "sigma", "RTS", "sigma",
               "unit");
+  // A parameter estimated relative to held ones is named with them; one in a
+  // direction the run leaves to the prior is the prior's value.
+  auto Label = [&](const std::string& name) -> std::string {
+    const auto rel = hd.relative_to.find(name);
+    if (rel != hd.relative_to.end()) {
+      std::string anchors;
+      for (const std::string& h : rel->second) anchors += (anchors.empty() ? "" : ", ") + h;
+      return "  (relative to held " + anchors + ")";
+    }
+    return held_set.count(name) ? "  (not estimable: prior value)" : "";
+  };
   for (int i = 0; i < layout.size(); ++i) {
     const ParameterInfo& p = layout.info(i);
     const double f = p.si_per_unit;
+    if (pinned.count(p.name)) {
+      // Not a calibration result: its nominal, without a sigma.
+      const ValueText v = FormatWithSigma(r.rts.theta[i] / f, 0.0);
+      std::printf("%-26s %16s %10s %16s %10s  %s  (not determined: nominal)\n", p.name.c_str(),
+                  v.value.c_str(), "-", v.value.c_str(), "-", p.unit.c_str());
+      continue;
+    }
     const ValueText e = FormatWithSigma(r.ekf.theta[i] / f, std::sqrt(r.ekf.cov(i, i)) / f);
     const ValueText s = FormatWithSigma(r.rts.theta[i] / f, std::sqrt(r.rts.cov(i, i)) / f);
     std::printf("%-26s %16s %10s %16s %10s  %s%s\n", p.name.c_str(), e.value.c_str(),
                 e.sigma.c_str(), s.value.c_str(), s.sigma.c_str(), p.unit.c_str(),
-                pinned.count(p.name)     ? "  (held at nominal)"
-                : held_set.count(p.name) ? "  (not estimable: prior value)"
-                                         : "");
+                Label(p.name).c_str());
   }
   std::printf("innovations: mean NIS %.2f (6 expected for a consistent filter)\n", r.mean_nis);
   auto advice = [](const WeakDirection& d) {
@@ -168,10 +188,11 @@ int RunFilter(const FilterArgs& a) {
     }
     return "";
   };
-  if (!hd.held.empty()) {
+  if (!opt.held.empty()) {
     std::string names;
-    for (const std::string& h : hd.held) names += (names.empty() ? "" : ", ") + h;
-    std::printf("HELD at nominal (this run's motion does not determine them): %s\n", names.c_str());
+    for (const std::string& h : opt.held) names += (names.empty() ? "" : ", ") + h;
+    std::printf("NOT DETERMINED, held at nominal (this run's motion does not determine them): "
+                "%s\n", names.c_str());
     for (const WeakDirection& d : hd.unsupported) {
       std::printf("  undetermined: %s; its other parameters are estimated relative to the held "
                   "ones.%s\n",

@@ -163,7 +163,7 @@ TEST(FilterCommand, NamesTheInnerAxisRotationWithoutTheConstraint) {
     return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   };
   const std::string held = run("");
-  EXPECT_NE(held.find("HELD at nominal (this run's motion does not determine them): dlambda2"),
+  EXPECT_NE(held.find("NOT DETERMINED, held at nominal (this run's motion does not determine them): dlambda2"),
             std::string::npos)
       << held;
   EXPECT_NE(held.find("common rotation of the triad about the inner bench axis"), std::string::npos);
