@@ -15,17 +15,59 @@
 namespace triadcal {
 namespace {
 
-nlohmann::json Entry(const JointParam& p, double value, double var, bool held) {
+// What the joint fit did with an unknown.
+enum class Treatment { kEstimated, kConsidered, kHeld };
+
+std::vector<Treatment> TreatmentOf(const JointResult& r, int m) {
+  std::vector<Treatment> t(m, Treatment::kEstimated);
+  for (int j : r.consider) t[j] = Treatment::kConsidered;
+  for (int j : r.held) t[j] = Treatment::kHeld;
+  return t;
+}
+
+nlohmann::json Entry(const JointParam& p, double value, double var, Treatment t) {
+  const bool estimated = t == Treatment::kEstimated;
   nlohmann::json e;
   e["value"] = value / p.si_per_unit;
-  e["sigma"] = held ? nlohmann::json(nullptr) : nlohmann::json(std::sqrt(std::max(0.0, var)) / p.si_per_unit);
+  e["sigma"] = estimated ? nlohmann::json(std::sqrt(std::max(0.0, var)) / p.si_per_unit)
+                         : nlohmann::json(nullptr);
   e["unit"] = p.unit;
-  e["estimable"] = !held;
-  if (held) {
+  e["estimable"] = estimated;
+  if (t == Treatment::kHeld) {
     e["held"] = true;
     e["reason"] = "no information in the runs together: held at its nominal value";
+  } else if (t == Treatment::kConsidered) {
+    e["considered"] = true;
+    e["reason"] =
+        "not determined by the runs together: kept at its nominal value, its prior "
+        "uncertainty carried into the others' sigma";
+    e["prior_sigma"] = p.prior_sigma / p.si_per_unit;
   }
   return e;
+}
+
+nlohmann::json BetweenJson(const JointParam& p, const BetweenRuns& b, double sigma) {
+  return {{"runs", b.runs},
+          {"q", b.q},
+          {"dof", b.dof},
+          {"p_value", b.p_value},
+          {"disagree", b.disagree},
+          {"largest_z", b.largest_z},
+          {"tau", b.tau / p.si_per_unit},
+          {"sigma_factor", b.sigma_factor},
+          {"sigma_within", sigma / b.sigma_factor / p.si_per_unit},
+          {"unit", p.unit}};
+}
+
+// "Kz: Q 48.1 for 3 (p 1.2e-10), spread 7.1 mg/g between the runs: sigma 0.074 -> 4.1 mg/g"
+std::string BetweenText(const JointParam& p, const BetweenRuns& b, double sigma) {
+  char buf[300];
+  std::snprintf(buf, sizeof(buf),
+                "%s: Q %.1f for %d (p %.2g), spread %.3g %s between the runs: sigma %.3g -> "
+                "%.3g %s",
+                p.name.c_str(), b.q, b.dof, b.p_value, b.tau / p.si_per_unit, p.unit.c_str(),
+                sigma / b.sigma_factor / p.si_per_unit, sigma / p.si_per_unit, p.unit.c_str());
+  return buf;
 }
 
 std::string Names(const std::vector<std::string>& v) {
@@ -96,7 +138,7 @@ JointSpec JointSpecOf(const RunsFile& file) {
   return spec;
 }
 
-std::string JointVerdict(const JointResult& r) {
+std::string JointVerdict(const JointLayout& jl, const JointResult& r) {
   if (!r.converged) return "NOT CONVERGED (the joint solve stopped before its tolerance)";
   std::vector<std::string> bad;
   int tested = 0;
@@ -115,10 +157,21 @@ std::string JointVerdict(const JointResult& r) {
       bad.push_back(s + ")");
     }
   }
-  if (!bad.empty()) {
+  std::string spread;
+  for (const BetweenRuns& b : r.between) {
+    if (!b.disagree) continue;
+    const JointParam& p = jl.param(b.index);
+    char buf[120];
+    std::snprintf(buf, sizeof(buf), "%s%s %.3g %s (sigma x%.3g)", spread.empty() ? "" : ", ",
+                  p.name.c_str(), b.tau / p.si_per_unit, p.unit.c_str(), b.sigma_factor);
+    spread += buf;
+  }
+  if (!bad.empty() || !spread.empty()) {
     std::string s = "RUNS DISAGREE: ";
     for (std::size_t k = 0; k < bad.size(); ++k) s += (k ? "; " : "") + bad[k];
-    return s + " -- a remount, a turn-on bias or an effect that differs between the runs";
+    if (!spread.empty()) s += (bad.empty() ? "" : "; ") + ("spread between the runs " + spread);
+    return s + " -- a remount, a turn-on bias or an effect that differs between the runs; the "
+               "joint sigma carry the spread";
   }
   if (tested < 2) return "converged (fewer than two runs could be compared with the others)";
   return "converged; the runs agree within their sigma";
@@ -131,18 +184,26 @@ nlohmann::json JointJson(const JointLayout& jl, const std::vector<JointRun>& run
   out["kind"] = "joint";
   out["axes"] = "imu";
   out["runs_file"] = file.path.empty() ? nlohmann::json(nullptr) : nlohmann::json(file.path);
-  std::vector<bool> held(jl.size(), false);
-  for (int j : r.held) held[j] = true;
+  const std::vector<Treatment> treat = TreatmentOf(r, jl.size());
   nlohmann::json shared = nlohmann::json::object();
   for (int j = 0; j < jl.size(); ++j) {
     const JointParam& p = jl.param(j);
     if (p.run >= 0) continue;
-    shared[p.name] = Entry(p, r.phi[j], r.cov(j, j), held[j]);
+    shared[p.name] = Entry(p, r.phi[j], r.cov(j, j), treat[j]);
     nlohmann::json share = nlohmann::json::object();
     for (int q = 0; q < jl.runs(); ++q) share[jl.run_name(q)] = r.share(q, j);
-    if (!held[j]) shared[p.name]["information_share"] = share;
+    if (treat[j] == Treatment::kEstimated) shared[p.name]["information_share"] = share;
+  }
+  nlohmann::json between = nlohmann::json::array();
+  for (const BetweenRuns& b : r.between) {
+    const JointParam& p = jl.param(b.index);
+    const double sigma = std::sqrt(std::max(0.0, r.cov(b.index, b.index)));
+    shared[p.name]["between_runs"] = BetweenJson(p, b, sigma);
+    if (b.sigma_factor > 1.0) between.push_back(p.name);
   }
   out["parameters"] = shared;
+  // The shared parameters whose sigma carry a spread between the runs.
+  out["between_run_component"] = between;
   if (!file.temperature_degree.empty()) {
     out["temperature_model"] = {{"reference_C", file.temperature_ref_C},
                                 {"degree", file.temperature_degree}};
@@ -153,6 +214,9 @@ nlohmann::json JointJson(const JointLayout& jl, const std::vector<JointRun>& run
   nlohmann::json held_names = nlohmann::json::array();
   for (int j : r.held) held_names.push_back(jl.param(j).name);
   out["held"] = held_names;
+  nlohmann::json considered = nlohmann::json::array();
+  for (int j : r.consider) considered.push_back(jl.param(j).name);
+  out["considered"] = considered;
   nlohmann::json jr = nlohmann::json::array();
   for (int q = 0; q < jl.runs(); ++q) {
     const JointRunResult& rr = r.runs[q];
@@ -165,11 +229,14 @@ nlohmann::json JointJson(const JointLayout& jl, const std::vector<JointRun>& run
     e["noise_mV"] = {rr.noise_mV[0], rr.noise_mV[1], rr.noise_mV[2]};
     e["noise_source"] = rr.alone.noise_source;
     e["chi2_per_dof"] = rr.chi2_per_dof;
+    e["sigma_method"] = rr.sigma_method;
+    e["hac_bandwidth_epochs"] =
+        rr.sigma_method == "hac" ? nlohmann::json(rr.hac_bandwidth_epochs) : nlohmann::json(nullptr);
     nlohmann::json own = nlohmann::json::object();
     for (int j = 0; j < jl.size(); ++j) {
       const JointParam& p = jl.param(j);
       if (p.run != q) continue;
-      own[p.name.substr(0, p.name.rfind('@'))] = Entry(p, r.phi[j], r.cov(j, j), held[j]);
+      own[p.name.substr(0, p.name.rfind('@'))] = Entry(p, r.phi[j], r.cov(j, j), treat[j]);
     }
     e["parameters"] = own;
     const BatchResult& a = rr.alone;
@@ -177,14 +244,20 @@ nlohmann::json JointJson(const JointLayout& jl, const std::vector<JointRun>& run
     alone["converged"] = a.converged;
     alone["chi2_per_dof"] = a.chi2_per_dof;
     alone["held"] = a.held;
+    alone["considered"] = a.consider;
     nlohmann::json ap = nlohmann::json::object();
     for (int i = 0; i < jl.layout().size(); ++i) {
       const ParameterInfo& info = jl.layout().info(i);
-      const bool h = std::find(a.held.begin(), a.held.end(), info.name) != a.held.end();
+      const bool h = !IsEstimated(a, info.name);
+      auto sigma_of = [&](const Eigen::MatrixXd& cov) {
+        return h || cov.rows() <= i ? nlohmann::json(nullptr)
+                                    : nlohmann::json(std::sqrt(std::max(0.0, cov(i, i))) /
+                                                     info.si_per_unit);
+      };
       ap[info.name] = {{"value", a.estimate.theta[i] / info.si_per_unit},
-                       {"sigma", h ? nlohmann::json(nullptr)
-                                   : nlohmann::json(std::sqrt(std::max(0.0, a.estimate.cov(i, i))) /
-                                                    info.si_per_unit)},
+                       {"sigma", sigma_of(a.estimate.cov)},
+                       {"sigma_given_consider", a.consider.empty() ? sigma_of(a.estimate.cov)
+                                                                   : sigma_of(a.cov_given_consider)},
                        {"unit", info.unit}};
     }
     alone["parameters"] = ap;
@@ -208,7 +281,7 @@ nlohmann::json JointJson(const JointLayout& jl, const std::vector<JointRun>& run
   out["degrees_of_freedom"] = r.degrees_of_freedom;
   out["converged"] = r.converged;
   out["iterations"] = r.iterations;
-  out["verdict"] = JointVerdict(r);
+  out["verdict"] = JointVerdict(jl, r);
   out["timing_s"] = {{"runs_alone", r.seconds_alone}, {"joint", r.seconds_joint}};
   return out;
 }
@@ -233,33 +306,56 @@ int RunJointFit(const FitSettings& s, const std::vector<std::string>& inputs,
   WriteJson(JointJson(jl, runs, r, file), out_json);
 
   std::printf("fit: %zu runs of one IMU as one problem; %s\n", runs.size(),
-              JointVerdict(r).c_str());
+              JointVerdict(jl, r).c_str());
   std::printf("joint: chi2/dof %.3f over %d degrees of freedom, %d iterations, %.1f s (runs "
               "alone %.1f s)\n",
               r.chi2_per_dof, r.degrees_of_freedom, r.iterations, r.seconds_joint,
               r.seconds_alone);
-  std::vector<bool> held(jl.size(), false);
-  for (int j : r.held) held[j] = true;
+  const std::vector<Treatment> treat = TreatmentOf(r, jl.size());
+  std::vector<const BetweenRuns*> between(jl.size(), nullptr);
+  for (const BetweenRuns& b : r.between) between[b.index] = &b;
   std::printf("%-26s %22s %-10s", "parameter (IMU axes)", "value ± sigma", "unit");
   for (int q = 0; q < jl.runs(); ++q) std::printf(" %8.8s", jl.run_name(q).c_str());
   std::printf("   (share of the information)\n");
   for (int j = 0; j < jl.size(); ++j) {
     const JointParam& p = jl.param(j);
     const double value = r.phi[j] / p.si_per_unit;
+    const bool spread = between[j] && between[j]->sigma_factor > 1.0;
     const std::string text =
-        held[j] ? FormatDouble(value) + " (held)"
-                : ValuePlusMinus(value, std::sqrt(std::max(0.0, r.cov(j, j))) / p.si_per_unit);
+        treat[j] == Treatment::kHeld         ? FormatDouble(value) + " (held)"
+        : treat[j] == Treatment::kConsidered ? FormatDouble(value) + " (not determined)"
+                                             : ValuePlusMinus(value, std::sqrt(std::max(0.0, r.cov(j, j))) /
+                                                                         p.si_per_unit) +
+                                                   (spread ? "*" : "");
     std::printf("%-26s %22s %-10s", p.name.c_str(), text.c_str(), p.unit.c_str());
-    if (!held[j]) {
+    if (treat[j] == Treatment::kEstimated) {
       for (int q = 0; q < jl.runs(); ++q) std::printf(" %8.2f", r.share(q, j));
     }
     std::printf("\n");
   }
+  bool any_spread = false;
+  for (const BetweenRuns& b : r.between) {
+    if (b.sigma_factor <= 1.0) continue;
+    if (!any_spread) std::printf("* sigma with the spread between the runs (random effects):\n");
+    any_spread = true;
+    const double sigma = std::sqrt(std::max(0.0, r.cov(b.index, b.index)));
+    std::printf("  %s%s\n", BetweenText(jl.param(b.index), b, sigma).c_str(),
+                b.disagree ? " -- the runs DISAGREE" : "");
+  }
+  if (!r.consider.empty()) {
+    std::vector<std::string> names;
+    for (int j : r.consider) names.push_back(jl.param(j).name);
+    std::printf("not determined by the runs together (nominal, prior uncertainty carried): %s\n",
+                Names(names).c_str());
+  }
   for (const JointRunResult& rr : r.runs) {
     const RunConsistency& c = rr.consistency;
-    std::printf("run %s: chi2/dof %.3f at the joint solution; alone %s, held %s; ",
-                rr.name.c_str(), rr.chi2_per_dof, rr.alone.converged ? "converged" : "NOT converged",
-                Names(rr.alone.held).c_str());
+    std::vector<std::string> undetermined = rr.alone.held;
+    undetermined.insert(undetermined.end(), rr.alone.consider.begin(), rr.alone.consider.end());
+    std::printf("run %s: chi2/dof %.3f at the joint solution, sigma %s; alone %s, not determined "
+                "%s; ",
+                rr.name.c_str(), rr.chi2_per_dof, rr.sigma_method.c_str(),
+                rr.alone.converged ? "converged" : "NOT converged", Names(undetermined).c_str());
     if (c.tested) {
       std::printf("against the others chi2 %.1f for %d, p %.3g: %s\n", c.chi2, c.dof, c.p_value,
                   c.consistent ? "agrees" : "DISAGREES");

@@ -43,7 +43,7 @@ nlohmann::json JointJson(const JointLayout& layout, const std::vector<JointRun>&
                          const JointResult& r, const RunsFile& file);
 
 // The verdict line: converged or not, and which runs disagree.
-std::string JointVerdict(const JointResult& r);
+std::string JointVerdict(const JointLayout& jl, const JointResult& r);
 
 // Runs `fit` on several runs; returns the exit status.
 int RunJointFit(const FitSettings& settings, const std::vector<std::string>& inputs,

@@ -56,32 +56,17 @@ double BartlettBandwidth(const Eigen::MatrixXd& series, const Eigen::VectorXd& w
   return std::min(S, 0.5 * static_cast<double>(N));
 }
 
-HacCovariance HacThetaCovariance(const std::vector<Eigen::VectorXd>& scores,
-                                 const Eigen::MatrixXd& information,
-                                 const Eigen::MatrixXd& theta_rows_information,
-                                 double bandwidth, bool prewhiten,
-                                 bool correct_kernel_bias) {
-  const Eigen::Index n = information.rows();
+HacDataPart HacDataCovariance(const std::vector<Eigen::VectorXd>& scores,
+                              const Eigen::MatrixXd& Iinv, const Eigen::VectorXd& weight,
+                              double bandwidth, bool prewhiten, bool correct_kernel_bias) {
+  const Eigen::Index n = Iinv.rows();
   const std::size_t E = scores.size();
-  HacCovariance out;
+  HacDataPart out;
   out.kernel_bias_factor = Eigen::VectorXd::Ones(n);
-  const Eigen::LDLT<Eigen::MatrixXd> ldlt(information);
-  const Eigen::MatrixXd Iinv = ldlt.solve(Eigen::MatrixXd::Identity(n, n));
-  if (E < 2) {
-    out.cov = Iinv;
-    return out;
-  }
+  out.cov = Eigen::MatrixXd::Zero(n, n);
+  if (E < 2) return out;
   Eigen::MatrixXd s(E, n);
   for (std::size_t e = 0; e < E; ++e) s.row(static_cast<Eigen::Index>(e)) = scores[e].transpose();
-
-  // The parameters the data determine (at least half of their information
-  // from the data) choose the bandwidth and count in the small-sample factor.
-  Eigen::VectorXd weight = Eigen::VectorXd::Zero(n);
-  for (Eigen::Index a = 0; a < n; ++a) {
-    const double total = information(a, a);
-    const double data = total - theta_rows_information(a, a);
-    if (total > 0.0 && data >= 0.5 * total) weight[a] = 1.0;
-  }
   // Prewhitening when asked (hac_covariance.h: why not by default): u_e =
   // s_e - rho s_{e-1}, the kernel estimate on u, recoloured by 1 / (1 - rho).
   Eigen::VectorXd rho = Eigen::VectorXd::Zero(n);
@@ -119,7 +104,7 @@ HacCovariance HacThetaCovariance(const std::vector<Eigen::VectorXd>& scores,
   }
   const double N = 6.0 * static_cast<double>(E - 1);
   const double k = weight.sum();
-  Eigen::MatrixXd data_cov = Iinv * B * Iinv * (N / std::max(1.0, N - k));
+  out.cov = Iinv * B * Iinv * (N / std::max(1.0, N - k));
   // The kernel's bias (hac_covariance.h), parameter by parameter: the
   // long-run variance of an AR(1) series with the lag-1 of the parameter's
   // influence series (I^-1 u_e, what each epoch adds to its error) over what
@@ -128,14 +113,44 @@ HacCovariance HacThetaCovariance(const std::vector<Eigen::VectorXd>& scores,
     const Eigen::MatrixXd influence = u * Iinv;
     const Eigen::Index max_lag = m0 - 1;
     for (Eigen::Index a = 0; a < n; ++a) {
-      if (!(data_cov(a, a) > 0.0)) continue;
+      if (!(out.cov(a, a) > 0.0)) continue;
       out.kernel_bias_factor[a] =
           std::sqrt(BartlettAr1Ratio(Lag1(influence.col(a)), out.bandwidth, max_lag));
     }
     const Eigen::VectorXd& d = out.kernel_bias_factor;
-    data_cov = d.asDiagonal() * data_cov * d.asDiagonal();
+    out.cov = d.asDiagonal() * out.cov * d.asDiagonal();
   }
-  out.cov = data_cov + Iinv * theta_rows_information * Iinv;
+  return out;
+}
+
+HacCovariance HacThetaCovariance(const std::vector<Eigen::VectorXd>& scores,
+                                 const Eigen::MatrixXd& information,
+                                 const Eigen::MatrixXd& theta_rows_information,
+                                 double bandwidth, bool prewhiten,
+                                 bool correct_kernel_bias) {
+  const Eigen::Index n = information.rows();
+  HacCovariance out;
+  out.kernel_bias_factor = Eigen::VectorXd::Ones(n);
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(information);
+  const Eigen::MatrixXd Iinv = ldlt.solve(Eigen::MatrixXd::Identity(n, n));
+  if (scores.size() < 2) {
+    out.cov = Iinv;
+    return out;
+  }
+  // The parameters the data determine (at least half of their information
+  // from the data) choose the bandwidth and count in the small-sample factor.
+  Eigen::VectorXd weight = Eigen::VectorXd::Zero(n);
+  for (Eigen::Index a = 0; a < n; ++a) {
+    const double total = information(a, a);
+    const double data = total - theta_rows_information(a, a);
+    if (total > 0.0 && data >= 0.5 * total) weight[a] = 1.0;
+  }
+  const HacDataPart part =
+      HacDataCovariance(scores, Iinv, weight, bandwidth, prewhiten, correct_kernel_bias);
+  out.bandwidth = part.bandwidth;
+  out.score_lag1 = part.score_lag1;
+  out.kernel_bias_factor = part.kernel_bias_factor;
+  out.cov = part.cov + Iinv * theta_rows_information * Iinv;
   out.cov = 0.5 * (out.cov + out.cov.transpose());
   return out;
 }

@@ -78,6 +78,27 @@ struct HacCovariance {
   Eigen::VectorXd kernel_bias_factor;
 };
 
+// One run's part of the data's covariance, I^-1 B I^-1 with B the run's
+// kernel estimate over its own epochs (lags never cross into another run), the
+// small-sample factor N / (N - k) (N = 6 (E - 1) innovation components, k =
+// the weights' sum) and, when asked, the kernel-bias factors. information_inverse:
+// I^-1 of the whole problem (one run, or several fitted together); weight: 1
+// for the parameters this run's data determine (they choose the bandwidth and
+// count in k), 0 for the others. The joint fit of several runs sums these
+// parts, one per run whose residuals are not white (joint_solver.h).
+struct HacDataPart {
+  Eigen::MatrixXd cov;
+  double bandwidth = 0.0;
+  double score_lag1 = 0.0;
+  Eigen::VectorXd kernel_bias_factor;
+};
+HacDataPart HacDataCovariance(const std::vector<Eigen::VectorXd>& scores,
+                              const Eigen::MatrixXd& information_inverse,
+                              const Eigen::VectorXd& weight, double bandwidth = -1.0,
+                              bool prewhiten = false, bool correct_kernel_bias = true);
+
+// The whole sandwich of one run: its data part above plus the priors' and
+// constraints' information as it is.
 // scores: E per-epoch score vectors (n each); information: the Fisher
 // information of theta with the priors (and constraints) included;
 // theta_rows_information: that of the priors and constraints alone (A^T A).

@@ -11,7 +11,9 @@
 #include "solvers/statistics/statistics.h"
 #include "solvers/estimation/batch_minimizer.h"
 #include "solvers/estimation/batch_objective.h"
+#include "solvers/estimation/hac_covariance.h"
 #include "solvers/estimation/parallel.h"
+#include "solvers/estimation/schur_covariance.h"
 #include "solvers/estimation/run_problem.h"
 
 namespace triadcal {
@@ -198,13 +200,13 @@ std::vector<int> JointIndicesOf(const JointLayout& jl, const std::string& name,
 // 0 estimated, 1 consider (not determined: nominal, prior uncertainty
 // carried), 2 held. *pt_out, when given, gets that evaluation.
 std::vector<int> HeldByRule(const JointLayout& jl, const std::vector<RunProblem>& problems,
-                            const JointOptions& opt, int threads,
+                            const JointOptions& opt, int threads, const Eigen::VectorXd& at,
                             BatchObjective::Point* pt_out) {
   const int m = jl.size();
   const BatchObjective objective = MakeJointObjective(jl, problems, threads);
   std::vector<Eigen::Vector3d> noise;
   for (const RunProblem& p : problems) noise.push_back(p.noise_mV);
-  BatchObjective::Point pt = objective.Evaluate(jl.Nominal(), noise, true);
+  BatchObjective::Point pt = objective.Evaluate(at, noise, true);
   const Eigen::VectorXd sigma = jl.PriorSigma();
   // Data and constraint information in prior units.
   const Eigen::MatrixXd info =
@@ -231,7 +233,10 @@ std::vector<int> HeldByRule(const JointLayout& jl, const std::vector<RunProblem>
       if (user_hold[j]) min_info[j] = std::numeric_limits<double>::infinity();
     }
     Eigen::VectorXd left;
-    const std::vector<int> kept = SupportedByInformation(info, min_info, priority, &left);
+    const Eigen::MatrixXd constraint_prior_units =
+        sigma.asDiagonal() * ConstraintInformationOverPhi(objective, m) * sigma.asDiagonal();
+    const std::vector<int> kept =
+        SupportedByInformation(info, min_info, priority, &left, &constraint_prior_units);
     kind.assign(m, 1);
     for (int j : kept) kind[j] = 0;
     for (int j = 0; j < m; ++j) {
@@ -275,6 +280,92 @@ std::vector<std::string> JointlyOnly(const JointLayout& jl, const std::vector<in
   return out;
 }
 
+
+// What run r alone says about joint unknown j: the run-layout parameter that
+// j alone carries (|map| > 0.5, no other unknown moving it),
+// when the run estimated it absolutely (not relative to a held parameter), as
+// a value of j with its sigma given what the run considered (the spread of
+// its own data: what it leaves at nominal is estimated jointly). Runs that do
+// not determine j alone give nothing.
+struct RunValue {
+  int run = 0;
+  double value = 0.0, sigma = 0.0;
+};
+std::vector<RunValue> AloneValuesOf(const JointLayout& jl, const std::vector<JointRunResult>& runs,
+                                    int j) {
+  std::vector<RunValue> out;
+  const JointParam& pj = jl.param(j);
+  if (pj.degree != 0 || pj.base < 0) return out;
+  const ParameterLayout& layout = jl.layout();
+  for (int r = 0; r < jl.runs(); ++r) {
+    if (pj.run >= 0 && pj.run != r) continue;
+    const BatchResult& a = runs[r].alone;
+    for (int i = 0; i < layout.size(); ++i) {
+      const double w = jl.map(r)(i, j);
+      if (std::abs(w) <= 0.5) continue;
+      const std::string& name = layout.info(i).name;
+      const double var = a.cov_given_consider.rows() == layout.size() ? a.cov_given_consider(i, i)
+                                                                       : a.estimate.cov(i, i);
+      if (!(var > 0.0) || !IsEstimated(a, name) || a.relative_to.count(name)) continue;
+      // theta_i moves with phi_j alone (not with a temperature coefficient
+      // or another unknown too): the run's value of theta_i is one of phi_j.
+      bool alone = true;
+      for (int k = 0; k < jl.size() && alone; ++k) {
+        alone = k == j || std::abs(jl.map(r)(i, k)) <= 1e-9 * std::abs(w);
+      }
+      if (alone) out.push_back({r, a.estimate.theta[i] / w, std::sqrt(var) / std::abs(w)});
+    }
+  }
+  return out;
+}
+
+// The between-run component of shared unknown j (random effects, DerSimonian
+// and Laird 1986): from the runs that determine it alone, Cochran's
+// Q = sum_r (x_r - xbar)^2 / s_r^2 over k runs (xbar their precision-weighted
+// mean) and tau^2 = max(0, (Q - (k - 1)) / (sum w - sum w^2 / sum w)),
+// w = 1 / s^2. The joint value is a weighted sum of what the runs say, its
+// weights the runs' shares of the information (share(r, j)); a spread tau^2
+// between the runs adds tau^2 sum_r share_r^2 to its variance, where Q says
+// the runs disagree (p < alpha).
+BetweenRuns BetweenRunComponent(const std::vector<RunValue>& values, const Eigen::MatrixXd& share,
+                                int j, double variance, double alpha) {
+  BetweenRuns b;
+  b.index = j;
+  b.runs = static_cast<int>(values.size());
+  if (b.runs < 2) return b;
+  double sw = 0.0, sw2 = 0.0, swx = 0.0;
+  for (const RunValue& v : values) {
+    const double w = 1.0 / (v.sigma * v.sigma);
+    sw += w;
+    sw2 += w * w;
+    swx += w * v.value;
+  }
+  const double mean = swx / sw;
+  for (const RunValue& v : values) {
+    const double z = (v.value - mean) / v.sigma;
+    b.q += z * z;
+    b.largest_z = std::max(b.largest_z, std::abs(z));
+  }
+  b.dof = b.runs - 1;
+  b.p_value = ChiSquareSurvival(b.q, b.dof);
+  b.disagree = b.p_value < alpha;
+  const double tau2 = std::max(0.0, (b.q - b.dof) / (sw - sw2 / sw));
+  b.tau = std::sqrt(tau2);
+  double s2 = 0.0;
+  for (int r = 0; r < share.rows(); ++r) s2 += share(r, j) * share(r, j);
+  if (b.disagree && variance > 0.0) b.sigma_factor = std::sqrt(1.0 + tau2 * s2 / variance);
+  return b;
+}
+
+// Each run's epoch scores (schur_covariance.h) over the free unknowns: the
+// run's own scores over its layout, mapped (theta_r = offset_r + T_r phi).
+std::vector<Eigen::VectorXd> ScoresOverFree(const RunReduction& red, const Eigen::MatrixXd& T) {
+  std::vector<Eigen::VectorXd> scores =
+      EpochScores(red.process_blocks, red.measurement_blocks);
+  for (Eigen::VectorXd& v : scores) v = T.transpose() * v;
+  return scores;
+}
+
 }  // namespace
 
 JointInformation JointInformationAtNominal(const std::vector<JointRun>& runs,
@@ -289,7 +380,7 @@ JointInformation JointInformationAtNominal(const std::vector<JointRun>& runs,
   }
   JointInformation out;
   BatchObjective::Point pt;
-  const std::vector<int> kind = HeldByRule(jl, problems, opt, threads, &pt);
+  const std::vector<int> kind = HeldByRule(jl, problems, opt, threads, jl.Nominal(), &pt);
   out.information = pt.information;
   std::vector<int> free;
   for (int j = 0; j < m; ++j) (kind[j] != 0 ? out.held : free).push_back(j);
@@ -382,44 +473,30 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
   res.seconds_alone = Seconds(t_alone);
   const auto t_joint = std::chrono::steady_clock::now();
 
-  // 2. What the runs together determine, at the nominal values.
-  Eigen::VectorXd phi = jl.Nominal();
-  say("joint: choosing the parameters the runs determine together");
-  const std::vector<int> kind = HeldByRule(jl, problems, opt, threads, nullptr);
-  std::vector<int> free;
-  for (int j = 0; j < m; ++j) (kind[j] != 0 ? res.held : free).push_back(j);
-
-  // 3. The start: each run's own estimate, the shared unknowns as the
+  // 2. The start: each run's own estimate, the shared unknowns as the
   // precision-weighted mean of what the runs say about them.
-  {
-    Eigen::VectorXd num = Eigen::VectorXd::Zero(m), den = Eigen::VectorXd::Zero(m);
-    for (int r = 0; r < R; ++r) {
-      const BatchResult& a = res.runs[r].alone;
-      for (int i = 0; i < layout.size(); ++i) {
-        const double var = a.estimate.cov(i, i);
-        if (!(var > 0.0) || !IsEstimated(a, layout.info(i).name)) continue;
-        // The unknown that carries parameter i in this run, if one does alone.
-        int source = -1;
-        double weight = 0.0;
-        for (int j = 0; j < m; ++j) {
-          const double w = jl.map(r)(i, j);
-          if (std::abs(w) > 0.5 && jl.param(j).degree == 0 && jl.param(j).base >= 0) {
-            if (source >= 0) {
-              source = -2;
-              break;
-            }
-            source = j;
-            weight = w;
-          }
-        }
-        if (source < 0 || kind[source] != 0) continue;
-        num[source] += a.estimate.theta[i] / weight / var;
-        den[source] += 1.0 / var;
-      }
+  Eigen::VectorXd phi = jl.Nominal();
+  for (int j = 0; j < m; ++j) {
+    double num = 0.0, den = 0.0;
+    for (const RunValue& v : AloneValuesOf(jl, res.runs, j)) {
+      num += v.value / (v.sigma * v.sigma);
+      den += 1.0 / (v.sigma * v.sigma);
     }
-    for (int j = 0; j < m; ++j) {
-      if (den[j] > 0.0) phi[j] = num[j] / den[j];
-    }
+    if (den > 0.0) phi[j] = num / den;
+  }
+
+  // 3. What the runs together determine, decided there (as a single fit
+  // decides with its scale factors and offsets fitted: at the nominal zero
+  // offsets a reading that never changes looks like a specific force that
+  // cross-couples); what is not estimated starts at its nominal value.
+  say("joint: choosing the parameters the runs determine together");
+  const std::vector<int> kind = HeldByRule(jl, problems, opt, threads, phi, nullptr);
+  std::vector<int> free;
+  for (int j = 0; j < m; ++j) {
+    if (kind[j] == 0) free.push_back(j);
+    if (kind[j] == 1) res.consider.push_back(j);
+    if (kind[j] == 2) res.held.push_back(j);
+    if (kind[j] != 0) phi[j] = jl.Nominal()[j];
   }
 
   // 4. The minimum: the one minimiser of the batch problem over the runs
@@ -448,7 +525,6 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
   for (int a = 0; a < nf; ++a)
     for (int b = 0; b < nf; ++b) H(a, b) = pt.information(free[a], free[b]);
   const Eigen::MatrixXd cov_free = H.ldlt().solve(Eigen::MatrixXd::Identity(nf, nf));
-  res.cov = ExpandFree(cov_free, free, m);
 
   // Degrees of freedom and each run's share.
   std::vector<Eigen::MatrixXd> data_free;
@@ -457,6 +533,62 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
     data_free.push_back(T.transpose() * pt.reductions[r].information * T);
   }
   res.share = InformationShare(data_free, free, m);
+
+  // 5. The covariance, each run's data as its fit alone judged them: the
+  // model's information where its residuals are white, its own HAC estimate
+  // (over its own epochs) where they are not; the sum floored at the model's
+  // covariance, as in a single fit. Then the prior uncertainty of the
+  // considered unknowns, and the spread between the runs.
+  say("joint: covariance");
+  {
+    const Eigen::VectorXd prior_var = jl.PriorSigma().cwiseAbs2();
+    Eigen::MatrixXd fixed = H;  // what is not estimated from scores: priors, constraints, white runs
+    Eigen::MatrixXd hac_part = Eigen::MatrixXd::Zero(nf, nf);
+    bool any_hac = false;
+    for (int r = 0; r < R; ++r) {
+      JointRunResult& rr = res.runs[r];
+      rr.sigma_method = rr.alone.sigma_method;
+      if (rr.sigma_method != "hac") continue;
+      any_hac = true;
+      fixed -= data_free[r];
+      Eigen::VectorXd weight = Eigen::VectorXd::Zero(nf);
+      for (int a = 0; a < nf; ++a) {
+        if (data_free[r](a, a) * prior_var[free[a]] >= 1.0) weight[a] = 1.0;
+      }
+      const HacDataPart part =
+          HacDataCovariance(ScoresOverFree(pt.reductions[r], MapFree(jl, r, free)), cov_free,
+                            weight, opt.batch.hac_bandwidth_epochs, false,
+                            opt.batch.hac_kernel_bias_correction);
+      rr.hac_bandwidth_epochs = part.bandwidth;
+      hac_part += part.cov;
+    }
+    Eigen::MatrixXd cov = cov_free;
+    if (any_hac) {
+      cov = hac_part + cov_free * fixed * cov_free;
+      cov = FloorVariances(0.5 * (cov + cov.transpose()), cov_free);
+    }
+    res.cov_white = ExpandFree(cov_free, free, m);
+    res.cov = ExpandFree(cov, free, m);
+  }
+  if (!res.consider.empty()) {
+    const Eigen::MatrixXd info = pt.data_information + ConstraintInformationOverPhi(objective, m);
+    Eigen::MatrixXd sensitivity, add;
+    ConsiderTerm(info, jl.PriorSigma(), free, res.consider, &sensitivity, &add);
+    res.cov += add;
+    res.cov_white += add;
+  }
+  for (int j : free) {
+    const JointParam& p = jl.param(j);
+    if (p.run >= 0 || p.degree != 0 || p.base < 0) continue;
+    BetweenRuns b = BetweenRunComponent(AloneValuesOf(jl, res.runs, j), res.share, j,
+                                        res.cov(j, j), opt.between_alpha);
+    if (b.runs < 2) continue;
+    if (b.sigma_factor > 1.0) {
+      res.cov.row(j) *= b.sigma_factor;
+      res.cov.col(j) *= b.sigma_factor;
+    }
+    res.between.push_back(b);
+  }
   for (int r = 0; r < R; ++r) {
     JointRunResult& rr = res.runs[r];
     rr.theta = jl.ThetaOfRun(r, phi);
@@ -478,7 +610,7 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
     res.jointly_only = JointlyOnly(jl, free, held_alone);
   }
 
-  // 5. Each run against the joint solution.
+  // 6. Each run against the joint solution.
   for (int r = 0; r < R; ++r) {
     res.runs[r].consistency = TestConsistency(jl, r, res.runs[r].alone, pt.reductions[r],
                                               MapFree(jl, r, free), cov_free,
