@@ -7,7 +7,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds="${1:-60}"
-targets=(csv_reader run_yaml scenario constraint calibration_json)
+targets=(csv_reader run_yaml scenario constraint calibration_json mat_reader apply)
 flags="-g -O1 -fno-omit-frame-pointer -fsanitize=fuzzer-no-link,address,undefined"
 flags+=" -fno-sanitize-recover=undefined -DEIGEN_MALLOC_ALREADY_ALIGNED=1"
 launcher=()
@@ -16,7 +16,7 @@ mkdir -p build-fuzz
 cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_CXX_FLAGS="$flags" "${launcher[@]}" \
   -DTRIADCAL_FUZZ=ON -DTRIADCAL_BUILD_TESTS=OFF > build-fuzz/build.log
-cmake --build build-fuzz -j2 --target "${targets[@]/#/fuzz_}" >> build-fuzz/build.log
+cmake --build build-fuzz -j"${FUZZ_JOBS:-2}" --target "${targets[@]/#/fuzz_}" >> build-fuzz/build.log
 status=0
 for t in "${targets[@]}"; do
   work="build-fuzz/corpus/$t"

@@ -421,7 +421,7 @@ TEST_F(CliInputErrors, DesignLeavesNothingWhenItsJsonFails) {
   const std::string sc = WriteText("sc.yaml", "profile: {duration_s: 20, rate_hz: 20}\n");
   fs::create_directories(Path("out.json"));
   ExpectError("design " + sc + " -o " + Path("out.json") + " --durations 10,20",
-              Path("out.json") + ": cannot write: Is a directory", {"out.svg"});
+              Path("out.json") + ": cannot write: is a directory", {"out.svg"});
 }
 
 TEST_F(CliInputErrors, ControlCharactersAreEscaped) {

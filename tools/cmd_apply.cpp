@@ -1,13 +1,18 @@
 // `triadcal apply CALIBRATION.json RUN.yaml -o corrected.csv`: raw readings ->
 // calibrated specific force [g] in the triad frame, by the exact inverse of the
 // readings model (core/model/apply_calibration.h).
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <memory>
+#include <string>
+#include <vector>
 
+#include "core/io/calibration_io.h"
 #include "core/io/column_mapping.h"
 #include "core/io/file_util.h"
+#include "core/model/errors.h"
 #include "core/model/units.h"
-#include "core/io/calibration_io.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
 #include "tools/provenance.h"
@@ -19,13 +24,39 @@ struct ApplyArgs {
   std::string calibration_json, run_yaml, out_csv;
 };
 
+// The corrected specific force of a run on a bench (or held still) has |W|
+// near 1 g: the dynamic terms of a bench add < 0.03 g. A median off by more
+// than this says the calibration does not fit the run.
+constexpr double kMaxMedianNormError_g = 0.1;
+
+// The warning line when the median |W| is far from 1 g, "" otherwise.
+std::string NormWarning(const ApplyArgs& a, const std::vector<Eigen::Vector3d>& W) {
+  if (W.empty()) return "";
+  std::vector<double> norm(W.size());
+  for (std::size_t k = 0; k < W.size(); ++k) norm[k] = W[k].norm();
+  std::nth_element(norm.begin(), norm.begin() + norm.size() / 2, norm.end());
+  const double median = norm[norm.size() / 2];
+  if (std::abs(median - 1.0) <= kMaxMedianNormError_g) return "";
+  char text[400];
+  std::snprintf(text, sizeof(text),
+                "%s: corrected with %s, |W| has the median %.4g g, where a bench at rest gives "
+                "1 g (bound +-%.2g g): a calibration of another sensor, in other units or for "
+                "another mounting?",
+                a.run_yaml.c_str(), a.calibration_json.c_str(), median, kMaxMedianNormError_g);
+  return text;
+}
+
 int RunApply(const ApplyArgs& a) {
-  CheckOutputPath(a.out_csv);
+  const bool to_stdout = IsStdout(a.out_csv);
+  if (!to_stdout) CheckOutputPath(a.out_csv);
   const Calibration cal = LoadCalibration(a.calibration_json);
   RecordInput("calibration", a.calibration_json);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
-  CheckOverwrite(a.out_csv);
+  CheckCalibrationForRun(cal, run.description);
+  if (!to_stdout) CheckOverwrite(a.out_csv);
   const std::vector<Eigen::Vector3d> W = ApplyCalibration(cal, run.description, run.data);
+  const std::string warning = NormWarning(a, W);
+  if (!warning.empty()) std::fprintf(stderr, "triadcal: warning: %s\n", OneLine(warning).c_str());
   const bool angles = !(SourceOf(run.description, "lambda1").constant &&
                         SourceOf(run.description, "lambda2").constant);
   const bool labels = run.data.has_label();
@@ -51,7 +82,8 @@ int RunApply(const ApplyArgs& a) {
     if (labels) out += "," + run.data.label[k];
     out += "\n";
   }
-  WriteFileAtomically(a.out_csv, out);
+  WriteOutput(a.out_csv, out);
+  if (to_stdout) return 0;  // stdout holds the CSV
   std::printf("apply: %zu samples, %d parameters from %s (%s)\nwrote %s\n", run.data.size(),
               cal.layout.size(), a.calibration_json.c_str(), cal.section.c_str(),
               a.out_csv.c_str());
@@ -69,7 +101,9 @@ Command AddApplyCommand(CLI::App& app) {
                     "OUT of fit, static, filter (its rts section) or compare (batch)")
       ->required();
   c.app->add_option("run", a->run_yaml, "run description (run.yaml) of the readings")->required();
-  c.app->add_option("-o,--output", a->out_csv, "output CSV: t, Wx, Wy, Wz [g] (+ angles)")
+  c.app
+      ->add_option("-o,--output", a->out_csv,
+                   "output CSV: t, Wx, Wy, Wz [g] (+ angles); - for stdout")
       ->required();
   c.run = [a] { return RunApply(*a); };
   return c;

@@ -244,7 +244,8 @@ Command AddBatchCommand(CLI::App& app) {
       ->add_option("--threads", a->threads,
                    "runs fitted at once per process (0: the cores, shared among the MPI ranks "
                    "on a machine)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(kThreadsRange);
   c.app->add_option("--shard", a->shard,
                     "do shard I of N (1 <= I <= N) of the runs, e.g. $SLURM_ARRAY_TASK_ID/N; "
                     "join the N summaries with `triadcal merge`");

@@ -192,7 +192,9 @@ Command AddDesignCommand(CLI::App& app) {
   c.app->add_option("--epoch-s", a->epoch_s, "interval between trajectory epochs [s]")
       ->capture_default_str()
       ->check(kEpochRange);
-  c.app->add_option("--threads", a->threads, "threads (0: all cores)")->capture_default_str();
+  c.app->add_option("--threads", a->threads, "threads (0: all cores)")
+      ->capture_default_str()
+      ->check(kThreadsRange);
   c.run = [a] { return RunDesign(*a); };
   return c;
 }

@@ -161,9 +161,11 @@ Command AddDiagnoseCommand(CLI::App& app) {
   c.app->add_option("--truth", a->truth_json, "truth.json of a simulated run: errors before/after");
   c.app->add_option("--candidates", a->candidates,
                     "effects to test (default: the whole catalogue), e.g. a,b");
-  c.app->add_option("--alpha", a->alpha, "false-selection rate per round")->capture_default_str();
-  c.app->add_option("--max-effects", a->max_effects, "at most this many effects")
+  c.app->add_option("--alpha", a->alpha, "false-selection rate per round, in (0, 1)")
       ->capture_default_str();
+  c.app->add_option("--max-effects", a->max_effects, "at most this many effects")
+      ->capture_default_str()
+      ->check(BoundedInt(0, 20));
   c.app->add_option("--epoch-s", a->epoch_s, "interval between epochs [s]")->capture_default_str()
       ->check(kEpochRange);
   c.run = [a] { return RunDiagnose(*a); };

@@ -61,7 +61,17 @@ int RunExport(const ExportArgs& a) {
   if (a.format != "c" && a.format != "yaml" && a.format != "json-matrix") {
     throw InputError("--format: expected c, yaml or json-matrix, got '" + a.format + "'");
   }
-  CheckOutputPath(a.out);
+  const bool to_stdout = IsStdout(a.out);
+  if (to_stdout && a.format == "c") {
+    throw InputError("-o -: --format c writes two files (NAME.c and NAME.h), not stdout");
+  }
+  if (!to_stdout) CheckOutputPath(a.out);
+  if (a.format == "c") {
+    fs::path c_path(a.out), h_path(a.out);
+    c_path.replace_extension(".c");
+    h_path.replace_extension(".h");
+    CheckOutputPath(c_path.string() == a.out ? h_path.string() : c_path.string());
+  }
   const Calibration cal = LoadCalibration(a.calibration_json);
   if (!cal.temperature_terms.empty()) {
     // The exported forms hold one set of parameters.
@@ -75,13 +85,13 @@ int RunExport(const ExportArgs& a) {
   if (a.format == "json-matrix") {
     WriteJson(nlohmann::json::parse(MatrixForm(cal).dump()), a.out);
   } else if (a.format == "yaml") {
-    CheckOverwrite(a.out);
+    if (!to_stdout) CheckOverwrite(a.out);
     YAML::Emitter y;
     EmitYaml(MatrixForm(cal), &y);
-    WriteFileAtomically(a.out,
-                        "# triadcal calibration, plain matrix form (triadcal export)\n"
-                        "# provenance: " +
-                            provenance + "\n" + y.c_str() + "\n");
+    WriteOutput(a.out,
+                "# triadcal calibration, plain matrix form (triadcal export)\n"
+                "# provenance: " +
+                    provenance + "\n" + y.c_str() + "\n");
   } else {
     const fs::path out(a.out);
     if (out.extension() != ".c" && out.extension() != ".h") {
@@ -98,14 +108,18 @@ int RunExport(const ExportArgs& a) {
     h_path.replace_extension(".h");
     CheckOverwrite(c_path.string());
     CheckOverwrite(h_path.string());
+    // The source includes the header by the name it is written under (the
+    // stem of -o), whatever --name calls the function.
     const CExport code = ExportC(cal, name,
                                  "calibration: " + a.calibration_json + " (" + cal.section + ")\n" +
-                                     "provenance: " + provenance);
+                                     "provenance: " + provenance,
+                                 out.stem().string());
     WriteFileAtomically(h_path.string(), code.header);
     WriteFileAtomically(c_path.string(), code.source);
     std::printf("export: %s_apply() in %s and %s\n", name.c_str(), h_path.c_str(), c_path.c_str());
     return 0;
   }
+  if (to_stdout) return 0;  // stdout holds the export
   std::printf("export: %s (%s) -> %s\n", a.calibration_json.c_str(), cal.section.c_str(),
               a.out.c_str());
   return 0;
@@ -123,7 +137,10 @@ Command AddExportCommand(CLI::App& app) {
                    "OUT of fit, static, filter (rts) or compare (batch), or a truth.json")
       ->required();
   c.app->add_option("--format", a->format, "c (NAME.c + NAME.h), yaml or json-matrix")->required();
-  c.app->add_option("-o,--output", a->out, "output file (for c: NAME.c or NAME.h)")->required();
+  c.app
+      ->add_option("-o,--output", a->out,
+                   "output file (for c: NAME.c or NAME.h; - for stdout with yaml, json-matrix)")
+      ->required();
   c.app->add_option("--name", a->name, "C function prefix (default: the file name)");
   c.run = [a] { return RunExport(*a); };
   return c;

@@ -3,26 +3,32 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <memory>
 #include <cstdio>
+#include <memory>
 #include <set>
 #include <sstream>
 
-#include "core/model/errors.h"
 #include "core/io/file_util.h"
+#include "core/model/errors.h"
 #include "core/model/units.h"
-#include "solvers/estimation/observability.h"
 #include "solvers/estimation/batch_solver.h"
-#include "tools/report/estimate_json.h"
 #include "solvers/estimation/kalman_smoother.h"
+#include "solvers/estimation/observability.h"
 #include "solvers/estimation/separability.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
 #include "tools/provenance.h"
+#include "tools/report/estimate_json.h"
+#include "tools/report/result_plausibility.h"
 #include "tools/report/value_format.h"
 
 namespace triadcal {
 namespace {
+
+// At most this many smoother passes (--iterations): each is a whole EKF + RTS
+// pass over the run, and the relinearised estimate settles in two or three
+// (1e9 ran on without end).
+constexpr int kMaxIterations = 20;
 
 struct FilterArgs {
   std::string run_yaml, out_json, report_html, series_csv, effects;
@@ -63,10 +69,15 @@ std::string SeriesCsv(const ParameterLayout& layout, const FilterResult& r) {
 }
 
 int RunFilter(const FilterArgs& a) {
-  if (!a.report_html.empty()) CheckOutputPath(a.report_html);
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html, "--report");
   const auto t0 = std::chrono::steady_clock::now();
   CheckOutputPath(a.out_json);
-  if (!a.series_csv.empty()) CheckOutputPath(a.series_csv);
+  if (!a.series_csv.empty()) CheckOutputPath(a.series_csv, "--series");
+  if (a.iterations < 1 || a.iterations > kMaxIterations) {
+    throw InputError("--iterations: Value " + std::to_string(a.iterations) + " not in range 1 to " +
+                     std::to_string(kMaxIterations));
+  }
+  CheckHoldFree(a.hold, a.free, ParameterLayout(ParseEffectList(a.effects)));
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
   CheckOverwrite(a.out_json);  // before the long work
   const ParameterLayout layout(ParseEffectList(a.effects, run.data));
@@ -80,7 +91,6 @@ int RunFilter(const FilterArgs& a) {
     ShowProgress("filter: pass " + std::to_string(pass) + "/" + std::to_string(passes),
                  (pass - 1 + f) / passes);
   };
-  if (a.iterations < 1) throw InputError("--iterations: must be >= 1");
   // The same decision as fit: what the run does not determine (held as a
   // structural null, or kept at nominal and considered in fit) is held at its
   // nominal value (removed from the filter's state), so that the filter does
@@ -146,6 +156,9 @@ int RunFilter(const FilterArgs& a) {
       {"mean_nis_expected", 6}};
   out["samples"] = run.data.size();
   out["time_s"] = seconds;
+  for (const std::string& w : ImplausibleResultWarnings(out["rts"]["parameters"], a.out_json)) {
+    std::fprintf(stderr, "triadcal: warning: %s\n", OneLine(w).c_str());
+  }
   WriteJson(out, a.out_json);
   WriteReportIfAsked(a.report_html, out, a.out_json);
   if (!a.series_csv.empty()) WriteFileAtomically(a.series_csv, SeriesCsv(layout, r));
@@ -227,12 +240,17 @@ Command AddFilterCommand(CLI::App& app) {
   c.app->add_option("--epoch-s", args->epoch_s, "interval between measurement epochs [s]")
       ->capture_default_str()
       ->check(kEpochRange);
-  c.app->add_option("--rate-window-s", args->rate_window_s,
-                    "half window of the local cubic fit giving lambda' from the angles [s]")
-      ->capture_default_str();
-  c.app->add_option("--iterations", args->iterations,
-                    "smoother passes; >1 relinearises about the previous smoothed estimate")
-      ->capture_default_str();
+  c.app
+      ->add_option("--rate-window-s", args->rate_window_s,
+                   "half window of the local cubic fit giving lambda' from the angles [s]")
+      ->capture_default_str()
+      ->check(kRateWindowRange);
+  c.app
+      ->add_option("--iterations", args->iterations,
+                   "smoother passes; >1 relinearises about the previous smoothed estimate "
+                   "(each a whole EKF + RTS pass; the estimate settles in 2 or 3)")
+      ->capture_default_str()
+      ->check(BoundedInt(1, kMaxIterations));
   c.app->add_option("--effects", args->effects, "catalogue effects to estimate too, e.g. a,b");
   c.app->add_flag("--correlations", args->correlations, "add the correlation matrix to OUT");
   c.app->add_option("--hold", args->hold, "parameters to hold at their nominal values, e.g. dpsi,Kxy");

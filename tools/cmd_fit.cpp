@@ -5,22 +5,23 @@
 #include <set>
 #include <sstream>
 
-#include "core/model/errors.h"
 #include "core/io/file_util.h"
+#include "core/io/runs_file_io.h"
+#include "core/model/errors.h"
 #include "solvers/diagnosis/residual_analysis.h"
 #include "solvers/estimation/batch_solver.h"
-#include "tools/report/estimate_json.h"
+#include "solvers/estimation/run_problem.h"
 #include "solvers/estimation/separability.h"
 #include "tools/command_util.h"
-#include "solvers/estimation/run_problem.h"
 #include "tools/commands.h"
-#include "tools/provenance.h"
 #include "tools/fit_job.h"
 #include "tools/joint_fit_job.h"
-#include "core/io/runs_file_io.h"
-#include "tools/report/html_report.h"
+#include "tools/provenance.h"
+#include "tools/report/estimate_json.h"
 #include "tools/report/fit_report.h"
+#include "tools/report/html_report.h"
 #include "tools/report/residual_plot_json.h"
+#include "tools/report/result_plausibility.h"
 
 namespace triadcal {
 namespace {
@@ -40,10 +41,10 @@ int RunFit(FitArgs a) {
     return RunJointFit(a.fit, a.runs, a.out_json, a.report_html);
   }
   a.run_yaml = a.runs[0];
-  if (!a.report_html.empty()) CheckOutputPath(a.report_html);
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html, "--report");
   CheckFitSettings(a.fit);
   CheckOutputPath(a.out_json);
-  if (!a.residuals_csv.empty()) CheckOutputPath(a.residuals_csv);
+  if (!a.residuals_csv.empty()) CheckOutputPath(a.residuals_csv, "--residuals");
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
   CheckOverwrite(a.out_json);  // before the long work
   StageProgress progress("fit: ");
@@ -56,6 +57,9 @@ int RunFit(FitArgs a) {
   const FitReport& rep = f.report;
   const std::string warning = NoiseWarning(a.run_yaml, run, r);
   if (!warning.empty()) std::fprintf(stderr, "triadcal: warning: %s\n", warning.c_str());
+  for (const std::string& w : ImplausibleResultWarnings(f.json["parameters"], a.out_json)) {
+    std::fprintf(stderr, "triadcal: warning: %s\n", OneLine(w).c_str());
+  }
   WriteJson(f.json, a.out_json);
   WriteReportIfAsked(a.report_html, f.json, a.out_json);
   if (!a.residuals_csv.empty()) WriteFileAtomically(a.residuals_csv, ResidualsCsv(r));
@@ -95,7 +99,9 @@ Command AddFitCommand(CLI::App& app) {
   c.app->add_option("--report", a->report_html,
                     "also write the HTML report of OUT (one self-contained file)");
   AddFitOptions(c.app, &a->fit);
-  c.app->add_option("--threads", a->fit.threads, "threads (0: all cores)")->capture_default_str();
+  c.app->add_option("--threads", a->fit.threads, "threads (0: all cores)")
+      ->capture_default_str()
+      ->check(kThreadsRange);
   c.app->add_option("--residuals", a->residuals_csv, "write the residuals per epoch (CSV)");
   c.run = [a] { return RunFit(*a); };
   return c;

@@ -31,10 +31,14 @@
 namespace triadcal {
 namespace {
 
+// At most this many runs in one job (a million fits; shard a bigger study).
+constexpr int kMaxRuns = 1000000;
+
 struct MonteCarloArgs {
   std::string scenario, out_json, report_html, effects, shard;
   std::string estimators = "ekf,rts,batch";
   int runs = 100;
+  std::string first_seed_text = "1";
   std::uint64_t first_seed = 1;
   int threads = 0;
   double epoch_s = kDefaultEpoch_s;
@@ -42,11 +46,21 @@ struct MonteCarloArgs {
   bool per_seed = false;
 };
 
-int RunMonteCarloCommand(const MonteCarloArgs& a) {
+int RunMonteCarloCommand(MonteCarloArgs a) {
   const auto t0 = std::chrono::steady_clock::now();
-  if (!a.report_html.empty()) CheckOutputPath(a.report_html);
+  a.first_seed = ParseSeed(a.first_seed_text, "--first-seed");
+  if (a.runs > 0 && a.first_seed > UINT64_MAX - static_cast<std::uint64_t>(a.runs - 1)) {
+    throw InputError("--first-seed: seeds " + a.first_seed_text + " .. first-seed + " +
+                     std::to_string(a.runs) + " - 1 pass 18446744073709551615 (2^64 - 1)");
+  }
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html, "--report");
   if (a.runs < 1) throw InputError("-n: at least 1 run, got " + std::to_string(a.runs));
+  if (a.runs > kMaxRuns) {
+    throw InputError("-n: at most " + std::to_string(kMaxRuns) + " runs, got " +
+                     std::to_string(a.runs));
+  }
   if (!(a.tolerance > 0)) throw InputError("--tolerance: must be > 0");
+  if (!(a.tolerance <= 1000.0)) throw InputError("--tolerance: must be at most 1000");
   const Shard shard = ParseShard(a.shard);
   CheckOutputPath(a.out_json);
   const Scenario s = LoadScenario(a.scenario);
@@ -149,20 +163,27 @@ Command AddMonteCarloCommand(CLI::App& app) {
   c.app->add_option("-o,--output", a->out_json, "output JSON")->required();
   c.app->add_option("--report", a->report_html,
                     "also write the HTML report of OUT (one self-contained file)");
-  c.app->add_option("-n,--runs", a->runs, "number of runs (seeds first-seed .. first-seed + n - 1)")
+  c.app
+      ->add_option("-n,--runs", a->runs,
+                   "number of runs, 1 to 1000000 (seeds first-seed .. first-seed + n - 1)")
       ->capture_default_str();
-  c.app->add_option("--first-seed", a->first_seed, "first seed")->capture_default_str();
+  c.app->add_option("--first-seed", a->first_seed_text, "first seed, 0 to 2^64 - 1")
+      ->capture_default_str();
   c.app->add_option("--estimators", a->estimators, "comma-separated: ekf, rts, batch")
       ->capture_default_str();
-  c.app->add_option("--threads", a->threads,
-                    "parallel runs per process (0: the cores, shared among the MPI ranks on a "
-                    "machine)")
-      ->capture_default_str();
+  c.app
+      ->add_option("--threads", a->threads,
+                   "parallel runs per process (0: the cores, shared among the MPI ranks on a "
+                   "machine)")
+      ->capture_default_str()
+      ->check(kThreadsRange);
   c.app->add_option("--effects", a->effects, "catalogue effects to estimate too, e.g. a,b");
   c.app->add_option("--epoch-s", a->epoch_s, "interval between epochs [s]")->capture_default_str()
       ->check(kEpochRange);
-  c.app->add_option("--tolerance", a->tolerance,
-                    "relative tolerance of scatter / CRB reported as within or outside")
+  c.app
+      ->add_option("--tolerance", a->tolerance,
+                   "relative tolerance of scatter / CRB reported as within or outside, > 0 and at "
+                   "most 1000")
       ->capture_default_str();
   c.app->add_flag("--per-seed", a->per_seed, "add every run's errors and sigmas to OUT");
   c.app->add_option("--shard", a->shard,

@@ -74,7 +74,7 @@ Command AddMountingCommand(CLI::App& app) {
   c.app->add_option("-o,--output", a->out_json, "output JSON (every mounting and its fit)");
   c.app->add_option("--zero-range-deg", a->zero_range_deg, "search the zeros within +-this")
       ->capture_default_str()
-      ->check(CLI::Range(0.0, 90.0));
+      ->check(Bounded(0.0, 90.0));
   c.run = [a] { return RunMounting(*a); };
   return c;
 }

@@ -264,24 +264,33 @@ Command AddObservabilityCommand(CLI::App& app) {
                   "SCENARIO.yaml only: also the catalogue effects that could go undetected on "
                   "this profile, their minimal detectable size and the largest parameter shift "
                   "they would cause (as diagnose's could_hide)");
-  c.app->add_option("--alpha", a->alpha,
-                    "with --could-hide: the loop's false-selection rate per round")
+  c.app
+      ->add_option("--alpha", a->alpha,
+                   "with --could-hide: the loop's false-selection rate per round")
       ->capture_default_str()
-      ->check(CLI::Range(1e-9, 0.5));
+      ->check(Bounded(1e-9, 0.5));
   c.app->add_option("--epoch-s", a->epoch_s, "interval between trajectory epochs [s]")
       ->capture_default_str()
       ->check(kEpochRange);
-  c.app->add_option("--rate-window-s", a->rate_window_s,
-                    "half window of the local cubic fit giving lambda' from the angles [s]")
-      ->capture_default_str();
-  c.app->add_option("--unobservable-below", a->unobservable_below,
-                    "information along a direction, in prior units, below which it is "
-                    "unobservable")
-      ->capture_default_str();
-  c.app->add_option("--weak-below", a->weak_below,
-                    "information in prior units below which a direction is weakly observable")
-      ->capture_default_str();
-  c.app->add_option("--threads", a->threads, "threads (0: all cores)")->capture_default_str();
+  c.app
+      ->add_option("--rate-window-s", a->rate_window_s,
+                   "half window of the local cubic fit giving lambda' from the angles [s]")
+      ->capture_default_str()
+      ->check(kRateWindowRange);
+  c.app
+      ->add_option("--unobservable-below", a->unobservable_below,
+                   "information along a direction, in prior units, below which it is "
+                   "unobservable")
+      ->capture_default_str()
+      ->check(Bounded(1e-12, 1e6));
+  c.app
+      ->add_option("--weak-below", a->weak_below,
+                   "information in prior units below which a direction is weakly observable")
+      ->capture_default_str()
+      ->check(Bounded(1e-12, 1e6));
+  c.app->add_option("--threads", a->threads, "threads (0: all cores)")
+      ->capture_default_str()
+      ->check(kThreadsRange);
   c.run = [a] { return RunObservability(*a); };
   return c;
 }

@@ -2,11 +2,15 @@
 // truth (DIR/run.csv, DIR/run.yaml, DIR/truth.json) and prints a short summary.
 #include <cstdint>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <string>
 
-#include "core/simulation/simulator.h"
+#include "core/io/file_util.h"
+#include "core/model/errors.h"
 #include "core/model/units.h"
+#include "core/simulation/simulator.h"
+#include "tools/command_util.h"
 #include "tools/commands.h"
 #include "tools/provenance.h"
 
@@ -16,7 +20,7 @@ namespace {
 struct SimulateOptions {
   std::string scenario_path;
   std::string out_dir;
-  std::uint64_t seed = 1;
+  std::string seed;  // --seed as given (ParseSeed)
 };
 
 void PrintSummary(const Scenario& s, const RunData& data, const std::string& dir) {
@@ -49,6 +53,32 @@ void PrintSummary(const Scenario& s, const RunData& data, const std::string& dir
               dir.c_str());
 }
 
+const char* const kSimulationFiles[] = {"run.csv", "run.yaml", "truth.json"};
+
+// Before any work: DIR is a folder (or missing), and each of its three files
+// is missing or a regular file; a FIFO, device node, directory or symbolic
+// link in their place is never replaced (the files are moved in by rename).
+void CheckSimulationOutputs(const std::string& dir) {
+  namespace fs = std::filesystem;
+  if (dir.empty()) throw InputError("-o: empty folder name (give a folder)");
+  std::error_code ec;
+  const fs::file_status st = fs::status(dir, ec);
+  if (fs::exists(st) && !fs::is_directory(st)) {
+    throw InputError(dir + ": exists and is not a folder");
+  }
+  for (const char* name : kSimulationFiles) {
+    const fs::path p = fs::path(dir) / name;
+    const fs::file_status link = fs::symlink_status(p, ec);
+    if (fs::is_symlink(link)) {
+      throw InputError(p.string() +
+                       ": cannot write: is a symbolic link (simulate moves its files into the "
+                       "folder; remove the link or choose another folder)");
+    }
+    CheckOutputFile(p.string());
+    NoteOutputFile(p.string());
+  }
+}
+
 }  // namespace
 
 Command AddSimulateCommand(CLI::App& app) {
@@ -58,12 +88,20 @@ Command AddSimulateCommand(CLI::App& app) {
       "simulate", "Generate a run with known truth: DIR/run.csv, DIR/run.yaml, DIR/truth.json");
   c.app->add_option("scenario", opt->scenario_path, "SCENARIO.yaml (docs/file-formats.md)")->required();
   c.app->add_option("-o,--out", opt->out_dir, "output folder (created when missing)")->required();
-  CLI::Option* seed = c.app->add_option("--seed", opt->seed, "noise seed (overrides `seed:`)");
+  CLI::Option* seed =
+      c.app->add_option("--seed", opt->seed, "noise seed, 0 to 2^64 - 1 (overrides `seed:`)");
   c.run = [opt, seed] {
+    const std::uint64_t seed_value = seed->count() > 0 ? ParseSeed(opt->seed, "--seed") : 0;
+    CheckSimulationOutputs(opt->out_dir);
     Scenario s = LoadScenario(opt->scenario_path);
     RecordInput("scenario", opt->scenario_path);
+    // No output may be an input, --force or not: DIR/run.yaml of `simulate
+    // run.yaml -o .` is the scenario itself.
+    for (const char* name : kSimulationFiles) {
+      CheckOutputsAreNotInputs((std::filesystem::path(opt->out_dir) / name).string());
+    }
     CheckSimulationFolder(opt->out_dir);
-    if (seed->count() > 0) s.seed = opt->seed;
+    if (seed->count() > 0) s.seed = seed_value;
     SampleTruth(&s);
     const RunData data = Simulate(s);
     WriteSimulation(s, data, opt->out_dir, CurrentProvenance().dump());

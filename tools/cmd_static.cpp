@@ -13,11 +13,12 @@
 #include "core/io/column_mapping.h"
 #include "core/model/errors.h"
 #include "core/model/units.h"
-#include "tools/report/estimate_json.h"
 #include "solvers/static/static_method.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
 #include "tools/provenance.h"
+#include "tools/report/estimate_json.h"
+#include "tools/report/result_plausibility.h"
 #include "tools/report/value_format.h"
 
 namespace triadcal {
@@ -230,10 +231,14 @@ StaticReference Reference(const StaticArgs& a, const LoadedRun& run) {
 }
 
 int RunStatic(const StaticArgs& a) {
-  if (!a.report_html.empty()) CheckOutputPath(a.report_html);
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html, "--report");
+  CheckOutputPath(a.out_json);
   StaticOptions opt = a.options;
   opt.fixed = SplitList(a.fix);
   if (!(a.placement_sigma_deg >= 0.0)) throw InputError("--placement-sigma-deg: must be >= 0");
+  if (!(a.placement_sigma_deg <= 45.0)) {
+    throw InputError("--placement-sigma-deg: must be at most 45");
+  }
   opt.placement_sigma_rad = a.placement_sigma_deg * kDegToRad;
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
   CheckOverwrite(a.out_json);  // before the long work
@@ -241,6 +246,9 @@ int RunStatic(const StaticArgs& a) {
     return SolveStatic(run.description, run.data, Reference(a, run), opt);
   });
   const nlohmann::json out = StaticJson(a, r, run.data.size());
+  for (const std::string& w : ImplausibleResultWarnings(out["parameters"], a.out_json)) {
+    std::fprintf(stderr, "triadcal: warning: %s\n", OneLine(w).c_str());
+  }
   WriteJson(out, a.out_json);
   WriteReportIfAsked(a.report_html, out, a.out_json);
   PrintReport(run, r);
@@ -265,31 +273,43 @@ Command AddStaticCommand(CLI::App& app) {
       ->capture_default_str();
   c.app->add_option("--fix", a->fix,
                     "parameters held at their nominal value, e.g. Kxy,Kyx or K_ij (all nine)");
-  c.app->add_option("--placement-sigma-deg", a->placement_sigma_deg,
-                    "1 sigma orientation error of each position that does not average out "
-                    "(hand placement, table tilt, bench positioning) [deg]; angles, labels")
+  c.app
+      ->add_option("--placement-sigma-deg", a->placement_sigma_deg,
+                   "1 sigma orientation error of each position that does not average out "
+                   "(hand placement, table tilt, bench positioning) [deg], 0 to 45; angles, labels")
       ->capture_default_str();
   StillOptions& s = a->options.still;
-  c.app->add_option("--min-still-s", s.min_still_s, "shortest still interval kept [s]")
+  c.app
+      ->add_option("--min-still-s", s.min_still_s,
+                   "shortest still interval kept [s], > 0 and at most 3600")
       ->capture_default_str();
-  c.app->add_option("--edge-s", s.edge_s, "dropped at each end of a still interval [s]")
+  c.app->add_option("--edge-s", s.edge_s, "dropped at each end of a still interval [s], 0 to 600")
       ->capture_default_str();
-  c.app->add_option("--merge-gap-s", s.merge_gap_s,
-                    "still runs closer than this are merged [s]")
+  c.app
+      ->add_option("--merge-gap-s", s.merge_gap_s,
+                   "still runs closer than this are merged [s], 0 to 600")
       ->capture_default_str();
-  c.app->add_option("--window-s", s.window_s,
-                    "without angles: window of the moving standard deviation [s]")
+  c.app
+      ->add_option(
+          "--window-s", s.window_s,
+          "without angles: window of the moving standard deviation [s], > 0 and at most 600")
       ->capture_default_str();
-  c.app->add_option("--noise-factor", s.noise_factor,
-                    "without angles: still when the moving std < factor x triad.noise_mV")
+  c.app
+      ->add_option(
+          "--noise-factor", s.noise_factor,
+          "without angles: still when the moving std < factor x triad.noise_mV; > 0 and at most "
+          "10000")
       ->capture_default_str();
-  c.app->add_option("--still-rate-deg-s", s.rate_threshold_deg_s,
-                    "with angles: still when |lambda'| is below this [deg/s]; 0: max(0.05, "
-                    "5 sigma of the estimated rate)")
+  c.app
+      ->add_option("--still-rate-deg-s", s.rate_threshold_deg_s,
+                   "with angles: still when |lambda'| is below this [deg/s]; 0: max(0.05, "
+                   "5 sigma of the estimated rate)")
       ->capture_default_str();
-  c.app->add_option("--rate-window-s", s.rate_half_window_s,
-                    "with angles: half window of the local cubic fit giving lambda' [s]")
-      ->capture_default_str();
+  c.app
+      ->add_option("--rate-window-s", s.rate_half_window_s,
+                   "with angles: half window of the local cubic fit giving lambda' [s]")
+      ->capture_default_str()
+      ->check(kRateWindowRange);
   c.run = [a] { return RunStatic(*a); };
   return c;
 }

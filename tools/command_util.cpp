@@ -1,22 +1,26 @@
 #include "tools/command_util.h"
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <charconv>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <sstream>
-#include <unistd.h>
 
-#include "core/model/errors.h"
 #include "core/io/column_mapping.h"
 #include "core/io/file_util.h"
-#include "core/io/run_io.h"
 #include "core/io/run_description_io.h"
+#include "core/io/run_io.h"
+#include "core/model/angle_derivatives.h"
+#include "core/model/errors.h"
+#include "solvers/static/mounting_search.h"
 #include "tools/provenance.h"
 #include "tools/report/html_report.h"
-#include "solvers/static/mounting_search.h"
 
 namespace triadcal {
 
@@ -136,8 +140,74 @@ void EndProgress() {
   p.started = false;
 }
 
-void CheckOutputPath(const std::string& path) {
+CLI::Validator Bounded(double lo, double hi) {
+  char range[80];
+  std::snprintf(range, sizeof(range), "in [%g, %g]", lo, hi);
+  return CLI::Validator(
+      [lo, hi](std::string& input) -> std::string {
+        double v = 0.0;
+        if (CLI::detail::lexical_cast(input, v) && std::isfinite(v) && v >= lo && v <= hi) {
+          return "";
+        }
+        // The text of CLI::Range, which this replaces.
+        return "Value " + Excerpt(input, 40) + " not in range " + std::to_string(lo) + " to " +
+               std::to_string(hi);
+      },
+      range);
+}
+
+CLI::Validator BoundedInt(long long lo, long long hi) {
+  const std::string range = "in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+  return CLI::Validator(
+      [lo, hi](std::string& input) -> std::string {
+        long long v = 0;
+        const auto res = std::from_chars(input.data(), input.data() + input.size(), v);
+        if (res.ec == std::errc() && res.ptr == input.data() + input.size() && v >= lo && v <= hi) {
+          return "";
+        }
+        return "Value " + Excerpt(input, 40) + " not in range " + std::to_string(lo) + " to " +
+               std::to_string(hi);
+      },
+      range);
+}
+
+const CLI::Validator kRateWindowRange =
+    Bounded(AngleDerivativeOptions::kMinHalfWindow_s, AngleDerivativeOptions::kMaxHalfWindow_s);
+
+std::uint64_t ParseSeed(const std::string& text, const std::string& option) {
+  const bool digits = !text.empty() && text.size() <= 20 &&
+                      text.find_first_not_of("0123456789") == std::string::npos;
+  std::uint64_t v = 0;
+  const auto res = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (!digits || res.ec != std::errc() || res.ptr != text.data() + text.size()) {
+    throw InputError(option + ": expected an integer 0 to 18446744073709551615, got '" +
+                     Excerpt(text, 40) + "'");
+  }
+  return v;
+}
+
+void CheckHoldFree(const std::string& hold, const std::string& free,
+                   const ParameterLayout& layout) {
+  const std::vector<std::string> held = SplitList(hold), freed = SplitList(free);
+  for (const std::string& h : held) {
+    if (std::find(freed.begin(), freed.end(), h) != freed.end()) {
+      throw InputError("--hold/--free: '" + Excerpt(h, 40) + "' given to both: hold it or free it");
+    }
+  }
+  for (int i = 0; i < layout.size(); ++i) {
+    if (std::find(held.begin(), held.end(), layout.info(i).name) == held.end()) return;
+  }
+  throw InputError("--hold: holds every parameter; nothing left to estimate");
+}
+
+void CheckOutputPath(const std::string& path, const std::string& option) {
   namespace fs = std::filesystem;
+  if (path.empty()) throw InputError(option + ": empty file name (give a file name)");
+  if (IsStdout(path)) {
+    throw InputError(option + " -: this command prints its summary on stdout; give a file name "
+                              "(stdout takes the output of apply and export)");
+  }
+  CheckOutputFile(path);
   fs::path dir = fs::path(path).parent_path();
   if (dir.empty()) dir = ".";
   if (!fs::is_directory(dir) || access(dir.c_str(), W_OK) != 0) {
@@ -146,11 +216,29 @@ void CheckOutputPath(const std::string& path) {
   NoteOutputFile(path);
 }
 
+void WriteOutput(const std::string& path, const std::string& content) {
+  if (!IsStdout(path)) {
+    WriteFileAtomically(path, content);
+    return;
+  }
+  if (std::fwrite(content.data(), 1, content.size(), stdout) != content.size() ||
+      std::fflush(stdout) != 0) {
+    throw InputError("-o -: cannot write to stdout (closed pipe or full disk)");
+  }
+}
+
 void WriteJson(const nlohmann::json& j, const std::string& path) {
-  CheckOverwrite(path);
-  nlohmann::json stamped = j;
-  stamped["provenance"] = CurrentProvenance();
-  WriteFileAtomically(path, stamped.dump(2) + "\n");
+  if (!IsStdout(path)) CheckOverwrite(path);
+  // "provenance" first, the other keys in their (sorted) order: the output
+  // guard reads only the start of an existing output (tools/provenance.h).
+  nlohmann::ordered_json stamped = nlohmann::ordered_json::object();
+  stamped["provenance"] = nlohmann::ordered_json::parse(CurrentProvenance().dump());
+  if (j.is_object()) {
+    for (const auto& [key, value] : j.items()) {
+      if (key != "provenance") stamped[key] = nlohmann::ordered_json::parse(value.dump());
+    }
+  }
+  WriteOutput(path, stamped.dump(2) + "\n");
 }
 
 void WriteReportIfAsked(const std::string& report_html, const nlohmann::json& out,

@@ -2,17 +2,18 @@
 // the --effects list, a progress line, and writing JSON outputs whole.
 #pragma once
 
-#include <map>
+#include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cstdint>
+#include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
 #include <vector>
 
-#include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
-
 #include "core/model/effects.h"
 #include "core/model/errors.h"
+#include "core/model/parameters.h"
 #include "core/model/run_data.h"
 #include "core/model/run_description.h"
 
@@ -56,9 +57,13 @@ std::vector<Effect> ParseEffectList(const std::string& list,
 std::vector<Effect> ParseEffectList(const std::string& list, const RunData& data,
                                     const std::string& option = "--effects");
 
-// Fails early (before long work) when an output file's folder is missing or
-// not writable: InputError("PATH: cannot write (folder missing or not writable)").
-void CheckOutputPath(const std::string& path);
+// Fails early (before any work) when an output cannot be written: an empty
+// name ("OPTION: empty file name"), a path that exists and is not a regular
+// file or a symbolic link to one (a directory, FIFO, device node, socket:
+// core/io/file_util.h CheckOutputFile), or a folder that is missing or not
+// writable ("PATH: cannot write (folder missing or not writable)"). Notes the
+// output for the guard. `option` names the flag that gave it.
+void CheckOutputPath(const std::string& path, const std::string& option = "-o");
 
 // Progress on stderr ("fit: relinearising pass 2  57%"). On a terminal one
 // line rewritten in place (at most 10 times a second); otherwise (piped, in
@@ -93,10 +98,42 @@ class StageProgress {
 void WriteReportIfAsked(const std::string& report_html, const nlohmann::json& out,
                         const std::string& out_json);
 
+// A number option within [lo, hi] (inclusive; NaN and infinities are out,
+// which CLI::Range lets through): "--flag: Value X not in range 0.010000 to
+// 10.000000", as CLI::Range says it. --help shows the range, "in [0.01, 10]".
+CLI::Validator Bounded(double lo, double hi);
+// The same for an integer option (a number with a fraction or exponent,
+// "1e9", is no integer).
+CLI::Validator BoundedInt(long long lo, long long hi);
+
 // Bounds of --epoch-s [s]: below 10 ms an epoch holds about one sample and the
 // problem grows past what a run needs (and past minutes of solving); above 10 s
 // the bench (periods of seconds) turns by more than one swing between epochs.
-inline const CLI::Range kEpochRange(0.01, 10.0);
+inline const CLI::Validator kEpochRange = Bounded(0.01, 10.0);
+// Bounds of --rate-window-s [s] (AngleDerivativeOptions::Check gives the reasons).
+extern const CLI::Validator kRateWindowRange;
+// --threads: 0 (all cores) to 1024.
+inline const CLI::Validator kThreadsRange = BoundedInt(0, 1024);
+
+// A seed from the command line: a decimal integer 0 .. 2^64 - 1, nothing else
+// (CLI11 wrapped -1 to 2^64 - 1 and saturated 2^64). Throws
+// InputError("OPTION: expected an integer 0 to 18446744073709551615, got 'X'").
+std::uint64_t ParseSeed(const std::string& text, const std::string& option);
+
+// --hold and --free against the parameters of `layout`: a name given to both
+// is a contradiction ("--hold/--free: 'X' given to both: hold it or free
+// it"), and holding every parameter leaves nothing to estimate ("--hold:
+// holds every parameter; nothing left to estimate"). Unknown names are left
+// to the solver (OptionError "hold_free").
+void CheckHoldFree(const std::string& hold, const std::string& free, const ParameterLayout& layout);
+
+// `-o -`: the output goes to stdout (apply, export --format yaml|json-matrix:
+// text outputs that a pipe can take; the command then prints nothing else
+// on stdout).
+inline bool IsStdout(const std::string& path) { return path == "-"; }
+// Writes content to stdout when IsStdout(path) (InputError when stdout
+// fails: a closed pipe, a full disk), else WriteFileAtomically.
+void WriteOutput(const std::string& path, const std::string& content);
 
 // Adds "provenance" (tools/provenance.h), refuses to replace an output of
 // other inputs (CheckOverwrite), serialises with 2-space indentation and

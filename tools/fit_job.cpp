@@ -2,6 +2,8 @@
 
 #include <cstdio>
 
+#include "core/io/file_util.h"
+#include "core/model/angle_derivatives.h"
 #include "core/model/errors.h"
 #include "solvers/diagnosis/residual_analysis.h"
 #include "tools/report/residual_plot_json.h"
@@ -12,7 +14,14 @@ void CheckFitSettings(const FitSettings& s) {
   if (s.init != "rts" && s.init != "nominal") {
     throw InputError("--init: expected rts or nominal, got '" + s.init + "'");
   }
-  ParseEffectList(s.effects);
+  CheckHoldFree(s.hold, s.free, ParameterLayout(ParseEffectList(s.effects)));
+  // The library's own guard for a bad window (a batch or Python caller).
+  AngleDerivativeOptions window;
+  window.half_window_s = s.rate_window_s;
+  WithFlags({{"half_window_s", "--rate-window-s"}}, [&] { window.Check(); });
+  if (s.threads < 0 || s.threads > 1024) {
+    throw InputError("--threads: Value " + std::to_string(s.threads) + " not in range 0 to 1024");
+  }
   for (const std::string& req : SplitList(s.require)) {
     if (req != "converged" && req != "white" && req != "noise" && req != "pass") {
       throw InputError("--require: unknown check '" + req + "' (converged, white, noise, pass)");
@@ -116,7 +125,8 @@ void AddFitOptions(CLI::App* app, FitSettings* a) {
       ->check(kEpochRange);
   app->add_option("--rate-window-s", a->rate_window_s,
                   "half window of the local cubic fit giving lambda' from the angles [s]")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(kRateWindowRange);
   app->add_flag("--correlations", a->correlations, "add the correlation matrix to OUT");
   app->add_option("--hold", a->hold, "parameters to hold at their nominal values, e.g. dpsi,Kxy");
   app->add_option("--free", a->free,

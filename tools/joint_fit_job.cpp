@@ -10,6 +10,7 @@
 #include "tools/command_util.h"
 #include "tools/provenance.h"
 #include "tools/report/fit_report.h"
+#include "tools/report/result_plausibility.h"
 #include "tools/report/value_format.h"
 
 namespace triadcal {
@@ -303,7 +304,11 @@ int RunJointFit(const FitSettings& s, const std::vector<std::string>& inputs,
   opt.batch.fraction = [&](double x) { progress.Fraction(x); };
   const JointResult r = SolveJoint(runs, jl, opt);
   EndProgress();
-  WriteJson(JointJson(jl, runs, r, file), out_json);
+  const nlohmann::json out = JointJson(jl, runs, r, file);
+  for (const std::string& w : ImplausibleResultWarnings(out["parameters"], out_json)) {
+    std::fprintf(stderr, "triadcal: warning: %s\n", OneLine(w).c_str());
+  }
+  WriteJson(out, out_json);
 
   std::printf("fit: %zu runs of one IMU as one problem; %s\n", runs.size(),
               JointVerdict(jl, r).c_str());

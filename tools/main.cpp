@@ -15,6 +15,20 @@
 #include "tools/provenance.h"
 #include "tools/distribution/mpi_context.h"
 
+namespace {
+
+// The last guard on what an error echoes: the readers quote at most short
+// excerpts of their input (errors.h Excerpt), and no error line is longer than
+// this; a longer one keeps its start (the file and key) and its end (what is
+// wrong).
+std::string Bounded(const std::string& line) {
+  constexpr std::size_t kMax = 2000;
+  if (line.size() <= kMax) return line;
+  return line.substr(0, 1200) + " ... " + line.substr(line.size() - 600);
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   // MPI only under an MPI launcher (tools/distribution/mpi_context.h).
   triadcal::MpiSession mpi(&argc, &argv);
@@ -65,7 +79,7 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     std::string command;
     for (const CLI::App* sub : app.get_subcommands()) command = sub->get_name();
-    std::cerr << "triadcal: error: " << triadcal::OneLine(e.what()) << " (see `triadcal "
+    std::cerr << "triadcal: error: " << Bounded(triadcal::OneLine(e.what())) << " (see `triadcal "
               << (command.empty() ? "" : command + " ") << "--help`)\n";
     return 2;
   }
@@ -82,25 +96,29 @@ int main(int argc, char** argv) {
     }
   } catch (const triadcal::OptionError& e) {
     // A setting the estimators rejected, named by its flag here.
-    static const std::map<std::string, std::string> kFlags = {
-        {"epoch_s", "--epoch-s"},           {"hold_free", "--hold/--free"},
-        {"effects", "--effects"},
-        {"sigma", "--sigma"},               {"hold", "--hold"},
-        {"free", "--free"}};
+    static const std::map<std::string, std::string> kFlags = {{"epoch_s", "--epoch-s"},
+                                                              {"hold_free", "--hold/--free"},
+                                                              {"effects", "--effects"},
+                                                              {"sigma", "--sigma"},
+                                                              {"hold", "--hold"},
+                                                              {"free", "--free"},
+                                                              {"half_window_s", "--rate-window-s"}};
     const auto it = kFlags.find(e.option());
     if (triadcal::MpiRoot()) {
       std::cerr << "triadcal: error: "
-                << triadcal::OneLine(it == kFlags.end() ? std::string(e.what())
-                                                        : it->second + ": " + e.problem())
+                << Bounded(triadcal::OneLine(it == kFlags.end() ? std::string(e.what())
+                                                                : it->second + ": " + e.problem()))
                 << "\n";
     }
     return 2;
   } catch (const triadcal::InputError& e) {
     // Every rank reads the same input and fails the same way: rank 0 says so.
-    if (triadcal::MpiRoot()) std::cerr << "triadcal: error: " << triadcal::OneLine(e.what()) << "\n";
+    if (triadcal::MpiRoot()) {
+      std::cerr << "triadcal: error: " << Bounded(triadcal::OneLine(e.what())) << "\n";
+    }
     return 2;
   } catch (const std::exception& e) {
-    std::cerr << "triadcal: internal error: " << triadcal::OneLine(e.what()) << "\n";
+    std::cerr << "triadcal: internal error: " << Bounded(triadcal::OneLine(e.what())) << "\n";
     triadcal::MpiAbortIfShared(3);  // other ranks may wait for this one
     return 3;
   }

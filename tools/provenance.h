@@ -41,6 +41,9 @@ nlohmann::json CurrentProvenance();
 // (other roles or paths), or it has none (it is not a triadcal output), throws
 // InputError("OUT: holds results of other inputs (...); --force overwrites
 // it") unless --force. Outputs of the same inputs are replaced silently.
+// OUT must be missing or a regular file (or a link to one), with --force too
+// (file_util.h CheckOutputFile); the stored provenance is looked for in the
+// first and last megabyte of OUT only (WriteJson puts it first).
 void CheckOverwrite(const std::string& out_path);
 
 // The same for simulate's folder: a non-empty DIR holding results (run.csv,

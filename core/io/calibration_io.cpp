@@ -1,10 +1,14 @@
 #include "core/io/calibration_io.h"
 
-#include "core/io/parameters_json.h"
-#include "core/model/errors.h"
-#include "core/io/file_util.h"
-
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+
+#include "core/io/column_mapping.h"
+#include "core/io/file_util.h"
+#include "core/io/parameters_json.h"
+#include "core/io/plausibility.h"
+#include "core/model/errors.h"
 
 namespace triadcal {
 
@@ -57,9 +61,7 @@ Calibration CalibrationFrom(const ParametersFile& file, const std::string& path)
 }  // namespace
 
 Calibration LoadCalibration(const std::string& path) {
-  ReadParametersJson(path, {"", "rts", "batch"}, kExpected);  // its messages for a bad file
-  // Valid JSON by now: read again for the joint fit's keys.
-  return CalibrationFromJson(nlohmann::json::parse(ReadFile(path)), path);
+  return CalibrationFromJson(ParseJsonStrict(ReadFile(path), path), path);
 }
 
 Calibration CalibrationFromJson(const nlohmann::json& root, const std::string& path) {
@@ -70,7 +72,116 @@ Calibration CalibrationFromJson(const nlohmann::json& root, const std::string& p
 }
 
 namespace {
+
+std::string Num(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.4g", x);
+  return buf;
+}
+
+// Unknown keys of the parameters: an effect (or an effect's parameter) this
+// build does not know is refused, since applying the calibration without it
+// would be silently wrong; so is any unknown name in an OUT file (it has a
+// "command"). A truth.json may hold other plain keys: its readers ignore what
+// they do not know (SPEC section 7).
+void RefuseUnknownKeys(const ParametersFile& file) {
+  std::string key;
+  for (const std::string& k : file.unknown_keys) {
+    if (k.find('.') != std::string::npos || !file.command.empty()) {
+      key = k;
+      break;
+    }
+  }
+  if (key.empty()) return;
+  std::string effects;
+  for (const EffectSpec& e : EffectCatalogue()) effects += (effects.empty() ? "" : ", ") + e.name;
+  const std::size_t dot = key.find('.');
+  if (dot == std::string::npos) {
+    throw InputError(file.At() + Excerpt(key) +
+                     ": unknown parameter (the names of docs/file-formats.md; a calibration "
+                     "is applied whole or not at all)");
+  }
+  const std::string effect = key.substr(0, dot);
+  for (const EffectSpec& e : EffectCatalogue()) {
+    if (e.name != effect) continue;
+    std::string params;
+    for (const ParamSpec& p : e.params) params += (params.empty() ? "" : ", ") + p.name;
+    throw InputError(file.At() + Excerpt(key) + ": unknown parameter of effect " + effect +
+                     " (its parameters: " + params + ")");
+  }
+  throw InputError(file.At() + Excerpt(key) + ": unknown effect '" + Excerpt(effect, 40) +
+                   "' (this build knows " + effects +
+                   "); applied without it the correction would be silently wrong: a "
+                   "calibration of another build?");
+}
+
+// The readings unit an entry's unit names ("mV", "mg", "counts"), "" when the
+// parameter's unit does not depend on the readings (or none was given).
+std::string ReadingsUnitOfEntry(const std::string& given, const std::string& canonical) {
+  if (given.empty()) return "";
+  for (const char* token : {"mV", "mg", "counts"}) {
+    const std::size_t at = canonical.find(token);
+    if (at == std::string::npos) continue;
+    const std::size_t len = std::string(token).size();
+    for (const char* r : {"mV", "mg", "counts"}) {
+      if (given == canonical.substr(0, at) + r + canonical.substr(at + len)) return r;
+    }
+  }
+  return "";
+}
+
+// The bounds of run.yaml and CalibrationBounds, in file units.
+void CheckCalibrationPlausible(const ParametersFile& file, const Calibration& cal) {
+  using B = PlausibilityBounds;
+  using C = CalibrationBounds;
+  const ParameterLayout& layout = cal.layout;
+  auto value = [&](int i) { return cal.theta[i] / layout.info(i).si_per_unit; };
+  auto fail = [&](int i, const std::string& what) {
+    const auto it = file.entries.find(layout.info(i).name);
+    const std::string key = it == file.entries.end() ? layout.info(i).name : it->second.key;
+    throw InputError(file.At() + key + ": " + what);
+  };
+  for (int i = 0; i < 3; ++i) {
+    const double k = value(kKx + i);
+    const std::string unit =
+        " " + (cal.readings_unit.empty() ? layout.info(kKx + i).unit : cal.readings_unit + "/g");
+    if (!(k > 0.0)) {
+      fail(kKx + i, Num(k) + unit +
+                        ": a scale factor must be > 0 (an axis that reads -1 g when it points "
+                        "up belongs in the run's mounting.axes)");
+    }
+    if (k < B::kMinScale || k > B::kMaxScale) {
+      fail(kKx + i, Num(k) + unit + " is outside [" + Num(B::kMinScale) + ", " +
+                        Num(B::kMaxScale) +
+                        "] per g (no accelerometer output is outside this range)");
+    }
+    const double b = value(kW0x + i);
+    if (std::abs(b) > B::kMaxBiasInG * k) {
+      fail(kW0x + i, Num(b) + " is " + Num(std::abs(b) / k) + " g worth of " +
+                         layout.info(kKx + i).name + " = " + Num(k) + " (bound " +
+                         Num(B::kMaxBiasInG) +
+                         " g): scale and bias in different units (V/g for mV/g?)");
+    }
+  }
+  for (int i = kAlphaX; i <= kGammaZ; ++i) {
+    const double a = value(i);
+    if (std::abs(a) > C::kMaxAngle_arcmin) {
+      fail(i, Num(a) + " " + layout.info(i).unit + " is beyond the bound " +
+                  Num(C::kMaxAngle_arcmin) +
+                  " arcmin (30 deg: no triad's axes are that far off; arcsec given as arcmin?)");
+    }
+  }
+  for (int i = kKxx; i <= kKzz; ++i) {
+    const double k = value(i);
+    if (std::abs(k) > C::kMaxNonlinearity_per_g) {
+      fail(i, Num(k) + " " + layout.info(i).unit + " is beyond the bound " +
+                  Num(C::kMaxNonlinearity_per_g) + " /g (a nonlinearity of 1000 % at 1 g)");
+    }
+  }
+}
+
 Calibration CalibrationFrom(const ParametersFile& file, const std::string& path) {
+  RefuseUnknownKeys(file);
   Calibration cal;
   cal.path = path;
   cal.section = file.section;
@@ -88,6 +199,7 @@ Calibration CalibrationFrom(const ParametersFile& file, const std::string& path)
   }
   cal.layout = ParameterLayout(effects);
   cal.theta = Eigen::VectorXd::Zero(cal.layout.size());
+  std::string unit_from;  // the entry that set cal.readings_unit
   for (int i = 0; i < cal.layout.size(); ++i) {
     const ParameterInfo& info = cal.layout.info(i);
     const auto it = file.entries.find(info.name);
@@ -100,14 +212,45 @@ Calibration CalibrationFrom(const ParametersFile& file, const std::string& path)
       continue;  // bench and lever arm: not used by the inverse
     }
     cal.theta[i] = it->second.value_file * info.si_per_unit;
-  }
-  for (int i = 0; i < 3; ++i) {
-    if (cal.theta[kKx + i] == 0.0) {
-      throw InputError(file.At() + cal.layout.info(kKx + i).name + ": scale factor 0");
+    const std::string r = ReadingsUnitOfEntry(it->second.unit, info.unit);
+    if (r.empty()) continue;
+    if (cal.readings_unit.empty()) {
+      cal.readings_unit = r;
+      unit_from = it->second.key;
+    } else if (r != cal.readings_unit) {
+      throw InputError(file.At() + it->second.key + ": unit " + it->second.unit + " is in " + r +
+                       ", but " + unit_from + " is in " + cal.readings_unit +
+                       ": one calibration has one readings unit");
     }
   }
+  CheckCalibrationPlausible(file, cal);
   return cal;
 }
+
 }  // namespace
+
+void CheckCalibrationForRun(const Calibration& cal, const RunDescription& run) {
+  const std::string at = cal.path + ": " + cal.section + ".";
+  const std::string run_unit = ReadingsUnit(run);
+  if (!cal.readings_unit.empty() && cal.readings_unit != run_unit) {
+    throw InputError(at + "Kx: the calibration is in " + cal.readings_unit + "/g, but the run " +
+                     run.yaml_path + " reads " + run_unit +
+                     " (columns.wx.unit): a calibration applies to readings in its own unit");
+  }
+  const double lo = run.scale_mV_per_g.minCoeff(), hi = run.scale_mV_per_g.maxCoeff();
+  for (int i = 0; i < 3; ++i) {
+    const ParameterInfo& info = cal.layout.info(kKx + i);
+    const double k = cal.theta[kKx + i] / info.si_per_unit;
+    const double ratio = k < lo ? lo / k : k > hi ? k / hi : 1.0;
+    if (ratio > CalibrationBounds::kMaxScaleRatio) {
+      throw InputError(at + info.name + ": " + Num(k) + " " + run_unit + "/g is " + Num(ratio) +
+                       " times " + (k < lo ? "below" : "above") + " the run's nominal scale " +
+                       Num(k < lo ? lo : hi) + " " + run_unit + "/g (" + run.yaml_path +
+                       ": triad.scale_mV_per_g; bound: a factor " +
+                       Num(CalibrationBounds::kMaxScaleRatio) +
+                       "): V/g given as mV/g, or the calibration of another sensor?");
+    }
+  }
+}
 
 }  // namespace triadcal

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/io/file_util.h"
+#include "core/model/errors.h"
 #include "core/model/units.h"
 
 namespace triadcal {
@@ -188,6 +189,10 @@ std::map<std::string, Eigen::Vector3d> ParsePositions(const YAML::Node& node,
     const YamlPlace p = at.Child(label);
     if (out.count(label)) p.Fail("given twice");
     Eigen::Vector3d v;
+    if (kv.second.IsScalar() && kv.second.Scalar() == "none") {
+      out[label] = Eigen::Vector3d::Zero();  // a label that is no still position
+      continue;
+    }
     if (kv.second.IsSequence()) {
       v = ReadVector3(kv.second, p);
       if (!(v.norm() > 0.0)) p.Fail("the up direction must not be [0, 0, 0]");
@@ -198,10 +203,21 @@ std::map<std::string, Eigen::Vector3d> ParsePositions(const YAML::Node& node,
                            ? static_cast<int>(std::string("xyz").find(s[1]))
                            : -1;
       if (axis < 0 || axis > 2) {
-        p.Fail("expected +x, -x, +y, -y, +z, -z or a list [x, y, z], got '" + s + "'");
+        p.Fail("expected +x, -x, +y, -y, +z, -z, a list [x, y, z] or none, got '" + Excerpt(s) +
+               "'");
       }
       v.setZero();
       v[axis] = s[0] == '-' ? -1.0 : 1.0;
+    }
+    // Two positions pointing the same way hold one orientation twice: the
+    // fit then has one direction less than it thinks (Kx 0 +- 160 mV/g from
+    // two "+x" positions).
+    for (const auto& [other, w] : out) {
+      if (w.dot(v) > std::cos(kSamePositionDeg * kDegToRad)) {
+        p.Fail("points the same way as positions." + other +
+               " (two positions need two "
+               "directions; one label written twice, or a sign lost?)");
+      }
     }
     out[label] = v;
   }

@@ -65,8 +65,12 @@ constexpr const char* kLabelChannel = "label";
 // The source column of the label channel, or "" when the run has none.
 std::string LabelSource(const RunDescription& run);
 
-// positions: {LABEL: "+x" | [x, y, z]} -> unit vectors in IMU axes.
+// positions: {LABEL: "+x" | [x, y, z] | none} -> unit vectors in IMU axes;
+// `none` (a zero vector) declares a label that is no still position (a
+// rotation between positions). Two positions within kSamePositionDeg of each
+// other are an error.
 std::map<std::string, Eigen::Vector3d> ParsePositions(const YAML::Node& node, const YamlPlace& at);
+constexpr double kSamePositionDeg = 5.0;
 // The Ferraris convention (imucal): x_p means +x points up and reads +1 g,
 // x_a that it points down; the same for y and z. Other labels are not positions.
 const std::map<std::string, Eigen::Vector3d>& DefaultLabelPositions();

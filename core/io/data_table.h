@@ -9,6 +9,11 @@
 
 namespace triadcal {
 
+// At most this many columns in a text file's header (or data_format.header):
+// a run file has a few dozen; a header line of a million names is a binary
+// file or a damaged one (and each name costs memory for every row).
+constexpr std::size_t kMaxColumns = 10000;
+
 struct DataTable {
   std::string path;
   bool is_mat = false;

@@ -1,14 +1,62 @@
 // Small file helpers shared by every writer: outputs appear whole or not at all.
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <string>
 
 namespace triadcal {
 
 // Writes content to path through a temporary file in the same folder and a
 // rename, so that readers never see a partial file. Throws InputError when the
-// folder cannot be written.
+// folder cannot be written, or when path is not fit for an output
+// (CheckOutputFile). A symbolic link to a regular file is written through:
+// the file it names is replaced, the link stays.
+//
+// Temporaries: TemporaryPathFor(target), in the target's folder. Removed
+// when the write fails and on SIGINT, SIGTERM or SIGHUP; one left by a killed
+// process (kill -9, a power cut) is removed by the next write of the same
+// output on the same host (RemoveStaleTemporaries).
 void WriteFileAtomically(const std::string& path, const std::string& content);
+
+// ".tmp.NAME.HOST.PID" beside `path` (NAME its file name, HOST this host's
+// name, PID this process).
+std::string TemporaryPathFor(const std::string& path);
+// Removes the temporaries of `path` that processes of this host no longer
+// running left behind (only names of the form above, and the ".tmp.NAME.PID"
+// of earlier versions; a temporary of a running process, or of another host,
+// stays).
+void RemoveStaleTemporaries(const std::string& path);
+// This host's name as it appears in temporaries (letters, digits, - and _).
+std::string HostTag();
+// True when `pid` names no running process of this host.
+bool ProcessIsGone(long pid);
+
+// Outputs are regular files. Throws InputError("PATH: cannot write: WHY")
+// when `path` is empty, exists and is not a regular file (a directory, a FIFO,
+// a device node, a socket), is a symbolic link to anything but a regular file
+// (or to nothing), or cannot be looked up (a symlink loop, a name too long, a
+// folder on the way not searchable). A missing file is fine.
+void CheckOutputFile(const std::string& path);
+
+// Why `path` cannot be read as an input file: "" when it is a readable
+// regular file (through symbolic links); otherwise "no such file", "is a
+// directory, not a file", "is a FIFO (named pipe), not a regular file", "is a
+// device node, not a regular file", "too many levels of symbolic links (a
+// loop?)", "file name too long", "permission denied", ...
+std::string InputFileProblem(const std::string& path);
+// Throws InputError("PATH: cannot read (no such file or not readable)") for a
+// missing file and InputError("PATH: cannot read: WHY") for the other
+// problems above; the path is quoted as an Excerpt when it is very long.
+void CheckInputFile(const std::string& path);
+// A path for a message: itself, or an excerpt when longer than 240 characters
+// (a name longer than the system allows).
+std::string PathForMessage(const std::string& path);
+
+// At most max_bytes of a regular file from byte `offset` ("" when it is not a
+// regular file or cannot be read): the output guard reads no more of an
+// existing output than this.
+std::string ReadFileRange(const std::string& path, std::uintmax_t offset, std::size_t max_bytes);
 
 // The output guard of the command line (off by default, so that tests may
 // rewrite what they read): once on, every file read is noted as an input and
@@ -28,7 +76,8 @@ void NoteOutputFile(const std::string& path);
 // it before writing, so a command with several outputs writes none of them.
 void CheckOutputsAreNotInputs(const std::string& path);
 
-// Reads a whole file; throws InputError("PATH: cannot read ...").
+// Reads a whole file; throws InputError("PATH: cannot read ...")
+// (CheckInputFile first: a FIFO or a device is never opened).
 std::string ReadFile(const std::string& path);
 
 // Shortest decimal text that reads back to exactly the same double.

@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <set>
+#include <vector>
 
 #include "core/io/file_util.h"
 #include "core/model/errors.h"
@@ -12,8 +14,10 @@ namespace {
 
 using nlohmann::json;
 
-// The value of one entry in file units; checks its unit when given.
-double EntryValue(const json& entry, const std::string& where, const std::string& unit) {
+// The value of one entry in file units; checks its unit when given (and
+// returns it in *given).
+double EntryValue(const json& entry, const std::string& where, const std::string& unit,
+                  std::string* given) {
   const json* v = &entry;
   if (!entry.is_object() && !entry.is_number()) {
     throw InputError(where + ": expected a number or {\"value\": number}");
@@ -33,12 +37,13 @@ double EntryValue(const json& entry, const std::string& where, const std::string
         return false;
       };
       if (!entry["unit"].is_string() || !same(entry["unit"].get<std::string>())) {
-        throw InputError(where + ": unit " + entry["unit"].dump() + ", expected \"" + unit +
-                         "\" (docs/file-formats.md)");
+        throw InputError(where + ": unit " + Excerpt(entry["unit"].dump()) + ", expected \"" +
+                         unit + "\" (docs/file-formats.md)");
       }
+      *given = entry["unit"].get<std::string>();
     }
   }
-  if (!v->is_number()) throw InputError(where + ": value is not a number: " + v->dump());
+  if (!v->is_number()) throw InputError(where + ": value is not a number: " + Excerpt(v->dump()));
   const double x = v->get<double>();
   if (!std::isfinite(x)) throw InputError(where + ": value is not finite");
   return x;
@@ -56,15 +61,54 @@ const ParameterLayout& EveryParameter() {
 
 }  // namespace
 
+json ParseJsonStrict(const std::string& text, const std::string& path) {
+  // The keys seen in each open object, and the key path to it, by depth.
+  struct Open {
+    std::set<std::string> keys;
+    std::string path;
+    std::string last_key;
+  };
+  std::vector<Open> open;
+  const json::parser_callback_t callback = [&](int /*depth*/, json::parse_event_t event,
+                                               json& parsed) {
+    switch (event) {
+      case json::parse_event_t::object_start: {
+        std::string at;
+        if (!open.empty())
+          at = open.back().path + (open.back().path.empty() ? "" : ".") + open.back().last_key;
+        open.push_back({{}, at, ""});
+        break;
+      }
+      case json::parse_event_t::object_end:
+        if (!open.empty()) open.pop_back();
+        break;
+      case json::parse_event_t::key: {
+        if (open.empty()) break;
+        const std::string key = parsed.get<std::string>();
+        Open& o = open.back();
+        if (!o.keys.insert(key).second) {
+          throw InputError(path + ": " + o.path + (o.path.empty() ? "" : ".") + Excerpt(key) +
+                           ": given twice (each key once per object; a reader would keep only "
+                           "one of them)");
+        }
+        o.last_key = key;
+        break;
+      }
+      default:
+        break;
+    }
+    return true;
+  };
+  try {
+    return json::parse(text, callback);
+  } catch (const json::exception& e) {  // syntax, or a number like 1e309
+    throw InputError(path + ": not valid JSON (" + Excerpt(e.what(), 300) + ")");
+  }
+}
+
 ParametersFile ReadParametersJson(const std::string& path, const std::vector<std::string>& sections,
                                   const std::string& expected_what) {
-  json root;
-  try {
-    root = json::parse(ReadFile(path));
-  } catch (const json::exception& e) {  // syntax, or a number like 1e309
-    throw InputError(path + ": not valid JSON (" + std::string(e.what()) + ")");
-  }
-  return ParametersFromJson(root, path, sections, expected_what);
+  return ParametersFromJson(ParseJsonStrict(ReadFile(path), path), path, sections, expected_what);
 }
 
 ParametersFile ParametersFromJson(const nlohmann::json& root, const std::string& path,
@@ -89,6 +133,7 @@ ParametersFile ParametersFromJson(const nlohmann::json& root, const std::string&
   if (!params) throw InputError(path + ": parameters: missing (expected " + expected_what + ")");
 
   const ParameterLayout& every = EveryParameter();
+  std::set<std::string> known;
   for (int i = 0; i < every.size(); ++i) {
     const ParameterInfo& info = every.info(i);
     std::vector<std::string> keys = {info.name};
@@ -96,11 +141,25 @@ ParametersFile ParametersFromJson(const nlohmann::json& root, const std::string&
       const EffectSpec& e = GetEffectSpec(*info.effect);
       keys.push_back(e.name + "." + UnitSuffixedKey(e.params[i - every.offset(e.id)]));
     }
+    known.insert(keys.begin(), keys.end());
     for (const std::string& key : keys) {
       if (!params->contains(key)) continue;
-      out.entries[info.name] = {key, EntryValue((*params)[key], out.At() + key, info.unit)};
+      std::string unit;
+      const double v = EntryValue((*params)[key], out.At() + key, info.unit, &unit);
+      out.entries[info.name] = {key, v, unit};
       break;
     }
+  }
+  for (const auto& [key, value] : params->items()) {
+    if (known.count(key)) continue;
+    // A temperature coefficient of the joint fit: NAME.t1, NAME.t2, ...
+    const std::size_t dot = key.rfind(".t");
+    if (dot != std::string::npos && dot + 2 < key.size() &&
+        key.find_first_not_of("0123456789", dot + 2) == std::string::npos &&
+        every.IndexOf(key.substr(0, dot)) >= 0) {
+      continue;
+    }
+    out.unknown_keys.push_back(key);
   }
   return out;
 }

@@ -26,15 +26,21 @@ struct ParametersFile {
   struct Entry {
     std::string key;    // as written in the file (for messages)
     double value_file;  // in the unit of docs/file-formats.md
+    std::string unit;   // the entry's "unit" as written, "" when not given
   };
   std::map<std::string, Entry> entries;  // by parameter name (ParameterLayout names)
+  // Keys of the parameters object that name no parameter of this build (nor
+  // a temperature coefficient "NAME.tK"): ignored by truth readers (SPEC
+  // section 7), refused by LoadCalibration.
+  std::vector<std::string> unknown_keys;
   // "PATH: SECTION." for messages about one entry.
   std::string At() const { return path + ": " + section + "."; }
 };
 
 // Reads PATH and the first of `sections` that holds a "parameters" object
 // ("" for the top level, "rts", "batch"). Throws InputError:
-//   "PATH: not valid JSON (...)", "PATH: parameters: missing (expected WHAT)",
+//   "PATH: not valid JSON (...)", "PATH: KEY: given twice ...",
+//   "PATH: parameters: missing (expected WHAT)",
 //   "PATH: SECTION.KEY: expected a number or {\"value\": number}" / "no \"value\"" /
 //   "unit U, expected \"V\" (docs/file-formats.md)" / "value is not a number: X" /
 //   "value is not finite".
@@ -45,6 +51,11 @@ ParametersFile ReadParametersJson(const std::string& path, const std::vector<std
 ParametersFile ParametersFromJson(const nlohmann::json& root, const std::string& path,
                                   const std::vector<std::string>& sections,
                                   const std::string& expected_what);
+
+// Parses JSON text like json::parse, and also refuses a key given twice in
+// one object (json::parse keeps the last): InputError "PATH: not valid JSON
+// (...)" or "PATH: KEY.PATH: given twice (each key once per object)".
+nlohmann::json ParseJsonStrict(const std::string& text, const std::string& path);
 
 // name -> value in file units (the form SetFromFileUnits takes).
 std::map<std::string, double> FileValues(const ParametersFile& p);

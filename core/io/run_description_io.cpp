@@ -2,17 +2,18 @@
 // constraints, and the column mapping and mounting for foreign data files.
 #include "core/io/run_description_io.h"
 
-#include <cstdio>
-
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <set>
 
 #include "core/io/column_mapping.h"
 #include "core/io/constraint_parser.h"
-#include "core/model/errors.h"
+#include "core/io/data_table.h"
 #include "core/io/file_util.h"
 #include "core/io/plausibility.h"
 #include "core/io/yaml_fields.h"
+#include "core/model/errors.h"
 
 namespace triadcal {
 
@@ -119,11 +120,16 @@ void ParseDataFormat(const YAML::Node& node, const YamlPlace& at, RunDescription
       p.Fail("expected the list of column names of a file without a header line, got " +
              DescribeNode(h));
     }
+    if (h.size() > kMaxColumns) {
+      p.Fail(std::to_string(h.size()) + " column names, more than the bound " +
+             std::to_string(kMaxColumns));
+    }
+    std::set<std::string> seen;
     for (std::size_t i = 0; i < h.size(); ++i) {
       const std::string name = ReadString(h[i], p.Index(i));
       if (name.empty()) p.Index(i).Fail("empty column name");
-      for (const std::string& seen : run->data_header) {
-        if (seen == name) p.Index(i).Fail("column name '" + name + "' given twice");
+      if (!seen.insert(name).second) {
+        p.Index(i).Fail("column name '" + Excerpt(name) + "' given twice");
       }
       run->data_header.push_back(name);
     }
@@ -280,7 +286,11 @@ std::string RunDescriptionToYaml(const RunDescription& run, const std::string& d
     out << YAML::Key << "positions" << YAML::Value << YAML::BeginMap;
     for (const auto& [label, up] : run.positions) {
       out << YAML::Key << label << YAML::Value;
-      EmitVector(out, up);
+      if (up.isZero()) {
+        out << "none";
+      } else {
+        EmitVector(out, up);
+      }
     }
     out << YAML::EndMap;
   }

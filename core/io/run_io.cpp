@@ -31,15 +31,20 @@ bool IsMatFile(const std::string& path) {
   return ext == ".mat";
 }
 
+// The names of a file's columns or variables for a message: each an
+// excerpt, at most 12 of them (a header line may be anything: a binary file,
+// /proc/self/environ, a million names).
 std::string JoinNames(const std::vector<std::string>& v) {
   std::string s;
-  for (const std::string& x : v) s += (s.empty() ? "" : ", ") + x;
+  const std::size_t shown = std::min<std::size_t>(v.size(), 12);
+  for (std::size_t i = 0; i < shown; ++i) s += (i ? ", " : "") + Excerpt(v[i], 40);
+  if (shown < v.size()) s += ", ... (" + std::to_string(v.size()) + " in all)";
   return s;
 }
 
 std::string Label(const DataTable& table, const std::string& name, const ColumnSource& src) {
   if (src.constant) return name + " (constant)";
-  std::string s = (table.is_mat ? "variable '" : "column '") + src.source + "'";
+  std::string s = (table.is_mat ? "variable '" : "column '") + Excerpt(src.source) + "'";
   return src.source == name ? s : s + " (" + name + ")";
 }
 
@@ -47,11 +52,11 @@ std::string Label(const DataTable& table, const std::string& name, const ColumnS
                                 const ColumnSource& src) {
   const std::string what = src.source == name ? "" : " (for " + name + ")";
   if (table.is_mat) {
-    throw InputError(table.path + ": variable '" + src.source + "'" + what +
+    throw InputError(table.path + ": variable '" + Excerpt(src.source) + "'" + what +
                      " not found (the file has: " + JoinNames(table.names) + ")");
   }
   throw InputError(table.path + ":" + std::to_string(table.header_line) + ": missing column '" +
-                   src.source + "'" + what + " (header: " + JoinNames(table.names) + ")");
+                   Excerpt(src.source) + "'" + what + " (header: " + JoinNames(table.names) + ")");
 }
 
 // Channel `name` in our units, or empty values when it is optional and absent.
@@ -116,8 +121,12 @@ void AppendDouble(double x, std::string* out) {
 RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
   const std::string where = run.yaml_path.empty() ? run.data_path : run.yaml_path + ": data";
   if (run.data_path.empty()) throw InputError(where + ": no data file given");
-  if (!fs::is_regular_file(run.data_path)) {
-    throw InputError(where + ": no such file '" + run.data_path + "'");
+  const std::string problem = InputFileProblem(run.data_path);
+  if (problem == "no such file") {
+    throw InputError(where + ": no such file '" + PathForMessage(run.data_path) + "'");
+  }
+  if (!problem.empty()) {
+    throw InputError(where + ": cannot read '" + PathForMessage(run.data_path) + "': " + problem);
   }
 
   // Read the columns the mapping asks for.

@@ -1,9 +1,15 @@
 // Typed YAML field access with "FILE: key.path: what is wrong" errors.
 #include "core/io/yaml_fields.h"
 
+#include <yaml-cpp/eventhandler.h>
+#include <yaml-cpp/parser.h>
+
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <set>
+#include <sstream>
 
 #include "core/io/file_util.h"
 #include "core/model/errors.h"
@@ -19,31 +25,84 @@ YamlPlace YamlPlace::Index(std::size_t i) const {
 }
 
 std::string YamlPlace::Message(const std::string& what) const {
-  return path.empty() ? where + ": " + what : where + ": " + path + ": " + what;
+  // A key path is short; one that is not holds a key read from the file.
+  const std::string shown = path.size() <= 160 ? path : Excerpt(path, 100);
+  return path.empty() ? where + ": " + what : where + ": " + shown + ": " + what;
 }
 
 void YamlPlace::Fail(const std::string& what) const { throw InputError(Message(what)); }
 
-YAML::Node LoadYamlFile(const std::string& path) {
-  if (!std::filesystem::is_regular_file(path)) {
-    throw InputError(path + ": cannot read (no such file or not readable)");
+namespace {
+
+// Whether a YAML document holds anything, and where it starts: the events of
+// one document from the parser, counted.
+class DocumentContent : public YAML::EventHandler {
+ public:
+  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark& mark, YAML::anchor_t) override { Note(mark); }
+  void OnScalar(const YAML::Mark& mark, const std::string&, YAML::anchor_t,
+                const std::string&) override {
+    Note(mark);
   }
+  void OnSequenceStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {
+    Note(mark);
+  }
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {
+    Note(mark);
+  }
+  void OnMapEnd() override {}
+
+  bool has_content = false;
+  YAML::Mark start;
+
+ private:
+  void Note(const YAML::Mark& mark) {
+    if (!has_content) start = mark;
+    has_content = true;
+  }
+};
+
+}  // namespace
+
+YAML::Node LoadYamlFile(const std::string& path) {
+  CheckInputFile(path);
   NoteInputFile(path);
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot read (no such file or not readable)");
+  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  YAML::Node root;
   try {
-    return YAML::LoadFile(path);
+    root = YAML::Load(text);
+    // One document per file: a second one (after "---") would be ignored,
+    // and what it holds with it. Only the first two documents are parsed
+    // (YAML::LoadAll never ends on some damaged input); an empty one after a
+    // trailing "---" holds nothing.
+    std::istringstream again(text);
+    YAML::Parser parser(again);
+    DocumentContent first, second;
+    if (parser.HandleNextDocument(first) && parser.HandleNextDocument(second) &&
+        second.has_content) {
+      throw InputError(path + ":" + std::to_string(second.start.line + 1) +
+                       ": a second YAML document (after ---); a triadcal file holds one (merge "
+                       "them, or remove the ---)");
+    }
   } catch (const YAML::ParserException& e) {
     throw InputError(path + ":" + std::to_string(e.mark.line + 1) +
-                     ": YAML syntax error: " + e.msg);
-  } catch (const YAML::BadFile&) {
-    throw InputError(path + ": cannot read (no such file or not readable)");
+                     ": YAML syntax error: " + Excerpt(e.msg, 120));
   }
+  return root;
 }
 
 std::string DescribeNode(const YAML::Node& node) {
   if (!node.IsDefined() || node.IsNull()) return "nothing";
   if (node.IsSequence()) return "a list";
   if (node.IsMap()) return "a map";
-  return "'" + node.Scalar() + "'";
+  return "'" + Excerpt(node.Scalar()) + "'";
 }
 
 std::string KeyOf(const YAML::Node& key, const YamlPlace& at) {
@@ -83,13 +142,13 @@ double ReadNumber(const YAML::Node& node, const YamlPlace& at) {
 
 double ReadPositive(const YAML::Node& node, const YamlPlace& at) {
   const double v = ReadNumber(node, at);
-  if (!(v > 0.0)) at.Fail("must be > 0, got " + node.Scalar());
+  if (!(v > 0.0)) at.Fail("must be > 0, got " + Excerpt(node.Scalar()));
   return v;
 }
 
 double ReadNonNegative(const YAML::Node& node, const YamlPlace& at) {
   const double v = ReadNumber(node, at);
-  if (v < 0.0) at.Fail("must be >= 0, got " + node.Scalar());
+  if (v < 0.0) at.Fail("must be >= 0, got " + Excerpt(node.Scalar()));
   return v;
 }
 

@@ -3,40 +3,29 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+
+#include "core/model/errors.h"
 
 namespace triadcal {
-namespace {
 
-// Least-squares cubic through (s_j, y_j); returns the coefficient vector c.
-// Columns are scaled by h so the normal matrix stays well conditioned.
-Eigen::Vector4d LocalCubic(const double* t, const double* y, int n, double t0, double h,
-                           int degree) {
-  Eigen::Matrix4d A = Eigen::Matrix4d::Zero();
-  Eigen::Vector4d b = Eigen::Vector4d::Zero();
-  for (int j = 0; j < n; ++j) {
-    const double s = (t[j] - t0) / h;
-    const double p[4] = {1.0, s, s * s, s * s * s};
-    for (int r = 0; r <= degree; ++r) {
-      b[r] += p[r] * y[j];
-      for (int c = 0; c <= degree; ++c) A(r, c) += p[r] * p[c];
-    }
+void AngleDerivativeOptions::Check() const {
+  if (std::isfinite(half_window_s) && half_window_s >= kMinHalfWindow_s &&
+      half_window_s <= kMaxHalfWindow_s) {
+    return;
   }
-  const int m = degree + 1;
-  Eigen::Vector4d c = Eigen::Vector4d::Zero();
-  c.head(m) = A.topLeftCorner(m, m).ldlt().solve(b.head(m));
-  for (int r = 1; r < 4; ++r) c[r] /= std::pow(h, r);
-  return c;
+  char text[160];
+  std::snprintf(text, sizeof(text), "%g s is outside [%g, %g] s", half_window_s, kMinHalfWindow_s,
+                kMaxHalfWindow_s);
+  throw OptionError("half_window_s", text);
 }
-
-}  // namespace
 
 namespace {
 
 // Rate and acceleration of both axes at sample k from the samples in the
 // window [lo, hi) (widened to at least 5 points). The two axes share the time
 // stamps, so one pass over the window gives the power sums of the normal
-// matrix (A(r, c) = sum s^(r+c), s = (t - t_k) / h) for both, as LocalCubic
-// builds it column by column.
+// matrix (A(r, c) = sum s^(r+c), s = (t - t_k) / h) for both.
 void FitAt(const RunData& run, std::size_t k, std::size_t lo, std::size_t hi, double h,
            BenchAngles<double>* o) {
   const std::size_t n = run.size();
@@ -100,6 +89,7 @@ bool NeedsRatesAtEverySample(const ParameterLayout& layout) {
 std::vector<BenchAngles<double>> EstimateAngleDerivatives(const RunData& run,
                                                           const AngleDerivativeOptions& opt,
                                                           const std::vector<std::size_t>* only) {
+  opt.Check();
   const std::size_t n = run.size();
   std::vector<BenchAngles<double>> out(n);
   for (std::size_t k = 0; k < n; ++k) {
@@ -128,16 +118,28 @@ std::vector<BenchAngles<double>> EstimateAngleDerivatives(const RunData& run,
 }
 
 double RateNoiseGain(double dt_s, const AngleDerivativeOptions& opt) {
-  // The fitted slope is a linear combination sum_j w_j y_j; its noise gain is |w|.
-  const int half = std::max(2, static_cast<int>(std::floor(opt.half_window_s / dt_s + 1e-9)));
-  const int n = 2 * half + 1;
-  std::vector<double> t(n);
-  for (int j = 0; j < n; ++j) t[j] = (j - half) * dt_s;
+  opt.Check();
+  // The fitted slope is a linear combination sum_j w_j y_j; its noise gain is
+  // |w|. With P the n x 4 matrix of rows p_j = (1, s_j, s_j^2, s_j^3),
+  // s_j = t_j / h, the coefficients are (P^T P)^-1 P^T y, so w_j = e_1^T
+  // (P^T P)^-1 p_j / h: one normal matrix for all j (linear in n; a fit per
+  // unit vector made it quadratic, minutes for a wide window on a fast run).
+  if (!(dt_s > 0.0) || !std::isfinite(dt_s)) return 0.0;
+  const double half_d = std::floor(opt.half_window_s / dt_s + 1e-9);
+  const long half = std::max(2L, static_cast<long>(std::min(half_d, 1e7)));
+  const long n = 2 * half + 1;
+  const double h = opt.half_window_s;
+  Eigen::Matrix4d A = Eigen::Matrix4d::Zero();
+  for (long j = 0; j < n; ++j) {
+    const double s = (j - half) * dt_s / h;
+    const Eigen::Vector4d p(1.0, s, s * s, s * s * s);
+    A += p * p.transpose();
+  }
+  const Eigen::Vector4d row = A.ldlt().solve(Eigen::Vector4d::UnitY());  // (P^T P)^-1 e_1
   double sum2 = 0.0;
-  for (int j = 0; j < n; ++j) {
-    std::vector<double> e(n, 0.0);
-    e[j] = 1.0;
-    const double w = LocalCubic(t.data(), e.data(), n, 0.0, opt.half_window_s, 3)[1];
+  for (long j = 0; j < n; ++j) {
+    const double s = (j - half) * dt_s / h;
+    const double w = (row[0] + s * (row[1] + s * (row[2] + s * row[3]))) / h;
     sum2 += w * w;
   }
   return std::sqrt(sum2);

@@ -22,6 +22,16 @@ namespace triadcal {
 
 struct AngleDerivativeOptions {
   double half_window_s = 0.1;
+  // Bounds of half_window_s [s]: below 1 ms the window holds one sample at
+  // any bench rate (the fit widens it to 5 samples, so nothing is gained);
+  // above 2 s it smooths over the bench's swings (periods of seconds), and
+  // every window spans most of a short run (0 s made the fit divide by 0, 1e6 s
+  // ran for minutes).
+  static constexpr double kMinHalfWindow_s = 1e-3;
+  static constexpr double kMaxHalfWindow_s = 2.0;
+  // Throws OptionError("half_window_s", ...) unless half_window_s is finite
+  // and within the bounds; the functions below call it first.
+  void Check() const;
 };
 
 // Per sample: recorded angle (as is), rate and angular acceleration of both

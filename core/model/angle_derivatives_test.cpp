@@ -6,8 +6,11 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
 #include <cmath>
 #include <random>
+
+#include "core/model/errors.h"
 
 namespace triadcal {
 namespace {
@@ -104,6 +107,55 @@ TEST(AngleDerivatives, RateNoiseGainMatchesTheScatterOfTheEstimatedRate) {
   const double expected = RateNoiseGain(dt, opt) * sigma;
   // 795 samples: the scatter's own relative sampling error is about 2.5 %.
   EXPECT_NEAR(std::sqrt(sum2 / n) / expected, 1.0, 0.1);
+}
+
+// RateNoiseGain from one normal matrix equals |w| of the slope's weights
+// computed the slow way: one least-squares cubic per unit vector.
+TEST(AngleDerivatives, RateNoiseGainEqualsTheWeightsOfTheSlope) {
+  for (const double dt : {0.01, 0.002, 0.05}) {
+    for (const double h : {0.02, 0.1, 0.5}) {
+      const int half = std::max(2, static_cast<int>(std::floor(h / dt + 1e-9)));
+      const int n = 2 * half + 1;
+      Eigen::MatrixXd P(n, 4);
+      for (int j = 0; j < n; ++j) {
+        const double s = (j - half) * dt / h;
+        P.row(j) << 1.0, s, s * s, s * s * s;
+      }
+      double sum2 = 0.0;
+      for (int j = 0; j < n; ++j) {
+        const Eigen::VectorXd e = Eigen::VectorXd::Unit(n, j);
+        const double w = P.colPivHouseholderQr().solve(e)[1] / h;
+        sum2 += w * w;
+      }
+      EXPECT_NEAR(RateNoiseGain(dt, AngleDerivativeOptions{h}), std::sqrt(sum2),
+                  1e-9 * std::sqrt(sum2))
+          << dt << " " << h;
+    }
+  }
+}
+
+// A window of 0, NaN or 1e6 s is a setting error naming the field (it made the
+// fit divide by zero, or span the whole run for every sample).
+TEST(AngleDerivatives, WindowOutsideItsBoundsIsAnOptionError) {
+  RunData d;
+  for (int k = 0; k < 50; ++k) {
+    d.t_s.push_back(0.01 * k);
+    for (int i = 0; i < 2; ++i) d.lambda_rad[i].push_back(0.0);
+  }
+  for (const double h : {0.0, -0.1, std::nan(""), 1e6, HUGE_VAL}) {
+    const AngleDerivativeOptions opt{h};
+    try {
+      EstimateAngleDerivatives(d, opt);
+      ADD_FAILURE() << h;
+    } catch (const OptionError& e) {
+      EXPECT_EQ(e.option(), "half_window_s");
+      EXPECT_NE(e.problem().find("is outside [0.001, 2] s"), std::string::npos) << e.problem();
+    }
+    EXPECT_THROW(RateNoiseGain(0.01, opt), OptionError) << h;
+  }
+  EXPECT_EQ(std::string(OptionError("half_window_s", "x").what()), "half_window_s: x");
+  EXPECT_NO_THROW(EstimateAngleDerivatives(d, AngleDerivativeOptions{0.001}));
+  EXPECT_NO_THROW(EstimateAngleDerivatives(d, AngleDerivativeOptions{2.0}));
 }
 
 }  // namespace

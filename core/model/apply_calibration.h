@@ -32,6 +32,9 @@ struct Calibration {
   std::string command;  // the "command" of the OUT file, or ""
   ParameterLayout layout;
   Eigen::VectorXd theta;  // SI
+  // The unit of the readings it was estimated from ("mV", "mg" or "counts"),
+  // as its entries' units say; "" when no entry gave a unit (truth.json).
+  std::string readings_unit;
   // A joint fit of several runs (docs/multi-run.md) gives the triad in the
   // IMU's own axes ("axes": "imu"): applied through the run's mounting
   // (core/model/mounting.h). Other calibrations are in the axes of the run

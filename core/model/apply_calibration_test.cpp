@@ -264,7 +264,10 @@ TEST_F(ApplyTest, BadCalibrationFilesGiveOneLine) {
                 "names)\n");
   j = nlohmann::json::parse(ParametersJsonText("fit"));
   j["parameters"]["Ky"]["value"] = 0;
-  EXPECT_EQ(error_of(j.dump()), "triadcal: error: " + f + ": parameters.Ky: scale factor 0\n");
+  EXPECT_EQ(error_of(j.dump()),
+            "triadcal: error: " + f +
+                ": parameters.Ky: 0 mV/g: a scale factor must be > 0 (an axis that reads -1 g "
+                "when it points up belongs in the run's mounting.axes)\n");
   // The run is checked too: a missing run.yaml.
   EXPECT_EQ(RunCli("apply " + Write("ok.json", ParametersJsonText("fit")) + " " +
                        Path("none.yaml") + " -o " + out,

@@ -1,6 +1,7 @@
 // Errors that reach the user as one line on stderr: "where: what is wrong".
 #pragma once
 
+#include <cstddef>
 #include <stdexcept>
 #include <string>
 
@@ -29,5 +30,11 @@ class OptionError : public InputError {
 // The text of an error as one printable line: control characters (a newline,
 // a tab, an escape byte read from a file) become \n, \t or \xNN.
 std::string OneLine(const std::string& text);
+
+// At most `max_chars` characters of text read from an input, escaped as by
+// OneLine, for quoting it in an error: a longer text keeps its first
+// max_chars - 20 and last 12 characters around "...". An error never echoes
+// more of a file than this (a field, a header name, a JSON value).
+std::string Excerpt(const std::string& text, std::size_t max_chars = 60);
 
 }  // namespace triadcal

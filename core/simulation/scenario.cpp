@@ -11,11 +11,12 @@
 #include <string>
 #include <vector>
 
-#include "core/model/errors.h"
 #include "core/io/file_util.h"
-#include "core/simulation/simulator.h"
-#include "core/io/yaml_fields.h"
+#include "core/io/plausibility.h"
 #include "core/io/run_description_io.h"
+#include "core/io/yaml_fields.h"
+#include "core/model/errors.h"
+#include "core/simulation/simulator.h"
 
 namespace triadcal {
 namespace {
@@ -76,6 +77,21 @@ void ParseProfile(const YAML::Node& n, const YamlPlace& at, HarmonicProfile* p) 
   if (n["phase_deg"]) {
     ReadPair(n["phase_deg"], at.Child("phase_deg"), pair);
     for (int i = 0; i < 2; ++i) p->phase_rad[i] = pair[i] * kDegToRad;
+  }
+  // The peak rate A 2 pi / T of each axis within the bound of run data: a
+  // run beyond it would be refused by every command (and 1e300 deg gave NaN
+  // readings).
+  for (int i = 0; i < 2; ++i) {
+    const double amplitude_deg = std::abs(p->amplitude_rad[i]) / kDegToRad;
+    const double peak_deg_s = amplitude_deg * 2.0 * kPi / p->period_s[i];
+    if (!(peak_deg_s <= PlausibilityBounds::kMaxRate_deg_s)) {
+      char text[200];
+      std::snprintf(text, sizeof(text),
+                    "%g deg over a period of %g s swings at up to %g deg/s, beyond the bound %g "
+                    "deg/s of run data",
+                    amplitude_deg, p->period_s[i], peak_deg_s, PlausibilityBounds::kMaxRate_deg_s);
+      at.Child("amplitude_deg").Index(i).Fail(text);
+    }
   }
   if (n["duration_s"]) p->duration_s = ReadPositive(n["duration_s"], at.Child("duration_s"));
   if (n["rate_hz"]) p->rate_hz = ReadPositive(n["rate_hz"], at.Child("rate_hz"));

@@ -76,6 +76,34 @@ std::string CsvComment(const Scenario& s) {
          "\nseed: " + std::to_string(s.seed);
 }
 
+// The staging folders ".simulate.tmp.HOST.PID" (and ".simulate.tmp.PID" of
+// earlier versions) of processes of this host that are gone (kill -9).
+void RemoveStaleStaging(const fs::path& dir) {
+  const std::string prefix = ".simulate.tmp.";
+  const std::string host = HostTag();
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.compare(0, prefix.size(), prefix) != 0) continue;
+    std::string rest = name.substr(prefix.size());
+    const std::size_t dot = rest.rfind('.');
+    if (dot != std::string::npos) {
+      if (rest.substr(0, dot) != host) continue;
+      rest = rest.substr(dot + 1);
+    }
+    if (rest.empty() || rest.size() > 9 ||
+        rest.find_first_not_of("0123456789") != std::string::npos) {
+      continue;
+    }
+    const long pid = std::stol(rest);
+    std::error_code rm;
+    if (pid != static_cast<long>(getpid()) && ProcessIsGone(pid) &&
+        fs::is_directory(fs::symlink_status(it->path(), rm))) {
+      fs::remove_all(it->path(), rm);
+    }
+  }
+}
+
 }  // namespace
 
 void WriteSimulation(const Scenario& s, const RunData& data, const std::string& dir,
@@ -89,11 +117,25 @@ void WriteSimulation(const Scenario& s, const RunData& data, const std::string& 
   std::error_code ec;
   const bool existed = fs::exists(out, ec);
   if (existed && !fs::is_directory(out, ec)) throw InputError(dir + ": exists and is not a folder");
+  // The files are moved in by rename, which would replace whatever has their
+  // names: each must be missing or a regular file, and no input.
+  for (const std::string& name : names) {
+    const fs::path p = out / name;
+    if (fs::is_symlink(fs::symlink_status(p, ec))) {
+      throw InputError(p.string() +
+                       ": cannot write: is a symbolic link (simulate moves its "
+                       "files into the folder; remove the link or choose another "
+                       "folder)");
+    }
+    CheckOutputFile(p.string());
+    CheckOutputsAreNotInputs(p.string());
+  }
+  if (existed) RemoveStaleStaging(out);
   if (!existed) {
     fs::create_directories(out, ec);
     if (ec) throw InputError(dir + ": cannot create the folder: " + ec.message());
   }
-  const fs::path staging = out / (".simulate.tmp." + std::to_string(getpid()));
+  const fs::path staging = out / (".simulate.tmp." + HostTag() + "." + std::to_string(getpid()));
   fs::remove_all(staging, ec);
   fs::create_directory(staging, ec);
   if (ec) {

@@ -5,7 +5,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
+
+#include "core/model/errors.h"
 
 namespace triadcal {
 
@@ -92,6 +95,18 @@ RunData Simulate(const Scenario& s) {
     for (int i = 0; i < 2; ++i) {
       d.lambda_rad[i].push_back(recorded.axis[i].angle + s.angle_noise_rad * angle_noise[i]);
       if (s.write_rates) d.rate_rad_s[i].push_back(recorded.axis[i].rate);
+    }
+    // A scenario whose numbers overflow the model (a huge amplitude or truth
+    // value) gives NaN or infinite readings, before any saturation: an error,
+    // never a file of NaN (or of saturated nonsense).
+    const double angle_sum = recorded.axis[0].angle + recorded.axis[1].angle;
+    if (!std::isfinite(angle_sum) || !readings_mV.allFinite()) {
+      char t_text[32];
+      std::snprintf(t_text, sizeof(t_text), "%g", t_s);
+      throw InputError(s.yaml_path + ": the simulated " +
+                       (std::isfinite(angle_sum) ? "readings" : "angles") + " at t = " + t_text +
+                       " s are not finite numbers: check the profile and truth values (a number "
+                       "beyond what the model can evaluate)");
     }
     for (int i = 0; i < 3; ++i) {
       double w = readings_mV[i] + accel_sigma_mV[i] * accel_noise[i];

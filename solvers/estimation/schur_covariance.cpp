@@ -3,6 +3,18 @@
 #include <Eigen/Cholesky>
 
 namespace triadcal {
+namespace {
+
+// S^-1 G for the theta columns G (6 x n). With no columns (only the states
+// solved for) it returns the empty result without calling the solve: Eigen's
+// triangular solve reads an empty right-hand side's null data (UBSan).
+Eigen::MatrixXd SolveColumns(const Eigen::LDLT<Eigen::Matrix<double, 6, 6>>& ldlt,
+                             const Eigen::MatrixXd& G) {
+  if (G.cols() == 0) return Eigen::MatrixXd(6, 0);
+  return ldlt.solve(G);
+}
+
+}  // namespace
 
 Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process,
                                         const std::vector<MeasurementBlock>& measurement,
@@ -23,7 +35,7 @@ Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process
   }
   for (std::size_t e = 0; e < E; ++e) {
     const Eigen::LDLT<Mat6> ldlt(S);
-    const Eigen::MatrixXd SiG = ldlt.solve(G);
+    const Eigen::MatrixXd SiG = SolveColumns(ldlt, G);
     Htt.noalias() -= G.transpose() * SiG;
     if (e + 1 == E) break;
     const ProcessBlock& p = process[e];
@@ -95,7 +107,7 @@ ReducedOverStates ReduceOverStates(const std::vector<ProcessBlock>& process,
   std::vector<Vec6> Sinv_h(with_states ? E : 0);
   for (std::size_t e = 0; e < E; ++e) {
     const Eigen::LDLT<Mat6> ldlt(S);
-    const Eigen::MatrixXd SiG = ldlt.solve(G);
+    const Eigen::MatrixXd SiG = SolveColumns(ldlt, G);
     const Vec6 Sih = ldlt.solve(h);
     out.information.noalias() -= G.transpose() * SiG;
     out.gradient.noalias() -= G.transpose() * Sih;
@@ -157,7 +169,7 @@ std::vector<Eigen::VectorXd> EpochScores(const std::vector<ProcessBlock>& proces
     const Eigen::MatrixXd Gf = G + p.A.transpose() * p.C;
     const Vec6 hf = h + p.A.transpose() * p.r0;
     const Eigen::LDLT<Mat6> ldlt(Sf);
-    const Eigen::MatrixXd SiG = ldlt.solve(Gf);
+    const Eigen::MatrixXd SiG = SolveColumns(ldlt, Gf);
     const Vec6 Sih = ldlt.solve(hf);
     done.noalias() -= Gf.transpose() * Sih;
     const Mat6 U = p.A.transpose() * p.B;

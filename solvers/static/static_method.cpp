@@ -185,9 +185,26 @@ std::string JoinSet(const std::set<std::string>& s, std::size_t max_items = 8) {
   std::size_t n = 0;
   for (const std::string& x : s) {
     if (n++ == max_items) return out + ", ...";
-    out += (out.empty() ? "" : ", ") + x;
+    out += (out.empty() ? "" : ", ") + Excerpt(x, 40);
   }
   return out;
+}
+
+// A direction for messages: "+x" for an axis, "[0.7071, 0, 0.7071]" otherwise.
+std::string DirectionText(const Eigen::Vector3d& v) {
+  for (int i = 0; i < 3; ++i) {
+    if (std::abs(std::abs(v[i]) - 1.0) < 1e-12) {
+      return std::string(v[i] > 0 ? "+" : "-") + "xyz"[i];
+    }
+  }
+  return "[" + Short(v[0]) + ", " + Short(v[1]) + ", " + Short(v[2]) + "]";
+}
+
+// The signed axis nearest a direction ("-x").
+std::string NearestAxis(const Eigen::Vector3d& v) {
+  Eigen::Index i = 0;
+  v.cwiseAbs().maxCoeff(&i);
+  return std::string(v[i] >= 0 ? "+" : "-") + "xyz"[i];
 }
 
 // The parameters held at nominal for this reference, with their reasons.
@@ -368,24 +385,44 @@ namespace {
 void FindPositions(const RunDescription& run, const RunData& data, const StaticOptions& options,
                    StaticResult* r) {
   std::set<std::string> position_labels;
+  const StillTest test = r->reference == StaticReference::kAngles ? StillTest::kAngleRates
+                                                                  : StillTest::kReadingVariance;
   if (r->reference == StaticReference::kLabels) {
     std::set<std::string> in_data(data.label.begin(), data.label.end());
+    std::set<std::string> declared, undeclared;
     for (const auto& [label, up] : PositionsOf(run)) {
-      if (in_data.count(label)) position_labels.insert(label);
+      declared.insert(label);
+      if (in_data.count(label) && !up.isZero()) position_labels.insert(label);
+    }
+    for (const std::string& label : in_data) {
+      if (!declared.count(label)) undeclared.insert(label);
     }
     if (position_labels.empty()) {
       throw InputError(run.yaml_path + ": positions: none of the position labels (" +
-                       JoinSet([&] {
-                         std::set<std::string> s;
-                         for (const auto& kv : PositionsOf(run)) s.insert(kv.first);
-                         return s;
-                       }()) +
-                       ") occurs in column '" + LabelSource(run) + "' (it has: " +
-                       JoinSet(in_data) + ")");
+                       JoinSet(declared) + ") occurs in column '" + LabelSource(run) +
+                       "' (it has: " + JoinSet(in_data) + ")");
+    }
+    // A label without a direction whose samples hold still data is a position
+    // the run does not declare (a typo, another convention): dropping it
+    // silently loses an orientation (Kx sigma 3.4 instead of 0.03 mV/g). Labels
+    // of motion (no still interval) are not positions; `LABEL: none` says so.
+    if (!undeclared.empty()) {
+      const StillResult probe = FindStillIntervals(data, test, run.noise_mV, run.angle_noise_rad,
+                                                   undeclared, options.still);
+      std::map<std::string, double> still_s;
+      for (const StillInterval& iv : probe.intervals) still_s[iv.label] += iv.duration_s();
+      if (!still_s.empty()) {
+        const auto most =
+            std::max_element(still_s.begin(), still_s.end(),
+                             [](const auto& x, const auto& y) { return x.second < y.second; });
+        throw InputError(run.yaml_path + ": positions: label '" + Excerpt(most->first, 40) +
+                         "' of column '" + LabelSource(run) + "' holds " + Short(most->second) +
+                         " s of still data but is no declared position (positions: " +
+                         JoinSet(declared) + "): give the direction that points up in it, or `" +
+                         Excerpt(most->first, 40) + ": none` if it is no position");
+      }
     }
   }
-  const StillTest test = r->reference == StaticReference::kAngles ? StillTest::kAngleRates
-                                                                  : StillTest::kReadingVariance;
   r->still = FindStillIntervals(data, test, run.noise_mV, run.angle_noise_rad, position_labels,
                                 options.still);
   r->positions = MakePositions(run, data, r->reference, r->still);
@@ -398,6 +435,44 @@ void FindPositions(const RunDescription& run, const RunData& data, const StaticO
                           : "reading std below " + Short(r->still.threshold) +
                                 " mV; check triad.noise_mV or the noise factor") +
                      ")");
+  }
+}
+
+// Labels against the data: the gravity direction of each labelled position's
+// mean reading (at the nominal scale and bias) must be within 45 deg of the
+// direction declared up. Labels swapped in the data (x_p where x_a was held)
+// otherwise fit "perfectly" with Kx = -171.5 mV/g.
+void CheckLabelsAgreeWithData(const RunDescription& run, const Eigen::VectorXd& theta_nominal,
+                              const StaticResult& r) {
+  if (r.reference != StaticReference::kLabels) return;
+  const double cos_bound = std::cos(kMaxLabelDisagreementDeg * kDegToRad);
+  for (const StaticPosition& p : r.positions) {
+    Eigen::Vector3d u;
+    for (int i = 0; i < 3; ++i) {
+      u[i] = (p.mean_mV[i] - theta_nominal[kW0x + i]) / theta_nominal[kKx + i];
+    }
+    if (!(u.norm() > 0.0)) continue;
+    u.normalize();
+    const double cos_angle = u.dot(p.up);
+    if (cos_angle >= cos_bound) continue;
+    // Which declared position the data look like, for the message.
+    std::string like;
+    double best = cos_bound;
+    for (const StaticPosition& q : r.positions) {
+      if (q.name != p.name && u.dot(q.up) > best) {
+        best = u.dot(q.up);
+        like = q.name;
+      }
+    }
+    const double angle_deg = std::acos(std::clamp(cos_angle, -1.0, 1.0)) / kDegToRad;
+    throw InputError(run.yaml_path + ": positions." + Excerpt(p.name, 40) + ": declared " +
+                     DirectionText(PositionsOf(run).at(p.name)) +
+                     " up, but its still readings have gravity along " + NearestAxis(u) +
+                     " (platform axes, " + Short(angle_deg) + " deg away; bound " +
+                     Short(kMaxLabelDisagreementDeg) + " deg): " +
+                     (like.empty() ? std::string("a wrong label or direction?")
+                                   : "are the labels " + Excerpt(p.name, 40) + " and " +
+                                         Excerpt(like, 40) + " swapped?"));
   }
 }
 
@@ -593,6 +668,7 @@ StaticResult SolveStatic(const RunDescription& run, const RunData& data,
   r.prior = MakePrior(run, r.layout);
   StaticProblem sp;
   sp.theta = NominalTheta(run, r.layout);
+  CheckLabelsAgreeWithData(run, sp.theta, r);
   for (const HeldParameter& h : r.held) sp.held_idx.push_back(r.layout.IndexOf(h.name));
   for (int i = 0; i < kN; ++i) {
     if (!sp.held(i)) sp.free_idx.push_back(i);

@@ -62,6 +62,11 @@ namespace triadcal {
 
 enum class StaticReference { kAngles, kLabels, kNone };
 
+// Labels: a position's still readings point gravity within this angle of the
+// direction declared up, or the run is refused (labels swapped, wrong
+// convention).
+constexpr double kMaxLabelDisagreementDeg = 45.0;
+
 const char* ReferenceName(StaticReference r);  // "angles", "labels", "none"
 
 // "auto" picks angles when the bench angles are recorded (not constant

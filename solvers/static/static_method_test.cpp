@@ -244,7 +244,8 @@ TEST(StaticReader, PositionsAndDataFormatErrorsNameTheKey) {
     return ErrorOf([&] { LoadRunDescription(dir.Write("run.yaml", "data: x.csv\n" + yaml)); });
   };
   EXPECT_EQ(error("positions: {x_p: \"+w\"}\n"),
-            f + ": positions.x_p: expected +x, -x, +y, -y, +z, -z or a list [x, y, z], got '+w'");
+            f + ": positions.x_p: expected +x, -x, +y, -y, +z, -z, a list [x, y, z] or none, got "
+                "'+w'");
   EXPECT_EQ(error("positions: {x_p: [0, 0, 0]}\n"),
             f + ": positions.x_p: the up direction must not be [0, 0, 0]");
   EXPECT_EQ(error("positions: []\n"),

@@ -25,13 +25,30 @@ void CheckOptions(const StillOptions& o) {
   auto require = [](bool ok, const char* option, const char* problem) {
     if (!ok) throw OptionError(option, problem);
   };
+  // The lower bounds first (their wording is older), then the upper ones,
+  // which also refuse infinities (a still hold lasts seconds to a minute).
+  using S = StillOptions;
   require(o.min_still_s > 0.0, "min_still_s", "must be > 0");
+  require(o.min_still_s <= S::kMaxMinStill_s, "min_still_s", "must be at most 3600 s");
   require(o.edge_s >= 0.0, "edge_s", "must be >= 0");
+  require(o.edge_s <= S::kMaxWindow_s, "edge_s", "must be at most 600 s");
   require(o.merge_gap_s >= 0.0, "merge_gap_s", "must be >= 0");
+  require(o.merge_gap_s <= S::kMaxWindow_s, "merge_gap_s", "must be at most 600 s");
   require(o.window_s > 0.0, "window_s", "must be > 0");
+  require(o.window_s <= S::kMaxWindow_s, "window_s", "must be at most 600 s");
   require(o.noise_factor > 0.0, "noise_factor", "must be > 0");
+  require(o.noise_factor <= S::kMaxNoiseFactor, "noise_factor", "must be at most 10000");
   require(o.rate_threshold_deg_s >= 0.0, "rate_threshold_deg_s", "must be >= 0 (0: automatic)");
+  require(o.rate_threshold_deg_s <= S::kMaxRateThreshold_deg_s, "rate_threshold_deg_s",
+          "must be at most 3600 deg/s");
   require(o.rate_half_window_s > 0.0, "rate_half_window_s", "must be > 0");
+  AngleDerivativeOptions d;
+  d.half_window_s = o.rate_half_window_s;
+  try {
+    d.Check();
+  } catch (const OptionError& e) {
+    throw OptionError("rate_half_window_s", e.problem());
+  }
 }
 
 // Moving standard deviation over the centred window of w samples (shorter at

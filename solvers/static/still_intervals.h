@@ -42,6 +42,12 @@ struct StillOptions {
   double noise_factor = 2.0;          // reading variance: threshold / declared noise
   double rate_threshold_deg_s = 0.0;  // angle rates: 0 = max(0.05, 5 sigma of lambda')
   double rate_half_window_s = 0.1;    // angle rates: local cubic fit half window
+  // Upper bounds (a still hold lasts seconds to a minute): window_s, edge_s
+  // and merge_gap_s at most 10 minutes, min_still_s an hour.
+  static constexpr double kMaxWindow_s = 600.0;
+  static constexpr double kMaxMinStill_s = 3600.0;
+  static constexpr double kMaxNoiseFactor = 1e4;
+  static constexpr double kMaxRateThreshold_deg_s = 3600.0;
 };
 
 struct StillInterval {

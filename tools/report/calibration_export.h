@@ -18,14 +18,17 @@
 namespace triadcal {
 
 struct CExport {
-  std::string header;  // NAME.h
-  std::string source;  // NAME.c (includes "NAME.h")
+  std::string header;  // FILE.h
+  std::string source;  // FILE.c (includes "FILE.h")
 };
 
-// C99 code for the calibration; `name` prefixes the function and is the base
-// of the file names (a C identifier); `comment` goes into both files' heading
-// (e.g. the provenance), one line per line.
-CExport ExportC(const Calibration& cal, const std::string& name, const std::string& comment);
+// C99 code for the calibration; `name` prefixes the function (a C
+// identifier); `file_base` is the base of the file names, FILE.h and FILE.c
+// (default: name), so that the source includes the header under the name it
+// is written with (`export --name NAME -o OTHER.c`); `comment` goes into both
+// files' heading (e.g. the provenance), one line per line.
+CExport ExportC(const Calibration& cal, const std::string& name, const std::string& comment,
+                const std::string& file_base = "");
 
 // The readings model as matrices, in SI and in g (g0 = 9.80665 m/s^2):
 //
