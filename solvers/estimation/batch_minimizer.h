@@ -1,16 +1,27 @@
 // The one solver of the batch problem: Levenberg-Marquardt on the parameters
 // (the free unknowns of a BatchObjective), every run's trajectory solved for
 // exactly at every evaluation, and each run's reading noise at its maximum
-// likelihood at every accepted point.
+// likelihood at every point evaluated.
 //
-// The unknowns of a step are z = (the free parameters, s = log sigma of each
-// channel of every run whose noise is estimated), and the function is the
-// negative log-likelihood -log L = cost(theta, s) + rho 0.5 sum log det Q(s)
-// (run_evaluation.h). Its gradient is exact; its Hessian is the Gauss-Newton
-// information in theta, 2 q_i in s_i and -2 g_i between them (g_i: channel
-// i's share of the gradient): a step moves the parameters and the noise
-// together, as they are coupled (a parameter that changes a channel's
-// residual changes its noise estimate, and the noise the channels' weights).
+// The function is the negative log-likelihood -log L = cost(theta, s) +
+// rho 0.5 sum log det Q(s) (run_evaluation.h), s = log sigma of each channel
+// of every run whose noise is estimated. Every point the minimiser evaluates
+// has its noise at its maximum there (MaximiseNoise: variance components,
+// reductions only), so the steps are on the likelihood profiled over the
+// noise, in theta alone; its gradient there is the exact gradient in theta
+// (the noise's part vanishes at its maximum).
+//
+// The step's model is Gauss-Newton's information plus a correction S that
+// the steps taken measure (MeasureCurvature, a structured BFGS update as in
+// NL2SOL): a misfit's residuals curve the cost beyond Gauss-Newton's model.
+// The observed coupling of theta and the noise (-2 g_i, channel i's share of
+// the gradient) is left out of the model (Fisher scoring: its expectation is
+// zero); far from the minimum a misfit makes it large and the coupled model
+// promise what the cost does not give: the paper's 90-s 1-kHz run from the
+// RTS start rejected five steps (predicted decrease 4772, actual -2585) and
+// took 9 steps in 15 passes with it, 2 in 3 without it and with S; the real
+// fast roll run 12 in 16 with the rank-one secant of before, 7 in 8 with S
+// (bench/solver_speed.py prints them).
 //
 // The steps, in the order Minimize takes them (after Ceres's
 // TrustRegionMinimizer: the state lives in members, each step is named):
@@ -20,15 +31,12 @@
 //                     (variance components; reductions only)
 //   ComputeStep       converged when the Newton decrement 0.5 g^T H^-1 g
 //                     (~0.5 |step|^2 in sigma units) is below the tolerance;
-//                     else the damped step (B + mu diag H) d = -g, B = H plus
-//                     the curvature the last step measured
+//                     else the damped step (B + mu diag H) d = -g, B = H + S
 //   TryStep           evaluate the trial (one pass); accept it when -log L
 //                     fell (damping by Nielsen's rule on the gain ratio),
 //                     else raise the damping
-//   MeasureCurvature  the curvature of -log L along the accepted step against
-//                     the model's: a misfit's residual curvature makes
-//                     Gauss-Newton converge linearly, the rank-one correction
-//                     restores the step length along the slow direction
+//   MeasureCurvature  the change of the gradient along the accepted step, at
+//                     fixed noise, into S (BFGS on H + S)
 //
 // The answer is the joint maximum of the likelihood in theta and the noises,
 // whatever the path: the exact increments are evaluated at every trial point
@@ -86,14 +94,13 @@ class BatchMinimizer {
   // False when converged (or stopped: summary_.termination says why).
   bool ComputeStep();
   bool TryStep();
-  void MeasureCurvature(const BatchObjective::Point& trial);
+  void MeasureCurvature(const BatchObjective::Point& trial,
+                        const std::vector<Eigen::Vector3d>& trial_noise);
   void Say(const std::string& line) const;
   // -log L up to a constant: the cost and each estimated noise's
   // log-determinant (run_evaluation.h).
   double Objective(const BatchObjective::Point& pt) const;
-  // Its gradient and Hessian over z = (the free unknowns, log sigma of each
-  // noisy run's channels): the Gauss-Newton information, the noise's
-  // curvature 2 q_i, and their coupling -2 g_i (run_evaluation.h).
+  // Its gradient in the free unknowns and their Gauss-Newton information.
   void Model(const BatchObjective::Point& pt, Eigen::VectorXd* g, Eigen::MatrixXd* H) const;
   double NoiseFloor(int run, int channel) const;
   // The noises of the runs that estimate them at their maximum at pt.
@@ -107,8 +114,8 @@ class BatchMinimizer {
   MinimizerSummary summary_;
   std::vector<Eigen::Vector3d> noise_;
   BatchObjective::Point current_;
-  Eigen::VectorXd step_;       // over z
-  Eigen::MatrixXd secant_;     // the last step's curvature correction over z
+  Eigen::VectorXd step_;       // over the free unknowns
+  Eigen::MatrixXd secant_;     // S: the curvature beyond Gauss-Newton the steps measured
   double predicted_ = 0.0;     // decrease the damped step predicts
   double mu_ = 1e-8, nu_ = 2.0;
 };

@@ -116,9 +116,6 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const Eigen::Vecto
     Eigen::Matrix3d qq, tt;
   };
   std::vector<Parts> comp(E - 1);
-  // Q_i Q^-1 r per channel, for step 3.
-  std::array<std::vector<Vec6>, 3> QiQinv_r;
-  for (auto& v : QiQinv_r) v.resize(E - 1);
   ParallelFor(E - 1, threads, [&](std::size_t e) {
     const ProcessStep& s = wp.process[e];
     Mat6 Q = s.Q_iso, Q_ref = s.Q_iso;
@@ -130,17 +127,17 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const Eigen::Vecto
     const Vec6 w = ldlt.solve(out.process_residual[e + 1]);
     Parts& c = comp[e];
     std::array<Mat6, 3> A;
-    std::array<Vec6, 3> QinvQiw;
+    std::array<Vec6, 3> QiQinv_r, QinvQiw;
     for (int i = 0; i < 3; ++i) {
       A[i] = ldlt_ref.solve(var_ref[i] * s.channel_weight[i]);
-      QiQinv_r[i][e] = var[i] * (s.channel_weight[i] * w);
-      QinvQiw[i] = ldlt.solve(QiQinv_r[i][e]);
-      c.q[i] = w.dot(QiQinv_r[i][e]);
+      QiQinv_r[i] = var[i] * (s.channel_weight[i] * w);
+      QinvQiw[i] = ldlt.solve(QiQinv_r[i]);
+      c.q[i] = w.dot(QiQinv_r[i]);
       c.N[i] = A[i].trace();
     }
     for (int i = 0; i < 3; ++i) {
       for (int j = 0; j < 3; ++j) {
-        c.qq(i, j) = QiQinv_r[i][e].dot(QinvQiw[j]);
+        c.qq(i, j) = QiQinv_r[i].dot(QinvQiw[j]);
         c.tt(i, j) = (A[i] * A[j]).trace();
       }
     }
@@ -159,14 +156,7 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const Eigen::Vecto
   // 3. The theta part at the optimal states: the whitened Jacobians (the
   // process whitening's derivative by K_i acts on the residual there), the
   // gradient J_theta^T r (J_x^T r = 0 at the optimal states) and the
-  // information with the states eliminated. With them, each channel's
-  // gradient g_i = 0.5 d q_i / d theta (the states optimal, their response
-  // by an adjoint solve): what couples theta and the noise (batch_minimizer.h).
-  // direct[e][i]: interval e's part of 0.5 d q_i / d theta at fixed states:
-  // through the increments, -U^T Q^-1 Q_i Q^-1 r, and through the weight's
-  // scale factors, 0.5 d q_i / d K_j = -(v_j / K_j) (delta_ij w^T W_i w -
-  // 2 w^T W_j Q^-1 Q_i w), v_j = (g sigma_j / K_j)^2, w = Q^-1 r.
-  std::vector<std::array<Eigen::VectorXd, 3>> direct(E - 1);
+  // information with the states eliminated.
   ParallelFor(E, threads, [&](std::size_t e) {
     const MeasurementStep& m = pass.measurement[e];
     mb[e].N = -wp.LR[e] * m.H;
@@ -179,17 +169,6 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const Eigen::Vecto
     pb[e].r0 = LQ[e] * r;
     Mat6 Q = w.Q_iso;
     for (int i = 0; i < 3; ++i) Q += var[i] * w.channel_weight[i];
-    const Eigen::LDLT<Mat6> ldlt(Q);
-    const Vec6 wr = ldlt.solve(r);
-    for (int i = 0; i < 3; ++i) {
-      const Vec6 QinvQiw = ldlt.solve(QiQinv_r[i][e]);
-      direct[e][i] = -s.U.transpose() * QinvQiw;
-      for (int j = 0; j < 3; ++j) {
-        double d = -2.0 * wr.dot(w.channel_weight[j] * QinvQiw);
-        if (i == j) d += wr.dot(w.channel_weight[i] * wr);
-        direct[e][i][kKx + j] += -(var[j] / theta[kKx + j]) * d;
-      }
-    }
     for (int i = 0; i < 3; ++i) {
       // d var_i / d K_i = -2 var_i / K_i; dL / d var_i by a central
       // difference of the 6 x 6 whitening (exact to ~1e-8 relative).
@@ -205,34 +184,6 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const Eigen::Vecto
   for (std::size_t e = 0; e < E; ++e) {
     out.gradient.noalias() += mb[e].N.transpose() * mb[e].r0;
     if (e + 1 < E) out.gradient.noalias() += pb[e].C.transpose() * pb[e].r0;
-  }
-  // The adjoint: u_i = H_xx^-1 (0.5 dq_i/dx). With r0_i = -L Q_i Q^-1 r the
-  // elimination's right-hand side J_x^T r0_i is -0.5 dq_i/dx, so its states
-  // are u_i; then g_i = direct_i - H_theta,x u_i.
-  std::vector<ProcessBlock> pb_states(E - 1);
-  std::vector<MeasurementBlock> mb_states(E);
-  for (std::size_t e = 0; e < E; ++e) {
-    mb_states[e].M = mb[e].M;
-    mb_states[e].N.resize(6, 0);
-    mb_states[e].r0.setZero();
-    if (e + 1 < E) {
-      pb_states[e].A = pb[e].A;
-      pb_states[e].B = pb[e].B;
-      pb_states[e].C.resize(6, 0);
-    }
-  }
-  for (int i = 0; i < 3; ++i) {
-    for (std::size_t e = 0; e + 1 < E; ++e) pb_states[e].r0 = -LQ[e] * QiQinv_r[i][e];
-    const std::vector<Vec6> u = ReduceOverStates(pb_states, mb_states, true).states;
-    Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
-    for (std::size_t e = 0; e < E; ++e) {
-      g.noalias() -= mb[e].N.transpose() * (mb[e].M * u[e]);
-      if (e + 1 < E) {
-        g += direct[e][i];
-        g.noalias() -= pb[e].C.transpose() * (pb[e].A * u[e] + pb[e].B * u[e + 1]);
-      }
-    }
-    out.channel_gradient[i] = g;
   }
   out.process_blocks = std::move(pb);
   out.measurement_blocks = std::move(mb);

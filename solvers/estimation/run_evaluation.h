@@ -98,9 +98,6 @@ struct RunReduction {
   // d2(-log L)/ds_i ds_j = -2 q_i d_ij + 4 qq_ij + rho (2 N_i d_ij - 2 tt_ij).
   Eigen::Matrix3d channel_cross_quadratic = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d channel_cross_trace = Eigen::Matrix3d::Zero();
-  // With the Jacobian: 0.5 d q_i / d theta (n), the states optimal, for the
-  // coupling of theta and the noise in the minimiser's Hessian.
-  std::array<Eigen::VectorXd, 3> channel_gradient;
   std::vector<Vec6> states;  // optimal (V, S) per epoch
   // Raw residuals at the optimal states: process (index e: the interval
   // ending at epoch e, zero at e = 0) and measurement (index e).
