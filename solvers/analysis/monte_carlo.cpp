@@ -87,9 +87,13 @@ std::vector<MonteCarloRun> RunMonteCarloSeeds(const Scenario& s, const MonteCarl
         run.error[j] = est->theta - run.truth;
         run.sigma[j] = est->cov.diagonal().cwiseMax(0.0).cwiseSqrt();
         if (name == "batch") {
-          for (const std::string& h : br.held) {
-            const int i = layout.IndexOf(h);
-            if (i >= 0) run.error[j][i] = std::nan("");
+          // Not estimated (held, or considered: at nominal with the prior's
+          // uncertainty): no error to judge against a sigma.
+          for (const auto* names : {&br.held, &br.consider}) {
+            for (const std::string& h : *names) {
+              const int i = layout.IndexOf(h);
+              if (i >= 0) run.error[j][i] = std::nan("");
+            }
           }
         }
       }

@@ -26,6 +26,33 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
   rep.not_estimable.insert(rep.held.begin(), rep.held.end());
   rep.not_estimable.insert(rep.consider.begin(), rep.consider.end());
   for (const auto& [name, anchors] : r.relative_to) rep.not_estimable.insert(name);
+  const int m = static_cast<int>(r.consider.size());
+  if (m > 0 && r.consider_sensitivity.rows() == layout.size() &&
+      r.consider_sensitivity.cols() == m && r.consider_cov.rows() == m &&
+      r.cov_given_consider.rows() == layout.size()) {
+    const double min_information = HoldPolicy().min_information;
+    for (int i = 0; i < layout.size(); ++i) {
+      const std::string& name = layout.info(i).name;
+      if (rep.held.count(name) || rep.consider.count(name)) continue;
+      const double total = r.estimate.cov(i, i), given = r.cov_given_consider(i, i);
+      if (!(total > 2.0 * given) ||
+          total * min_information <= r.prior.sigma[i] * r.prior.sigma[i]) {
+        continue;
+      }
+      // The considered parameters by their share of the consider variance,
+      // those with at least a quarter of it.
+      std::vector<std::pair<double, int>> share;
+      for (int q = 0; q < m; ++q) {
+        const double s = r.consider_sensitivity(i, q);
+        share.push_back({s * s * r.consider_cov(q, q), q});
+      }
+      std::sort(share.rbegin(), share.rend());
+      std::vector<std::string>& names = rep.with_considered[name];
+      for (const auto& [v, q] : share) {
+        if (names.empty() || v >= 0.25 * (total - given)) names.push_back(r.consider[q]);
+      }
+    }
+  }
   rep.beyond_prior = BeyondPrior(layout, r.estimate.theta, r.prior.mean, r.prior.sigma);
   // Whiteness of the whitened process residuals (the solver's test).
   rep.whiteness_p_value = r.whiteness_p_value;
@@ -97,8 +124,18 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
       v << "; the other parameters of these directions are estimated relative to the held ones)";
     }
   }
+  if (!rep.with_considered.empty()) {
+    v << "; DETERMINED ONLY WITH the considered parameters at nominal (their prior uncertainty "
+         "is most of the sigma):";
+    for (const auto& [name, with] : rep.with_considered) {
+      v << " " << name << " (with";
+      for (const std::string& c : with) v << " " << c;
+      v << ")";
+    }
+  }
   if (rep.weak.empty()) {
-    v << "; every estimated parameter determined";
+    v << (rep.with_considered.empty() ? "; every estimated parameter determined"
+                                      : "; every other estimated parameter determined");
   } else {
     v << "; NOT SEPARABLE in this run:";
     for (const std::string& s : ParametersIn(rep.weak)) v << " " << s;
@@ -136,6 +173,7 @@ void AddConsiderJson(const ParameterLayout& layout, const BatchResult& r, nlohma
     pj["sigma"] = r.prior.sigma[iq] / unit_q;
     pj["determined"] = false;
     pj["considered"] = true;
+    pj.erase("held");  // not held: its uncertainty is carried
   }
   (*out)["consider"] = consider;
 }
@@ -149,7 +187,11 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
   for (int i = 0; i < layout.size(); ++i) {
     const ParameterInfo& pi = layout.info(i);
     nlohmann::json& pj = out["parameters"][pi.name];
-    pj["determined"] = !rep.held.count(pi.name) && !rep.consider.count(pi.name);
+    pj["determined"] = !rep.held.count(pi.name) && !rep.consider.count(pi.name) &&
+                       !rep.with_considered.count(pi.name);
+    if (const auto w = rep.with_considered.find(pi.name); w != rep.with_considered.end()) {
+      pj["determined_with_considered"] = w->second;
+    }
     if (pj["sigma"].is_null()) continue;
     if (r.cov_white.rows() == layout.size()) {
       pj["sigma_white"] = std::sqrt(std::max(0.0, r.cov_white(i, i))) / pi.si_per_unit;
@@ -265,6 +307,10 @@ void PrintParameterTable(const ParameterLayout& layout, const BatchResult& r,
       std::snprintf(why, sizeof(why), "  (not determined: nominal, prior +-%.3g carried)",
                     r.prior.sigma[i] / f);
       label = why;
+    } else if (const auto w = rep.with_considered.find(pi.name); w != rep.with_considered.end()) {
+      label = "  (only with considered";
+      for (const std::string& c : w->second) label += " " + c;
+      label += " at nominal)";
     } else if (rep.not_estimable.count(pi.name)) {
       label = "  (not estimable on its own)";
     }

@@ -3,6 +3,7 @@
 // the printed table.
 #pragma once
 
+#include <map>
 #include <set>
 #include <string>
 #include <vector>
@@ -19,6 +20,13 @@ struct FitReport {
   std::set<std::string> not_estimable;  // held, or in a weak direction
   std::set<std::string> held;
   std::set<std::string> consider;  // not determined: nominal, prior uncertainty carried
+  // Estimated, but determined only together with considered parameters:
+  // sigma above the prior's / sqrt(HoldPolicy::min_information) (what the
+  // hold rule asks of a determined parameter), mostly from the considered
+  // ones' prior uncertainty (more than half the variance). The value holds
+  // for the considered ones at nominal; named with the considered parameters
+  // that carry most of it (e.g. gamma_z with gamma_y on a roll run).
+  std::map<std::string, std::vector<std::string>> with_considered;
   // > 3 prior sigma from the nominal value, largest |z| first (JSON
   // "at_prior_bound" and verdict.beyond_prior: their names).
   std::vector<PriorExcursion> beyond_prior;

@@ -79,6 +79,7 @@ TEST(FitReport, ConsideredParameterIsShownAsNotDetermined) {
     r.estimate.cov.col(i).setZero();
   }
   r.prior.sigma[kxy] = 0.02 * layout.info(kxy).si_per_unit;
+  r.estimate.cov(kx, kx) = 1e-4;  // determined: sigma 1 % of the prior
   r.held = {"dy2"};
   r.consider = {"Kxy"};
   r.conditional_information = Eigen::VectorXd::Zero(layout.size());
@@ -119,6 +120,47 @@ TEST(FitReport, ConsideredParameterIsShownAsNotDetermined) {
   const std::string line = table.substr(at, table.find('\n', at + 1) - at);
   EXPECT_NE(line.find(" - "), std::string::npos) << line;
   EXPECT_NE(line.find("(not determined: nominal, prior +-0.02 carried)"), std::string::npos) << line;
+}
+
+// An estimated parameter whose sigma is above prior / sqrt(min_information)
+// and mostly the considered one's prior uncertainty is determined only with
+// it: said in the verdict, the JSON and the table, never "determined".
+TEST(FitReport, ParameterCarriedByAConsideredOneIsNamedWithIt) {
+  const ParameterLayout layout;
+  BatchResult r = Solution(layout);
+  r.estimate.theta.setZero();
+  const int gz = layout.IndexOf("gamma_z"), gy = layout.IndexOf("gamma_y");
+  const int kz = layout.IndexOf("Kz");
+  r.estimate.cov.row(gy).setZero();
+  r.estimate.cov.col(gy).setZero();
+  r.consider = {"gamma_y"};
+  r.cov_given_consider = r.estimate.cov;
+  // gamma_z follows gamma_y one for one (sigma = the prior's); Kz a little
+  // (its sigma 1e-3 of the prior: determined whatever the share).
+  r.consider_sensitivity = Eigen::MatrixXd::Zero(layout.size(), 1);
+  r.consider_sensitivity(gz, 0) = 1.0;
+  r.consider_sensitivity(kz, 0) = 1e-3;
+  r.consider_cov = Eigen::MatrixXd::Constant(1, 1, 1.0);
+  r.estimate.cov(gz, gz) += 1.0;
+  r.estimate.cov(kz, kz) += 1e-6;
+  const FitReport rep = MakeFitReport(layout, r);
+  ASSERT_EQ(rep.with_considered.size(), 1u);
+  EXPECT_EQ(rep.with_considered.at("gamma_z"), (std::vector<std::string>{"gamma_y"}));
+  EXPECT_NE(rep.verdict.find("DETERMINED ONLY WITH the considered parameters at nominal (their "
+                             "prior uncertainty is most of the sigma): gamma_z (with gamma_y)"),
+            std::string::npos)
+      << rep.verdict;
+  EXPECT_EQ(rep.verdict.find("; every estimated parameter determined"), std::string::npos);
+  const nlohmann::json j = FitJson(layout, r, rep, false);
+  EXPECT_FALSE(j["parameters"]["gamma_z"]["determined"].get<bool>());
+  EXPECT_EQ(j["parameters"]["gamma_z"]["determined_with_considered"],
+            (std::vector<std::string>{"gamma_y"}));
+  EXPECT_TRUE(j["parameters"]["Kz"]["determined"].get<bool>());
+  EXPECT_FALSE(j["parameters"]["gamma_y"].contains("held"));
+  ::testing::internal::CaptureStdout();
+  PrintParameterTable(layout, r, rep);
+  const std::string table = ::testing::internal::GetCapturedStdout();
+  EXPECT_NE(table.find("(only with considered gamma_y at nominal)"), std::string::npos) << table;
 }
 
 }  // namespace

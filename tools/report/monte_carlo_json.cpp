@@ -160,7 +160,7 @@ void PrintMonteCarlo(const MonteCarloSettings& a, const MonteCarloResult& r,
     }
     int held = 0;
     for (const EstimatorStats& st : r.estimators) held = std::max(held, st.held_runs[i]);
-    if (held > 0) std::printf("  held in %d runs", held);
+    if (held > 0) std::printf("  not estimated in %d runs", held);
     std::printf("\n");
   }
   std::printf("sampling error of a scatter from %d runs: about %.1f %% (1/sqrt(2N))\n", a.runs,
