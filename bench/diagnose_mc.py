@@ -140,16 +140,12 @@ def bias(effect, work):
     # effect's misfit, ~0.1 mV) and its sigma shrink with it; the bias is
     # meant in the sigma of a run with the declared noise, so they are scaled
     # back by the ratio of the declared to the used noise (RMS over channels).
-    # When the noise split is judged misfit, `fit` keeps the declared noise
-    # and scales sigma by sqrt(variance_factor) instead: undone the same way.
     # --sigma white: the HAC sigma of a noise-free misfit is not the question.
     nz = out.get("noise", {})
     ratio = 1.0
     if nz.get("used_mV") and nz.get("declared_mV"):
         rms = lambda v: (sum(x * x for x in v) / len(v)) ** 0.5
         ratio = rms(nz["declared_mV"]) / rms(nz["used_mV"])
-    if nz.get("variance_factor"):
-        ratio /= nz["variance_factor"] ** 0.5
     return max(abs(p["value"] - truth[n]) / (p["sigma"] * ratio) for n, p in fit.items()
                if n in truth and p.get("estimable", True) and p.get("sigma"))
 

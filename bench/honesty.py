@@ -41,14 +41,15 @@ Sections (all by default):
             it): each run fitted whole and in halves (time_range_s) with the
             noise estimated (noise_mV: auto) and the loop's effects
             (--real-effects, angle_latency,thermal_drift), nothing held by hand
-            (--real-hold, '': what the fit pins it pins itself); the halves'
-            estimates compared, chi2 = (a - b)^2 / (sigma_a^2 + sigma_b^2) per
-            parameter determined by both, with the sigma given the pins (the
-            pinned values are common to both halves), median over parameters,
-            with the 5-95 % band of that median for honest sigma given the
+            (--real-hold, '': what the fit holds or considers it decides
+            itself); the halves' estimates compared, chi2 = (a - b)^2 /
+            (sigma_a^2 + sigma_b^2) per parameter determined by both, with the
+            sigma given the considered values (common to both halves) plus
+            what those leave in the difference, median over parameters, with
+            the 5-95 % band of that median for honest sigma given the
             parameters' correlations (drawn from the halves' correlation given
-            the pins, `fit --correlations`; needs numpy); then the three speeds
-            compared with the reported sigma.
+            the considered values, `fit --correlations`; needs numpy); then
+            the three speeds compared with the reported sigma.
 """
 import argparse
 import json
@@ -340,7 +341,7 @@ def median_band(fa, fb, var_diff, observed, draws=20000, seed=1):
     honest is 0.455 for independent parameters; correlated ones widen its
     spread. Draws the halves' difference with its correlation (the halves are
     independent data: the covariance of a - b is that of a plus that of b,
-    each given the pins, with var_diff, the per-parameter variance the halves are judged on)
+    each given the considered values, with var_diff, the per-parameter variance the halves are judged on)
     and returns the 5 %, 50 %, 95 % points of the median and the chance of
     one at least as far from 0.455 on the observed side. None without
     correlations in the fits (--correlations) or numpy."""
@@ -350,7 +351,7 @@ def median_band(fa, fb, var_diff, observed, draws=20000, seed=1):
         return None
     names = list(var_diff)
     def block(f):
-        c = f.get("correlation_given_pinned") or f.get("correlation")
+        c = f.get("correlation_given_consider") or f.get("correlation")
         if not c:
             return None
         idx = {n: i for i, n in enumerate(c["names"])}
@@ -361,11 +362,11 @@ def median_band(fa, fb, var_diff, observed, draws=20000, seed=1):
     if ra is None or rb is None:
         return None
     pa, pb = fa["parameters"], fb["parameters"]
-    sa = np.array([pa[n].get("sigma_given_pinned", pa[n]["sigma"]) for n in names])
-    sb = np.array([pb[n].get("sigma_given_pinned", pb[n]["sigma"]) for n in names])
+    sa = np.array([pa[n].get("sigma_given_consider", pa[n]["sigma"]) for n in names])
+    sb = np.array([pb[n].get("sigma_given_consider", pb[n]["sigma"]) for n in names])
     cov = np.outer(sa, sa) * ra + np.outer(sb, sb) * rb
-    # var_diff includes what the pins leave (consider
-    # term): added on the diagonal, uncorrelated (a conservative spread).
+    # var_diff includes what the considered values leave (consider term):
+    # added on the diagonal, uncorrelated (a conservative spread).
     var = np.array([var_diff[n] for n in names])
     cov += np.diag(np.maximum(var - np.diag(cov), 0.0))
     d = np.sqrt(np.diag(cov))
@@ -433,48 +434,41 @@ def real(work, a):
         if fits is None:
             continue
         a_, b_ = fits[1]["parameters"], fits[2]["parameters"]
-        # Both halves pin (nearly) the same parameters at the same nominal
-        # values: that part of their error is common and cancels in the
-        # difference, so the halves are compared with the sigma given the
-        # pins (sigma_given_pinned; the reported sigma include it).
+        # Both halves consider (nearly) the same parameters at the same
+        # nominal values: that part of their error is common and cancels in
+        # the difference, so the halves are compared with the sigma given the
+        # considered values (sigma_given_consider; the reported sigma include it).
         def chi_of(key):
             def sg(p):
                 return p.get(key, p["sigma"]) if key else p["sigma"]
             return {n: (a_[n]["value"] - b_[n]["value"]) ** 2 / (sg(a_[n]) ** 2 + sg(b_[n]) ** 2)
-                    for n in a_ if a_[n]["estimable"] and b_[n]["estimable"] and a_[n]["sigma"]
+                    for n in a_ if a_[n].get("determined") and b_[n].get("determined") and a_[n]["sigma"]
                     and b_[n]["sigma"]}
-        # What the pins leave in the difference: each half's estimate follows
-        # the pinned values' common error delta by its own sensitivity S_h, so
-        # a - b carries (S_a - S_b) delta, delta ~ P (the halves' mean; a pin
-        # of one half alone adds S P S^T of that half).
+        # What the considered parameters leave in the difference: each half's
+        # estimate follows the considered values' common error delta (their
+        # nominal values, the same in both halves) by its own sensitivity
+        # S_h, so a - b carries (S_a - S_b) delta, delta ~ diag(prior
+        # sigma^2); a parameter considered in one half alone adds S P S^T
+        # of that half.
         def consider_var(name):
-            pa = {p["parameter"]: p for p in fits[1].get("pinned", [])}
-            pb = {p["parameter"]: p for p in fits[2].get("pinned", [])}
-            def cov(pin_a, pin_b, q, c):
-                if q == c:
-                    return ((pin_a[q]["sigma"] ** 2 + pin_b[q]["sigma"] ** 2) / 2
-                            if pin_b is not None else pin_a[q]["sigma"] ** 2)
-                def one(pins):
-                    return pins[q]["correlation"].get(c, 0.0) * pins[q]["sigma"] * pins[c]["sigma"]
-                return (one(pin_a) + one(pin_b)) / 2 if pin_b is not None else one(pin_a)
-            common = [q for q in pa if q in pb and "sensitivity" in pa[q] and "sensitivity" in pb[q]]
-            ds = {q: pa[q]["sensitivity"].get(name, 0.0) - pb[q]["sensitivity"].get(name, 0.0)
-                  for q in common}
-            v = sum(ds[q] * ds[c] * cov(pa, pb, q, c) for q in common for c in common)
-            for own, other in ((pa, pb), (pb, pa)):
-                alone = [q for q in own if q not in other and "sensitivity" in own[q]]
-                s_ = {q: own[q]["sensitivity"].get(name, 0.0) for q in alone}
-                v += sum(s_[q] * s_[c] * cov(own, None, q, c) for q in alone for c in alone)
+            pa = {p["parameter"]: p for p in fits[1].get("consider", [])}
+            pb = {p["parameter"]: p for p in fits[2].get("consider", [])}
+            v = 0.0
+            for q in set(pa) | set(pb):
+                sa = pa[q].get("sensitivity", {}).get(name, 0.0) if q in pa else 0.0
+                sb = pb[q].get("sensitivity", {}).get(name, 0.0) if q in pb else 0.0
+                prior = (pa.get(q) or pb.get(q))["prior_sigma"]
+                v += (sa - sb) ** 2 * prior ** 2
             return v
-        var_diff = {n: a_[n].get("sigma_given_pinned", a_[n]["sigma"]) ** 2 +
-                       b_[n].get("sigma_given_pinned", b_[n]["sigma"]) ** 2 + consider_var(n)
-                    for n in a_ if a_[n]["estimable"] and b_[n]["estimable"] and a_[n]["sigma"]
+        var_diff = {n: a_[n].get("sigma_given_consider", a_[n]["sigma"]) ** 2 +
+                       b_[n].get("sigma_given_consider", b_[n]["sigma"]) ** 2 + consider_var(n)
+                    for n in a_ if a_[n].get("determined") and b_[n].get("determined") and a_[n]["sigma"]
                     and b_[n]["sigma"]}
         chi = {n: (a_[n]["value"] - b_[n]["value"]) ** 2 / v for n, v in var_diff.items()}
         band = median_band(fits[1], fits[2], var_diff, statistics.median(chi.values()))
-        chi_given = chi_of("sigma_given_pinned")
+        chi_given = chi_of("sigma_given_consider")
         chi_reported = chi_of(None)
-        pins = [[p["parameter"] for p in f.get("pinned", [])] for f in fits]
+        pins = [[p["parameter"] for p in f.get("consider", [])] for f in fits]
         worst = sorted(chi.items(), key=lambda kv: -kv[1])[:3]
         conv = ", ".join(f"{l} {'converged' if f['converged'] else 'NOT converged'}"
                          for l, f in zip(("whole", "first half", "second half"), fits))
@@ -503,16 +497,16 @@ def real(work, a):
                   f"median of {mid:.2f} (5-95 %: {lo:.2f}-{hi:.2f}); one as far out as "
                   f"{statistics.median(chi.values()):.2f}: p {p:.3g}")
         if any(pins):
-            print(f"{speed}: pinned (whole, halves) {pins}; the difference judged with the "
-                  f"sigma given the pins plus what the pins leave in it ((S_a - S_b) P (S_a - "
-                  f"S_b)); with the sigma given the pins alone: median chi2/dof "
+            print(f"{speed}: considered (whole, halves) {pins}; the difference judged with "
+                  f"the sigma given the considered values plus what they leave in it ((S_a - "
+                  f"S_b) P (S_a - S_b)); with the sigma given them alone: median chi2/dof "
                   f"{statistics.median(chi_given.values()):.2f}; with the reported sigma, which "
-                  f"include the pins' whole uncertainty twice: "
+                  f"include their whole uncertainty twice: "
                   f"{statistics.median(chi_reported.values()):.2f}")
     if len(whole) < 3:
         return
     names = [n for n in whole["slow"]["parameters"]
-             if all(whole[s]["parameters"][n]["estimable"] and whole[s]["parameters"][n]["sigma"]
+             if all(whole[s]["parameters"][n].get("determined") and whole[s]["parameters"][n]["sigma"]
                     for s in whole)]
     rows = []
     for n in names:
@@ -541,8 +535,8 @@ def main():
                     help="effects fitted on the real runs (what the loop finds there; '' none)")
     ap.add_argument("--real-hold", default="",
                     help="parameters held on the real runs by hand ('' none, the default: "
-                         "the fit pins what it moved far along a weak direction itself, "
-                         "docs/method.md; dpsi was held by hand before that)")
+                         "the fit decides before it starts what the run does not determine, "
+                         "docs/method.md)")
     ap.add_argument("--real-runs", default="slow,medium,fast",
                     help="which real roll runs (slow,medium,fast)")
     ap.add_argument("--real-timeout", type=float, default=1200.0,
