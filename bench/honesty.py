@@ -13,6 +13,11 @@ Sections (all by default):
   noise     50 Hz, 90 s, true noise 2 mV, declared 0.2 mV (10x too small) and
             6 mV (3x too large): mean sigma / CRB of the TRUE noise (the CRB from
             the correctly declared Monte Carlo), and the warning of one fit.
+  diagnose_noise  the same run, declared 0.5 mV (4x too small) and 6 mV (3x
+            too large), N seeds (10) through `diagnose`: mean sigma / CRB of the
+            true noise per parameter after the loop (its smallest), the largest
+            |error| / sigma, and how often an effect was selected (none is in
+            the data).
   unconstrained  the paper run without its pseudo-measurement: are gamma_y,
             gamma_z, dlambda2 reported estimable on their own, is the direction in
             "unobservable"?
@@ -147,6 +152,42 @@ def noise(work, a):
         print(f"  {warning.strip()}")
 
 
+def diagnose_noise(work, a):
+    print("\n## diagnose with the declared noise wrong (true 2 mV, 50 Hz, 90 s)\n")
+    ref = montecarlo(work, scenario(work, "noise_ref"), a.seeds, "noise_ref")
+    crb = {n: p["crb"] for n, p in ref["parameters"].items()}
+    for declared in (0.5, 6.0):
+        scen = scenario(work, f"dnoise_{declared}", declared=declared)
+        ratios, worst, selected = {}, (0.0, "", 0), 0
+        for seed in range(1, a.diagnose_noise_seeds + 1):
+            d = os.path.join(work, f"dnoise_{declared}_{seed}")
+            run([BIN, "simulate", scen, "-o", d, "-q", "--seed", str(seed), "--force"])
+            out = os.path.join(d, "diagnose.json")
+            p = run([BIN, "diagnose", os.path.join(d, "run.yaml"), "-o", out, "-q", "--force"],
+                    check=False)
+            if p.returncode not in (0, 4):
+                sys.exit(f"honesty: diagnose of seed {seed} exited {p.returncode}: "
+                         f"{p.stderr.strip()[-300:]}")
+            j = json.load(open(out))
+            truth = json.load(open(os.path.join(d, "truth.json")))["parameters"]
+            selected += 1 if j["selected"] else 0
+            for n, q in j["parameters"].items():
+                if not q.get("estimable") or not q.get("sigma"):
+                    continue
+                if crb.get(n, 0) > 0:
+                    ratios.setdefault(n, []).append(q["sigma"] / crb[n])
+                if n in truth:
+                    z = abs(q["value"] - truth[n]) / q["sigma"]
+                    if z > worst[0]:
+                        worst = (z, n, seed)
+        mean = {n: statistics.mean(v) for n, v in ratios.items()}
+        lo = min(mean, key=mean.get)
+        print(f"declared {declared} mV (true 2), {a.diagnose_noise_seeds} seeds through "
+              f"diagnose: mean sigma / CRB(true noise) >= {mean[lo]:.3f} ({lo}), largest "
+              f"{max(mean.values()):.3f}; largest |error| / sigma {worst[0]:.2f} ({worst[1]}, "
+              f"seed {worst[2]}); an effect selected on {selected} seeds (none injected)")
+
+
 def unconstrained(work, a):
     print("\n## without the pseudo-measurement dpsi - dlambda2\n")
     scen = scenario(work, "uncon", constraints=False)
@@ -240,7 +281,12 @@ def vertical(work, a):
         ks = []
         for k in ("Kx", "Ky", "Kz"):
             p = f["parameters"][k]
-            ks.append(f"{k} {(p['value'] - 174.0) / p['sigma']:+.2f} sigma (sigma {p['sigma']:.1f})")
+            if p.get("sigma") is None or not p.get("determined", True):
+                ks.append(f"{k} {p['value']:.1f} (not determined: "
+                          f"{'considered' if p.get('considered') else 'held'} at nominal)")
+            else:
+                ks.append(f"{k} {(p['value'] - 174.0) / p['sigma']:+.2f} sigma "
+                          f"(sigma {p['sigma']:.1f})")
         print(f"seed {seed}: converged {f['converged']}, chi2/dof {f['chi2_per_dof']:.3f}; "
               f"from nominal: {', '.join(ks)}; not estimable: "
               f"{[n for n in f['not_estimable'] if n[0] in 'KW' and len(n) <= 3]}")
@@ -526,10 +572,12 @@ def real(work, a):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--only",
-                    default="short,noise,unconstrained,diagnose,bias,vertical,coloured,unalike,real")
+                    default="short,noise,diagnose_noise,unconstrained,diagnose,bias,vertical,"
+                            "coloured,unalike,real")
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--diagnose-seeds", type=int, default=100)
     ap.add_argument("--bias-seeds", type=int, default=400)
+    ap.add_argument("--diagnose-noise-seeds", type=int, default=10)
     ap.add_argument("--workdir", default="")
     ap.add_argument("--real-effects", default="angle_latency,thermal_drift",
                     help="effects fitted on the real runs (what the loop finds there; '' none)")
@@ -544,7 +592,8 @@ def main():
     a = ap.parse_args()
     work = a.workdir or tempfile.mkdtemp(prefix="triadcal_honesty_")
     os.makedirs(work, exist_ok=True)
-    sections = {"short": short, "noise": noise, "unconstrained": unconstrained,
+    sections = {"short": short, "noise": noise, "diagnose_noise": diagnose_noise,
+                "unconstrained": unconstrained,
                 "diagnose": diagnose, "bias": bias, "vertical": vertical, "coloured": coloured,
                 "unalike": unalike, "real": real}
     for name in a.only.split(","):
