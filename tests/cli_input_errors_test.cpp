@@ -21,26 +21,20 @@
 #include "core/model/parameters.h"
 #include "core/simulation/simulator.h"
 #include "tests/sim_fixtures.h"
+#include "tests/cli_test.h"
 #include "tests/temp_dir_test.h"
 
 namespace triadcal {
 namespace {
 
 namespace fs = std::filesystem;
+using testing_fixtures::CliResult;
 
-struct CliResult {
-  int exit_code = -1;
-  std::string err;
-};
-
-class CliInputErrors : public testing_fixtures::TempDirTest {
+class CliInputErrors : public testing_fixtures::CliTest {
  protected:
   void SetUp() override {
-    TempDirTest::SetUp();
-    const Scenario s = testing_fixtures::PaperScenario(50.0, 20.0, 2.0, 15.0, 11);
-    WriteRunCsv(Simulate(s), Path("run.csv"), "");
+    CliTest::SetUp();
     lines_ = ReadLines(Path("run.csv"));
-    WriteText("run.yaml", "data: run.csv\n");
   }
 
   static std::vector<std::string> ReadLines(const std::string& path) {
@@ -68,26 +62,6 @@ class CliInputErrors : public testing_fixtures::TempDirTest {
     std::string row;
     for (std::size_t i = 0; i < f.size(); ++i) row += (i ? "," : "") + f[i];
     return CsvWithLine(line, row);
-  }
-
-  CliResult Run(const std::string& args) const {
-    const std::string err = Path("stderr.txt");
-    const int status =
-        std::system((std::string(TRIADCAL_BIN) + " " + args + " > /dev/null 2> " + err).c_str());
-    CliResult r;
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.err = ReadFile(err);
-    return r;
-  }
-
-  // `triadcal ARGS` must fail with exit 2 and exactly "triadcal: error: WHAT\n",
-  // and leave none of the files named in `outputs`.
-  void ExpectError(const std::string& args, const std::string& what,
-                   const std::vector<std::string>& outputs = {"out.json"}) const {
-    const CliResult r = Run(args);
-    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.err;
-    EXPECT_EQ(r.err, "triadcal: error: " + what + "\n") << args;
-    for (const std::string& o : outputs) EXPECT_FALSE(fs::exists(Path(o))) << o << ": " << args;
   }
 
   std::string FitBad(const std::string& yaml_text) const {

@@ -31,17 +31,14 @@
 #include "core/model/units.h"
 #include "core/simulation/simulator.h"
 #include "tests/sim_fixtures.h"
+#include "tests/cli_test.h"
 #include "tests/temp_dir_test.h"
 
 namespace triadcal {
 namespace {
 
 namespace fs = std::filesystem;
-
-struct CliResult {
-  int exit_code = -1;
-  std::string err;
-};
+using testing_fixtures::CliResult;
 
 // The 21 sensor parameters of a calibration file, Kx..Kzz, with units;
 // `extra` is spliced into the parameters object.
@@ -67,34 +64,11 @@ std::string CalibrationJson(const std::string& kx = "{\"value\": 174, \"unit\": 
   return p + extra + "}}";
 }
 
-class CliReliability : public testing_fixtures::TempDirTest {
+class CliReliability : public testing_fixtures::CliTest {
  protected:
   void SetUp() override {
-    TempDirTest::SetUp();
-    const Scenario s = testing_fixtures::PaperScenario(50.0, 20.0, 2.0, 15.0, 11);
-    WriteRunCsv(Simulate(s), Path("run.csv"), "");
-    WriteText("run.yaml", "data: run.csv\n");
+    CliTest::SetUp();
     WriteText("cal.json", CalibrationJson());
-  }
-
-  CliResult Run(const std::string& args, const std::string& env = "") const {
-    const std::string err = Path("stderr.txt");
-    const int status = std::system(
-        (env + " " + std::string(TRIADCAL_BIN) + " " + args + " > /dev/null 2> " + err).c_str());
-    CliResult r;
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.err = ReadFile(err);
-    return r;
-  }
-
-  // `triadcal ARGS` must fail with exit 2 and exactly "triadcal: error: WHAT\n",
-  // and leave none of the files named in `outputs`.
-  void ExpectError(const std::string& args, const std::string& what,
-                   const std::vector<std::string>& outputs = {"out.json"}) const {
-    const CliResult r = Run(args);
-    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.err;
-    EXPECT_EQ(r.err, "triadcal: error: " + what + "\n") << args;
-    for (const std::string& o : outputs) EXPECT_FALSE(fs::exists(Path(o))) << o << ": " << args;
   }
 
   std::string Fit(const std::string& options) const {

@@ -311,10 +311,9 @@ std::string TemporaryPathFor(const std::string& path) {
       .string();
 }
 
-void RemoveStaleTemporaries(const std::string& path) {
-  const fs::path target(path);
-  const fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
-  const std::string prefix = ".tmp." + target.filename().string() + ".";
+void RemoveStaleEntries(const std::string& folder, const std::string& prefix,
+                        bool directories) {
+  const fs::path dir = folder.empty() ? fs::path(".") : fs::path(folder);
   const std::string host = HostTag();
   std::error_code ec;
   for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
@@ -331,12 +330,21 @@ void RemoveStaleTemporaries(const std::string& path) {
       continue;
     }
     const long pid = std::stol(rest);
+    if (pid == static_cast<long>(getpid()) || !ProcessIsGone(pid)) continue;
     std::error_code rm;
-    if (pid != static_cast<long>(getpid()) && ProcessIsGone(pid) &&
-        fs::is_regular_file(fs::symlink_status(it->path(), rm))) {
+    const fs::file_status st = fs::symlink_status(it->path(), rm);
+    if (directories && fs::is_directory(st)) {
+      fs::remove_all(it->path(), rm);
+    } else if (!directories && fs::is_regular_file(st)) {
       fs::remove(it->path(), rm);
     }
   }
+}
+
+void RemoveStaleTemporaries(const std::string& path) {
+  const fs::path target(path);
+  RemoveStaleEntries(target.parent_path().string(), ".tmp." + target.filename().string() + ".",
+                     false);
 }
 
 void WriteFileAtomically(const std::string& path, const std::string& content) {

@@ -27,6 +27,10 @@ std::string TemporaryPathFor(const std::string& path);
 // of earlier versions; a temporary of a running process, or of another host,
 // stays).
 void RemoveStaleTemporaries(const std::string& path);
+// The same for any staging entry "PREFIX.HOST.PID" (or "PREFIX.PID") in
+// `folder` ("" is the working folder): regular files, or with `directories`
+// folders (removed with their content), of processes of this host that are gone.
+void RemoveStaleEntries(const std::string& folder, const std::string& prefix, bool directories);
 // This host's name as it appears in temporaries (letters, digits, - and _).
 std::string HostTag();
 // True when `pid` names no running process of this host.

@@ -79,29 +79,7 @@ std::string CsvComment(const Scenario& s) {
 // The staging folders ".simulate.tmp.HOST.PID" (and ".simulate.tmp.PID" of
 // earlier versions) of processes of this host that are gone (kill -9).
 void RemoveStaleStaging(const fs::path& dir) {
-  const std::string prefix = ".simulate.tmp.";
-  const std::string host = HostTag();
-  std::error_code ec;
-  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
-    const std::string name = it->path().filename().string();
-    if (name.compare(0, prefix.size(), prefix) != 0) continue;
-    std::string rest = name.substr(prefix.size());
-    const std::size_t dot = rest.rfind('.');
-    if (dot != std::string::npos) {
-      if (rest.substr(0, dot) != host) continue;
-      rest = rest.substr(dot + 1);
-    }
-    if (rest.empty() || rest.size() > 9 ||
-        rest.find_first_not_of("0123456789") != std::string::npos) {
-      continue;
-    }
-    const long pid = std::stol(rest);
-    std::error_code rm;
-    if (pid != static_cast<long>(getpid()) && ProcessIsGone(pid) &&
-        fs::is_directory(fs::symlink_status(it->path(), rm))) {
-      fs::remove_all(it->path(), rm);
-    }
-  }
+  RemoveStaleEntries(dir.string(), ".simulate.tmp.", true);
 }
 
 }  // namespace
