@@ -20,6 +20,8 @@
 #include "core/io/run_description_io.h"
 #include "core/io/run_io.h"
 #include "core/model/bench_model.h"
+#include "core/model/effects.h"
+#include "tools/report/calibration_export.h"
 #include "tests/command_runner.h"
 #include "tests/temp_dir_test.h"
 
@@ -166,6 +168,56 @@ TEST_F(ExportTest, CMatchesApplyWithTheSensorStageEffects) {
   ASSERT_TRUE(cal.layout.has(Effect::kCrossQuadratic));
   EXPECT_EQ(cal.theta[cal.layout.offset(Effect::kCrossQuadratic) + 2], 0.005);
   EXPECT_LE(LargestDifference(Path("sim/truth.json"), run), 1e-9);
+}
+
+// Every sensor-stage effect of the catalogue, alone at its typical size: each
+// exported form carries it (the C gives what apply gives, the matrix forms name
+// it) or export refuses it by name (exit 2, no file). None is silently left out.
+TEST_F(ExportTest, EverySensorStageEffectIsCarriedOrRefusedByName) {
+  int carried = 0, refused = 0;
+  for (const EffectSpec& e : EffectCatalogue()) {
+    if (e.stage != EffectStage::kSensor) continue;
+    SCOPED_TRACE(e.name);
+    std::string params;
+    for (const ParamSpec& p : e.params) {
+      char buf[64];
+      std::snprintf(buf, sizeof(buf), "%.6g", TypicalValue(e, p, 175.8));
+      params += (params.empty() ? "" : ", ") + p.name + ": " + buf;
+    }
+    fs::remove_all(Path("sim"));
+    const std::string run =
+        Simulate(Scenario("effects: {" + e.name + ": {" + params + "}}\n" +
+                          (e.needs.temp_C ? "temperature: {start_C: 20, rate_C_per_h: 10}\n" : "")));
+    const std::string truth = Path("sim/truth.json");
+    ASSERT_TRUE(LoadCalibration(truth).layout.has(e.id));
+    const std::string refusal = ExportRefusal(LoadCalibration(truth));
+    for (const std::string format : {"c", "yaml", "json-matrix"}) {
+      const std::string out = Path(e.name + (format == "c" ? ".c" : "." + format));
+      const auto r = RunTriadcal("export " + truth + " --format " + format + " -o " + out, Err());
+      if (refusal.empty()) {
+        EXPECT_EQ(r.status, 0) << format << ": " << r.err;
+        if (format != "c") {
+          const std::string text = ReadFile(out);
+          const std::string key = format == "yaml" ? e.name + ":" : "\"" + e.name + "\"";
+          EXPECT_NE(text.find(key), std::string::npos) << format;
+        }
+      } else {
+        EXPECT_EQ(r.status, 2) << format;
+        EXPECT_EQ(r.err, "triadcal: error: " + refusal + "\n") << format;
+        EXPECT_EQ(refusal.rfind(truth + ": " + e.name + ": ", 0), 0u) << refusal;
+        EXPECT_FALSE(fs::exists(out)) << format;
+        EXPECT_FALSE(fs::exists(Path(e.name + ".h"))) << format;
+      }
+    }
+    if (refusal.empty()) {
+      ++carried;
+      EXPECT_LE(LargestDifference(truth, run), 1e-9);
+    } else {
+      ++refused;
+    }
+  }
+  EXPECT_GE(carried, 4);  // thermal_drift, thermal_drift_temp, scale_asymmetry, cross_quadratic
+  EXPECT_GE(refused, 1);  // thermal_drift_quadratic
 }
 
 // The real run: the Ferraris six-position session, calibrated by `static`.

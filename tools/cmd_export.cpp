@@ -79,6 +79,8 @@ int RunExport(const ExportArgs& a) {
                      ": temperature_model: a calibration with a temperature model cannot be "
                      "exported (apply evaluates it; export a fit at one temperature)");
   }
+  // Before any output: an effect the exported forms cannot carry.
+  if (const std::string why = ExportRefusal(cal); !why.empty()) throw InputError(why);
   RecordInput("calibration", a.calibration_json);
   const std::string provenance = CurrentProvenance().dump();
 

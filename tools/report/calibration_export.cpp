@@ -6,6 +6,7 @@
 #include <cstdlib>
 
 #include "core/model/bench_model.h"
+#include "core/model/errors.h"
 #include "core/model/units.h"
 
 namespace triadcal {
@@ -71,10 +72,44 @@ Eigen::Matrix<double, 6, 1> CrossQuadratic(const Calibration& cal) {
                : Eigen::Matrix<double, 6, 1>(cal.theta.segment<6>(o));
 }
 
+void RefuseUncarried(const Calibration& cal) {
+  const std::string why = ExportRefusal(cal);
+  if (!why.empty()) throw InputError(why);
+}
+
 }  // namespace
+
+bool ExportCarries(const EffectSpec& effect) {
+  if (effect.stage != EffectStage::kSensor) return true;  // does not act on W: left out
+  switch (effect.zero_offset_signal) {
+    case ZeroOffsetSignal::kTime_s:      // kDriftPerS * t_s
+    case ZeroOffsetSignal::kTempRise_C:  // kDriftPerC * (temp_C - temp_ref_C)
+      return true;
+    case ZeroOffsetSignal::kTimeCurvature_s2:  // needs the span of the run
+      return false;
+    case ZeroOffsetSignal::kNone:
+      break;
+  }
+  return effect.id == Effect::kScaleAsymmetry || effect.id == Effect::kCrossQuadratic;
+}
+
+std::string ExportRefusal(const Calibration& cal) {
+  for (const EffectSpec& e : EffectCatalogue()) {
+    if (!cal.layout.has(e.id) || ExportCarries(e)) continue;
+    const std::string why =
+        e.zero_offset_signal == ZeroOffsetSignal::kTimeCurvature_s2
+            ? "its zero-offset curvature is defined over the span of the run it is applied to"
+            : "this build's export does not implement it";
+    return cal.path + ": " + e.name +
+           ": the exported forms (c, yaml, json-matrix) cannot carry this effect (" + why +
+           "); `triadcal apply` applies it, or export a fit without it";
+  }
+  return "";
+}
 
 CExport ExportC(const Calibration& cal, const std::string& name, const std::string& comment,
                 const std::string& file_base) {
+  RefuseUncarried(cal);
   const std::string base = file_base.empty() ? name : file_base;
   const double* th = cal.theta.data();
   const Eigen::Matrix3d M = MisalignmentMatrix(th);
@@ -231,6 +266,7 @@ static void Residual(const double* W, const double* u, double* F, double* J) {
 }
 
 nlohmann::ordered_json MatrixForm(const Calibration& cal) {
+  RefuseUncarried(cal);
   const double* th = cal.theta.data();
   const double g0 = kStandardGravity;
   const Eigen::Vector3d K = cal.theta.segment<3>(kKx);

@@ -8,12 +8,17 @@
 //                thermal_drift_temp, scale_asymmetry, cross_quadratic). Geometry and angle
 //                effects do not act on W and are left out, as in `apply`.
 //   yaml, json   the plain matrix form (MatrixForm below).
+//
+// Every sensor-stage effect of the catalogue that `apply` inverts is either
+// carried by every exported form or refused (ExportRefusal below): a form that
+// left one out would differ from `apply` without saying so.
 #pragma once
 
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "core/model/apply_calibration.h"
+#include "core/model/effects.h"
 
 namespace triadcal {
 
@@ -27,8 +32,21 @@ struct CExport {
 // (default: name), so that the source includes the header under the name it
 // is written with (`export --name NAME -o OTHER.c`); `comment` goes into both
 // files' heading (e.g. the provenance), one line per line.
+// Throws InputError when `cal` has an effect the exported forms do not carry.
 CExport ExportC(const Calibration& cal, const std::string& name, const std::string& comment,
                 const std::string& file_base = "");
+
+// Whether the exported forms carry a sensor-stage effect of the catalogue: the
+// zero-offset effects whose signal the C function's arguments give (t_s:
+// thermal_drift; temp_C - temp_ref_C: thermal_drift_temp), scale_asymmetry and
+// cross_quadratic. Not carried: thermal_drift_quadratic, whose signal is
+// defined over the span of the run it is applied to (firmware has no run).
+// Geometry and angle effects do not act on W: true (left out, as in `apply`).
+bool ExportCarries(const EffectSpec& effect);
+
+// "" when every effect of `cal` is carried, else the one-line reason naming
+// the first effect that is not ("CAL: thermal_drift_quadratic: ...").
+std::string ExportRefusal(const Calibration& cal);
 
 // The readings model as matrices, in SI and in g (g0 = 9.80665 m/s^2):
 //
@@ -39,6 +57,7 @@ CExport ExportC(const Calibration& cal, const std::string& name, const std::stri
 //   b = W0                             bias [mV]
 //
 // plus S^-1 (the linear inverse) and the sensor-stage effects' parameters.
+// Throws InputError when `cal` has an effect the exported forms do not carry.
 nlohmann::ordered_json MatrixForm(const Calibration& cal);
 
 }  // namespace triadcal
