@@ -754,6 +754,39 @@ TEST_F(CliReliability, CalibrationKeysOfAnotherBuildOrGivenTwice) {
               {"cal.c", "cal.h"});
 }
 
+// Only a calibration is applied or exported: the OUT of observability holds
+// "parameters" too (nominal values), and was applied and exported with exit 0.
+TEST_F(CliReliability, OutputsOfOtherCommandsAreNoCalibration) {
+  const std::string obs = Path("obs.json");
+  const CliResult o = Run("observability " + Path("run.yaml") + " -o " + obs);
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  const std::string expected =
+      ": not a calibration (expected an OUT of fit, static, diagnose, filter (\"rts\"), "
+      "compare (\"batch\") or a truth.json)";
+  ExpectError(Apply(obs, Path("w.csv")), obs + ": command 'observability'" + expected, {"w.csv"});
+  ExpectError("export " + obs + " --format json-matrix -o " + Path("m.json"),
+              obs + ": command 'observability'" + expected, {"m.json"});
+  ExpectError("export " + obs + " --format c -o " + Path("cal.c"),
+              obs + ": command 'observability'" + expected, {"cal.c", "cal.h"});
+  // Any other command, whatever its parameters hold.
+  const std::string c = Path("c.json");
+  for (const std::string command : {"montecarlo", "design", "batch", "mounting"}) {
+    std::string text = CalibrationJson();
+    text.replace(text.find("\"fit\""), 5, "\"" + command + "\"");
+    WriteText("c.json", text);
+    ExpectError(Apply(c, Path("w.csv")), c + ": command '" + command + "'" + expected, {"w.csv"});
+  }
+  // The calibrations: fit, static, diagnose (top-level "parameters") are applied.
+  for (const std::string command : {"fit", "static", "diagnose"}) {
+    std::string text = CalibrationJson();
+    text.replace(text.find("\"fit\""), 5, "\"" + command + "\"");
+    WriteText("c.json", text);
+    const CliResult r = Run(Apply(c, Path("w.csv")));
+    EXPECT_EQ(r.exit_code, 0) << command << ": " << r.err;
+    fs::remove(Path("w.csv"));
+  }
+}
+
 TEST_F(CliReliability, CorrectedForceFarFromOneGIsAWarning) {
   // Scale factors 1.5 times the sensor's: within the bound, but |W| ~ 0.67 g.
   const std::string c =

@@ -98,7 +98,7 @@ Command AddApplyCommand(CLI::App& app) {
   c.app = app.add_subcommand(
       "apply", "Raw readings -> calibrated specific force [g] with the parameters of an OUT file");
   c.app->add_option("calibration", a->calibration_json,
-                    "OUT of fit, static, filter (its rts section) or compare (batch)")
+                    "OUT of fit, static, diagnose, filter (its rts section) or compare (batch), or a truth.json")
       ->required();
   c.app->add_option("run", a->run_yaml, "run description (run.yaml) of the readings")->required();
   c.app

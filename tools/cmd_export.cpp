@@ -136,7 +136,7 @@ Command AddExportCommand(CLI::App& app) {
       "export", "A calibration as C99 code applying it, or as plain matrices (YAML, JSON)");
   c.app
       ->add_option("calibration", a->calibration_json,
-                   "OUT of fit, static, filter (rts) or compare (batch), or a truth.json")
+                   "OUT of fit, static, diagnose, filter (rts) or compare (batch), or a truth.json")
       ->required();
   c.app->add_option("--format", a->format, "c (NAME.c + NAME.h), yaml or json-matrix")->required();
   c.app

@@ -55,8 +55,12 @@ void ReadJointKeys(const nlohmann::json& root, const std::string& path, Calibrat
   }
 }
 
+// The commands whose OUT is a calibration (a truth.json has no "command"):
+// fit (one run, several runs, batch), static, diagnose (its final fit),
+// filter ("rts") and compare ("batch").
+const char* const kCalibrationCommands[] = {"fit", "static", "diagnose", "filter", "compare"};
 const char kExpected[] =
-    "an OUT of fit, static, filter (\"rts\"), compare (\"batch\") or a truth.json";
+    "an OUT of fit, static, diagnose, filter (\"rts\"), compare (\"batch\") or a truth.json";
 Calibration CalibrationFrom(const ParametersFile& file, const std::string& path);
 }  // namespace
 
@@ -65,6 +69,18 @@ Calibration LoadCalibration(const std::string& path) {
 }
 
 Calibration CalibrationFromJson(const nlohmann::json& root, const std::string& path) {
+  // An OUT of another command (observability, design, montecarlo, ...) may
+  // hold a "parameters" object of nominal values: not a calibration.
+  if (root.is_object() && root.contains("command")) {
+    const nlohmann::json& c = root["command"];
+    const std::string command = c.is_string() ? c.get<std::string>() : c.dump();
+    bool calibration = false;
+    for (const char* k : kCalibrationCommands) calibration = calibration || command == k;
+    if (!calibration) {
+      throw InputError(path + ": command '" + Excerpt(command, 40) +
+                       "': not a calibration (expected " + kExpected + ")");
+    }
+  }
   Calibration cal =
       CalibrationFrom(ParametersFromJson(root, path, {"", "rts", "batch"}, kExpected), path);
   ReadJointKeys(root, path, &cal);

@@ -9,9 +9,11 @@
 
 namespace triadcal {
 
-// Reads the parameters of an OUT file of `fit` or `static` ("parameters"),
-// `filter` ("rts" section), `compare` ("batch" section), or a truth.json
-// (plain values). Each entry is {"value": v, "unit": u, ...} with u the unit of
+// Reads the parameters of an OUT file of `fit`, `static` or `diagnose`
+// ("parameters"), `filter` ("rts" section), `compare` ("batch" section), or a
+// truth.json (plain values, no "command"). The OUT of any other command
+// (observability's "parameters" are nominal values) is refused: "PATH: command
+// 'observability': not a calibration (expected ...)". Each entry is {"value": v, "unit": u, ...} with u the unit of
 // docs/file-formats.md, or a plain number in that unit. Effect parameters
 // ("thermal_drift.rate_x", or "...rate_x_mV_per_min" as in truth.json) switch
 // their effect on. The 21 sensor parameters (Kx..Kzz) are required; the bench

@@ -238,8 +238,8 @@ TEST_F(ApplyTest, BadCalibrationFilesGiveOneLine) {
                 "'[', '{', or a literal)\n");
   EXPECT_EQ(error_of("{\"ekf\": {}}"),
             "triadcal: error: " + f +
-                ": parameters: missing (expected an OUT of fit, static, filter (\"rts\"), "
-                "compare (\"batch\") or a truth.json)\n");
+                ": parameters: missing (expected an OUT of fit, static, diagnose, filter "
+                "(\"rts\"), compare (\"batch\") or a truth.json)\n");
   nlohmann::json j = nlohmann::json::parse(ParametersJsonText("fit"));
   j["parameters"].erase("Kyz");
   EXPECT_EQ(error_of(j.dump()),
