@@ -25,6 +25,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "core/io/file_util.h"
 #include "core/io/run_io.h"
 #include "core/model/parameters.h"
@@ -785,6 +787,25 @@ TEST_F(CliReliability, OutputsOfOtherCommandsAreNoCalibration) {
     EXPECT_EQ(r.exit_code, 0) << command << ": " << r.err;
     fs::remove(Path("w.csv"));
   }
+}
+
+// observability with noise_mV: auto takes the readings' own noise as fit does
+// (it took the default 2 mV: a CRB 36 times below the fit's sigma on a real run).
+TEST_F(CliReliability, ObservabilityWithAutoNoiseUsesTheReadingsNoise) {
+  WriteRunCsv(Simulate(testing_fixtures::PaperScenario(50.0, 20.0, 10.0, 15.0, 11)),
+              Path("noisy.csv"), "");
+  auto kx_crb = [&](const std::string& noise) {
+    WriteText("noisy.yaml", "data: noisy.csv\ntriad: {noise_mV: " + noise + "}\n");
+    const CliResult r = Run("observability " + Path("noisy.yaml") + " -o " + Path("obs.json") +
+                            " --force");
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json j = nlohmann::json::parse(ReadFile(Path("obs.json")));
+    EXPECT_EQ(j["settings"]["noise_auto"].get<bool>(), noise == "auto");
+    return j["crb"]["Kx"].get<double>();
+  };
+  const double declared = kx_crb("10"), auto_noise = kx_crb("auto"), two = kx_crb("2");
+  EXPECT_NEAR(auto_noise / declared, 1.0, 0.1) << auto_noise << " vs " << declared;
+  EXPECT_GT(auto_noise / two, 3.0) << auto_noise << " vs " << two;
 }
 
 TEST_F(CliReliability, CorrectedForceFarFromOneGIsAWarning) {

@@ -13,10 +13,12 @@
 #include <nlohmann/json.hpp>
 
 #include "core/model/errors.h"
+#include "core/io/column_mapping.h"
 #include "core/io/file_util.h"
 #include "core/io/parameters_json.h"
 #include "core/simulation/simulator.h"
 #include "core/io/yaml_fields.h"
+#include "core/model/sample_noise.h"
 #include "solvers/analysis/experiment_design.h"
 #include "solvers/estimation/observability.h"
 #include "tools/command_util.h"
@@ -62,7 +64,9 @@ int RunJointObservability(const ObservabilityArgs& a) {
                      ": not available for several runs yet");
   }
   ShowProgress("observability: loading the runs", 0.0);
-  const JointInput in = LoadJointInput(a.inputs, a.effects, a.out_json);
+  JointInput in = LoadJointInput(a.inputs, a.effects, a.out_json);
+  // noise_mV: auto: each run's readings' own noise, as `fit` starts from.
+  for (JointRun& r : in.runs) r.run = WithReadingNoise(r.run, r.data);
   const RunsFile& file = in.file;
   const std::vector<JointRun>& runs = in.runs;
   const JointLayout& jl = *in.layout;
@@ -111,7 +115,8 @@ int RunJointObservability(const ObservabilityArgs& a) {
   out["settings"] = {{"epoch_s", a.epoch_s}, {"effects", a.effects}};
   WriteJson(out, a.out_json);
 
-  std::printf("observability: %zu runs together, at the nominal values, declared noise\n",
+  std::printf("observability: %zu runs together, at the nominal values, the runs' noise "
+              "(declared, or the readings' own with noise_mV: auto)\n",
               runs.size());
   std::printf("%-26s %14s %14s %-10s", "parameter (IMU axes)", "CRB sigma", "prior sigma", "unit");
   for (int r = 0; r < jl.runs(); ++r) std::printf(" %8.8s", jl.run_name(r).c_str());
@@ -160,6 +165,7 @@ int RunObservability(ObservabilityArgs a) {
   RunData data;
   Eigen::VectorXd theta;
   std::string source, at;
+  bool noise_auto = false;
   if (IsScenario(a.input)) {
     const Scenario s = NoiseFreeScenario(LoadScenario(a.input));
     RecordInput("scenario", a.input);
@@ -170,8 +176,11 @@ int RunObservability(ObservabilityArgs a) {
     at = "truth";
   } else {
     LoadedRun loaded = LoadRunOrThrow(a.input);
-    run = loaded.description;
     data = std::move(loaded.data);
+    // noise_mV: auto: the readings' own noise, as `fit` starts from (not the
+    // default 2 mV, which gave a CRB 36 times below the fit's sigma).
+    noise_auto = loaded.description.noise_auto;
+    run = WithReadingNoise(loaded.description, data);
     theta = NominalTheta(run, layout);
     source = "run";
     at = "nominal";
@@ -213,7 +222,11 @@ int RunObservability(ObservabilityArgs a) {
                      {"effects", a.effects},
                      {"unobservable_below", a.unobservable_below},
                      {"weak_below", a.weak_below},
-                     {"declared_noise_mV", run.noise_mV},
+                     {"declared_noise_mV", noise_auto ? nlohmann::json(nullptr)
+                                                      : nlohmann::json(run.noise_mV)},
+                     {"noise_auto", noise_auto},
+                     {"noise_mV", {run.ChannelNoise_mV()[0], run.ChannelNoise_mV()[1],
+                                   run.ChannelNoise_mV()[2]}},
                      {"declared_angle_noise_arcsec", run.angle_noise_rad / kArcsecToRad}};
   if (a.could_hide) {
     out["could_hide"] = CouldHideJson(hide);
@@ -224,6 +237,12 @@ int RunObservability(ObservabilityArgs a) {
 
   std::printf("observability: %s, %zu samples over %.4g s, %zu epochs; evaluated at %s; %.2f s\n",
               source.c_str(), r.samples, r.duration_s, r.epochs, at.c_str(), r.seconds);
+  {
+    const Eigen::Vector3d n = run.ChannelNoise_mV();
+    std::printf("reading noise %.3g %.3g %.3g %s (%s)\n", n[0], n[1], n[2],
+                ReadingsUnit(run).c_str(),
+                noise_auto ? "the readings' own, noise_mV: auto" : "declared");
+  }
   PrintObservability(r);
   if (a.could_hide) {
     std::printf("could hide (alpha %.3g over %zu candidates, power 80 %%):\n", a.alpha, hide.size());

@@ -21,4 +21,22 @@ double SecondDifferenceNoise(const std::vector<double>& x) {
   return std::sqrt(sum / static_cast<double>(keep) / 0.87348 / 6.0);
 }
 
+Eigen::Vector3d RunReadingNoise_mV(const RunDescription& run, const RunData& data) {
+  Eigen::Vector3d noise = run.ChannelNoise_mV();
+  if (!run.noise_auto) return noise;
+  for (int i = 0; i < 3; ++i) {
+    const double sd = SecondDifferenceNoise(data.w_mV[i]);
+    if (sd > 0.0) noise[i] = sd;
+  }
+  return noise;
+}
+
+RunDescription WithReadingNoise(RunDescription run, const RunData& data) {
+  const Eigen::Vector3d noise = RunReadingNoise_mV(run, data);
+  run.noise_auto = false;
+  run.noise_channel_mV = noise;
+  run.noise_mV = noise.maxCoeff();
+  return run;
+}
+
 }  // namespace triadcal

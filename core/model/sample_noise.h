@@ -10,9 +10,23 @@
 
 #include <vector>
 
+#include <Eigen/Core>
+
+#include "core/model/run_data.h"
+#include "core/model/run_description.h"
+
 namespace triadcal {
 
 // sigma of the white part of x, in x's unit (0 for fewer than 10 samples).
 double SecondDifferenceNoise(const std::vector<double>& x);
+
+// The reading noise of each channel of a run [mV]: the declared figures, or
+// with `noise_mV: auto` each channel's own white noise (SecondDifferenceNoise;
+// the declared figure where a channel has too few samples) - what `fit`
+// starts from. For analyses that take the noise as known (observability).
+Eigen::Vector3d RunReadingNoise_mV(const RunDescription& run, const RunData& data);
+
+// `run` with RunReadingNoise_mV declared per channel and noise_auto off.
+RunDescription WithReadingNoise(RunDescription run, const RunData& data);
 
 }  // namespace triadcal
