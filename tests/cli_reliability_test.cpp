@@ -808,6 +808,66 @@ TEST_F(CliReliability, ObservabilityWithAutoNoiseUsesTheReadingsNoise) {
   EXPECT_GT(auto_noise / two, 3.0) << auto_noise << " vs " << two;
 }
 
+// Units follow the run's readings: observability printed and wrote mV/g for a
+// run read in counts (its layout was made before the run was read).
+TEST_F(CliReliability, ObservabilityUnitsFollowTheReadings) {
+  WriteText("counts.yaml",
+            "data: run.csv\ncolumns:\n  wx: {source: wx, unit: counts, counts_per_g: 174}\n"
+            "  wy: {source: wy, unit: counts, counts_per_g: 174}\n"
+            "  wz: {source: wz, unit: counts, counts_per_g: 174}\n");
+  ASSERT_EQ(std::system((std::string(TRIADCAL_BIN) + " observability " + Path("counts.yaml") +
+                         " -o " + Path("obs.json") + " > " + Path("stdout.txt") + " 2> " +
+                         Path("stderr.txt"))
+                            .c_str()),
+            0)
+      << ReadFile(Path("stderr.txt"));
+  const nlohmann::json j = nlohmann::json::parse(ReadFile(Path("obs.json")));
+  EXPECT_EQ(j["units"]["Kx"], "counts/g");
+  EXPECT_EQ(j["units"]["W0z"], "counts");
+  EXPECT_EQ(j["parameters"]["Kx"]["unit"], "counts/g");
+  const std::string out = ReadFile(Path("stdout.txt"));
+  EXPECT_EQ(out.find("mV"), std::string::npos) << out;
+  EXPECT_NE(out.find("counts/g"), std::string::npos) << out;
+}
+
+// batch names its units for each run's readings: Kx was "mV/g" for counts.
+TEST_F(CliReliability, BatchUnitsFollowEachRunsReadings) {
+  CliResult r_failed;
+  WriteText("counts.yaml",
+            "data: run.csv\ncolumns:\n  wx: {source: wx, unit: counts, counts_per_g: 174}\n"
+            "  wy: {source: wy, unit: counts, counts_per_g: 174}\n"
+            "  wz: {source: wz, unit: counts, counts_per_g: 174}\n");
+  WriteText("counts.csv", "serial,run\nC1,counts.yaml\n");
+  // Not converged (the nominal offsets of counts are 0, these are 1500): an
+  // error naming the verdict, not an internal error (exit 3).
+  r_failed = Run("batch " + Path("counts.csv") + " -o " + Path("bad") + " --date 2024-01-02");
+  EXPECT_EQ(r_failed.exit_code, 0) << r_failed.err;
+  EXPECT_EQ(r_failed.err, "");
+  WriteText("counts.yaml",
+            "data: run.csv\ntriad: {bias_mV: [1500, 1500, 1500]}\ncolumns:\n"
+            "  wx: {source: wx, unit: counts, counts_per_g: 174}\n"
+            "  wy: {source: wy, unit: counts, counts_per_g: 174}\n"
+            "  wz: {source: wz, unit: counts, counts_per_g: 174}\n");
+  WriteText("mixed.csv", "serial,run\nC1,counts.yaml\nM1,run.yaml\n");
+  auto kx_unit = [&](const std::string& dir, const std::string& serial) {
+    for (const auto& d : fs::recursive_directory_iterator(Path(dir))) {
+      if (d.path().filename() == "calibration.json" &&
+          d.path().parent_path().parent_path().filename() == serial) {
+        return nlohmann::json::parse(ReadFile(d.path().string()))["parameters"]["Kx"]["unit"]
+            .get<std::string>();
+      }
+    }
+    return std::string("none");
+  };
+  CliResult r = Run("batch " + Path("counts.csv") + " -o " + Path("one") + " --date 2024-01-02");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(kx_unit("one", "C1"), "counts/g");
+  r = Run("batch " + Path("mixed.csv") + " -o " + Path("two") + " --date 2024-01-02");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(kx_unit("two", "C1"), "counts/g");
+  EXPECT_EQ(kx_unit("two", "M1"), "mV/g");
+}
+
 TEST_F(CliReliability, CorrectedForceFarFromOneGIsAWarning) {
   // Scale factors 1.5 times the sensor's: within the bound, but |W| ~ 0.67 g.
   const std::string c =

@@ -17,8 +17,10 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <set>
 #include <nlohmann/json.hpp>
 
+#include "core/io/column_mapping.h"
 #include "core/io/file_util.h"
 #include "core/io/run_description_io.h"
 #include "core/io/run_io.h"
@@ -47,7 +49,9 @@ struct BatchArgs {
 };
 
 // What a rank hands to rank 0 for one manifest run.
-nlohmann::json FitUnit(const BatchArgs& a, const ManifestEntry& e, int item) {
+// `own_unit`: name the output units for this run's readings (process-wide:
+// only when the runs are fitted one at a time, see RunBatch).
+nlohmann::json FitUnit(const BatchArgs& a, const ManifestEntry& e, int item, bool own_unit) {
   const auto t0 = std::chrono::steady_clock::now();
   nlohmann::json j = {{"item", item},
                       {"status", "fitted"},
@@ -57,6 +61,7 @@ nlohmann::json FitUnit(const BatchArgs& a, const ManifestEntry& e, int item) {
   try {
     LoadedRun run;
     run.description = LoadRunDescription(e.run_path);
+    if (own_unit) SetReadingsUnitName(ReadingsUnit(run.description));
     RunWarnings warnings;
     run.data = LoadRunData(run.description, &warnings);
     j["warnings"] = warnings.lines;
@@ -102,7 +107,14 @@ UnitResult FileUnit(const BatchArgs& a, const std::string& date, const ManifestE
   }
   if (!cal.value("converged", false)) {
     u.status = "error";
-    u.reason = "no convergence (" + cal.value("verdict", std::string()) + ")";
+    // The fit's verdict is an object; its sentence says why (reading it as a
+    // string threw: an internal error, exit 3, for any unit not converged).
+    const nlohmann::json& verdict = cal.contains("verdict") ? cal["verdict"] : nlohmann::json();
+    const nlohmann::json& sentence =
+        verdict.is_object() && verdict.contains("sentence") ? verdict["sentence"] : verdict;
+    u.reason = "no convergence (" +
+               (sentence.is_string() ? sentence.get<std::string>() : std::string("no verdict")) +
+               ")";
   } else {
     u.violations = CheckLimits(e.limits, cal["parameters"]);
     u.status = u.violations.empty() ? "pass" : "fail";
@@ -162,15 +174,29 @@ int RunBatch(const BatchArgs& a) {
   std::error_code ec;
   fs::create_directories(a.out_dir, ec);
   CheckOutputPath((fs::path(a.out_dir) / "summary.json").string());
-  const int threads = a.threads > 0 ? a.threads : std::max(1, DefaultThreads() / MpiLocalSize());
+  int threads = a.threads > 0 ? a.threads : std::max(1, DefaultThreads() / MpiLocalSize());
   const ItemRange range = ShardRange(static_cast<int>(entries.size()), shard);
   const std::vector<int> mine = RankItems(range, MpiRank(), MpiSize());
+  // The units of the outputs are named for the readings (mV/g, counts/g,
+  // mg/g) by one process-wide name: set once when every run reads the same
+  // unit; runs in several units are fitted one at a time, each naming its own
+  // (a run that cannot be read fails in FitUnit, as before).
+  std::set<std::string> readings_units;
+  for (int item : mine) {
+    try {
+      readings_units.insert(ReadingsUnit(LoadRunDescription(entries[item].run_path)));
+    } catch (const std::exception&) {
+    }
+  }
+  const bool own_unit = readings_units.size() > 1;
+  if (readings_units.size() == 1) SetReadingsUnitName(*readings_units.begin());
+  if (own_unit) threads = 1;
 
   std::vector<nlohmann::json> jobs(mine.size());
   std::mutex mutex;
   int done = 0;
   ParallelFor(mine.size(), threads, [&](std::size_t k) {
-    jobs[k] = FitUnit(a, entries[mine[k]], mine[k]);
+    jobs[k] = FitUnit(a, entries[mine[k]], mine[k], own_unit);
     std::lock_guard<std::mutex> lock(mutex);
     ++done;
     if (MpiRoot()) {

@@ -152,7 +152,6 @@ int RunObservability(ObservabilityArgs a) {
   if (!(a.unobservable_below > 0.0) || !(a.weak_below >= a.unobservable_below)) {
     throw InputError("--unobservable-below, --weak-below: expected 0 < unobservable <= weak");
   }
-  const ParameterLayout layout(ParseEffectList(a.effects));
   ObservabilityOptions oo;
   oo.threads = a.threads;
   oo.thresholds = {a.unobservable_below, a.weak_below};
@@ -163,6 +162,9 @@ int RunObservability(ObservabilityArgs a) {
   ShowProgress("observability: loading the run", 0.0);
   RunDescription run;
   RunData data;
+  // Made once the readings unit is known: its units are named for it (mV/g,
+  // counts/g, mg/g); made before, they said mV/g for a run read in counts.
+  ParameterLayout layout;
   Eigen::VectorXd theta;
   std::string source, at;
   bool noise_auto = false;
@@ -171,12 +173,15 @@ int RunObservability(ObservabilityArgs a) {
     RecordInput("scenario", a.input);
     data = Simulate(s);
     run = s.run;
+    SetReadingsUnitName(ReadingsUnit(run));  // the layout's units, named for the readings
+    layout = ParameterLayout(ParseEffectList(a.effects));
     theta = TruthInLayout(s, layout);
     source = "scenario (simulated without noise)";
     at = "truth";
   } else {
-    LoadedRun loaded = LoadRunOrThrow(a.input);
+    LoadedRun loaded = LoadRunOrThrow(a.input);  // sets the readings unit
     data = std::move(loaded.data);
+    layout = ParameterLayout(ParseEffectList(a.effects));
     // noise_mV: auto: the readings' own noise, as `fit` starts from (not the
     // default 2 mV, which gave a CRB 36 times below the fit's sigma).
     noise_auto = loaded.description.noise_auto;
