@@ -294,8 +294,15 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
       for (const NotSeparable& ns : c.not_separable) {
         decision.consider.push_back(spec.name + "." + spec.params[ns.component].name);
       }
-      BatchResult r =
-          FitLayout(run, data, aug, start, decision, fit_opt, true, &fit.noise_used_mV);
+      // Refitted as fit does, the noise estimated with the parameters (the
+      // round's noise still holds the misfit of the effect being tested:
+      // real medium roll run, chi2/dof 0.05 after the 8.6-ms latency and the
+      // drift at the first fit's noise); its likelihood ratio is taken at
+      // the round's noise, the same for every candidate (cost_at_noise).
+      BatchOptions refit_opt = fit_opt;
+      refit_opt.cost_at_noise = fit.noise_used_mV;
+      BatchResult r = FitLayout(run, data, aug, start, decision, refit_opt, true,
+                                fit_opt.estimate_noise ? nullptr : &fit.noise_used_mV);
       const int k = static_cast<int>(GetEffectSpec(e).params.size());
       int held_new = 0;
       for (const std::vector<std::string>* names : {&r.held, &r.consider}) {
@@ -305,9 +312,9 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
       }
       t.refit = true;
       t.dof = k - held_new;
-      t.lr = 2.0 * (fit.final_cost - r.final_cost);
-      t.statistic = std::max(0.0, t.lr) / std::max(1.0, r.chi2_per_dof);
-      t.chi2_per_dof_after = r.chi2_per_dof;
+      t.lr = 2.0 * (fit.final_cost - r.cost_at_noise);
+      t.chi2_per_dof_after = 2.0 * r.cost_at_noise / std::max(1, r.degrees_of_freedom);
+      t.statistic = std::max(0.0, t.lr) / std::max(1.0, t.chi2_per_dof_after);
       if (t.dof == 0) {
         t.p_value = 1.0;
         t.note = "not supported by this run's motion";
@@ -558,29 +565,17 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
     current.push_back(chosen);
     const ParameterLayout next(current);
     // The selected candidate's refit (with its covariance) is the new fit.
+    const Eigen::Vector3d round_noise = fit.noise_used_mV;
     fit = std::move(refits[order[pick]]);
-    {
-      // The new model fitted with its noise estimated, as fit does: the
-      // selected refit was at the round's noise, which still held the
-      // misfit of the effect just added (real medium roll run: chi2/dof 0.05
-      // after the 8.6-ms latency and the drift at the first fit's noise), and
-      // every later test at that level would be blind by the same factor.
-      say("round " + std::to_string(round) + ": refitting with " +
-          GetEffectSpec(chosen).name + " added, the reading noise estimated again");
-      span_begin = span_end;
-      span_end = round_end;
-      const Eigen::Vector3d before = fit.noise_used_mV;
-      BatchResult r = FitLayout(run, data, next, fit.estimate.theta, DecisionOf(fit), fit_opt, true,
-                                fit_opt.estimate_noise ? nullptr : &fit.noise_used_mV);
-      const Eigen::Vector3d& after = r.noise_used_mV;
+    if (fit_opt.estimate_noise) {
       char figures[200];
       std::snprintf(figures, sizeof(figures),
                     "round %d: reading noise re-estimated with %s added: %.3g %.3g %.3g (was "
                     "%.3g %.3g %.3g)",
-                    round, GetEffectSpec(chosen).name.c_str(), after[0], after[1], after[2],
-                    before[0], before[1], before[2]);
+                    round, GetEffectSpec(chosen).name.c_str(), fit.noise_used_mV[0],
+                    fit.noise_used_mV[1], fit.noise_used_mV[2], round_noise[0], round_noise[1],
+                    round_noise[2]);
       res.notes.push_back(figures);
-      fit = std::move(r);
     }
     info_current = false;
     round_begin = round_end;

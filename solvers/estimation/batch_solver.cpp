@@ -85,14 +85,7 @@ Eigen::MatrixXd ConstraintInformation(const RunProblem& p) {
 Eigen::Vector3d StartNoise(const RunDescription& run, const RunData& data,
                            const BatchOptions& opt) {
   if ((opt.noise_override.array() > 0.0).all()) return opt.noise_override;
-  Eigen::Vector3d noise = run.ChannelNoise_mV();
-  if (run.noise_auto) {
-    for (int i = 0; i < 3; ++i) {
-      const double sd = SecondDifferenceNoise(data.w_mV[i]);
-      if (sd > 0.0) noise[i] = sd;
-    }
-  }
-  return noise;
+  return RunReadingNoise_mV(run, data);
 }
 
 // The start of the minimiser.
@@ -498,6 +491,11 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   res.passes = summary.passes;
   say(summary.termination);
   res.final_cost = pt.cost;
+  if (opt.cost_at_noise.minCoeff() > 0.0) {
+    BatchObjective::Point at = pt;
+    objective.Reweight(&at, {opt.cost_at_noise}, false);
+    res.cost_at_noise = at.cost;
+  }
   res.estimate.theta = pt.phi;
   res.noise_used_mV = red.noise_mV;
   res.noise_source = opt.estimate_noise ? "estimated" : "declared";

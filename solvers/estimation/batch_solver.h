@@ -163,6 +163,11 @@ struct BatchOptions {
   // given (declared, or noise_override).
   bool estimate_noise = true;
   Eigen::Vector3d noise_override = Eigen::Vector3d::Zero();  // > 0: the noise to use [reading units]
+  // > 0: also the cost at the minimum with the residuals weighted by this
+  // noise (BatchResult::cost_at_noise; a reduction, no pass over the
+  // samples): the loop's likelihood ratio at the round's noise, from a
+  // refit whose own noise is estimated.
+  Eigen::Vector3d cost_at_noise = Eigen::Vector3d::Zero();
   std::function<void(const std::string&)> progress;  // one line per stage
   std::function<void(double)> fraction;              // 0..1
 };
@@ -189,6 +194,7 @@ struct BatchResult {
   Eigen::VectorXd conditional_information;    // HoldDecision::conditional_information
   Prior prior;
   double final_cost = 0.0;      // 0.5 sum r^2 over all blocks
+  double cost_at_noise = 0.0;   // the same at BatchOptions::cost_at_noise (when given)
   int residual_count = 0;
   // 2 cost / (residuals - unknowns): 1 when the noise is right and the model
   // complete (the diagnosis starts here).
