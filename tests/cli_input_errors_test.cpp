@@ -204,6 +204,17 @@ TEST_F(CliInputErrors, NoisyRunInDegreesIsNotTakenForRadians) {
   EXPECT_TRUE(fs::exists(Path("out.json")));
 }
 
+// A mistyped command is named with the nearest one; a list option's items
+// may have blanks around them.
+TEST_F(CliInputErrors, UnknownCommandIsNamedWithTheNearest) {
+  ExpectError("fitt " + Path("run.yaml") + " -o " + Path("out.json"),
+              "unknown command 'fitt' (did you mean 'fit'?) (see `triadcal --help`)");
+  ExpectError("frobnicate", "unknown command 'frobnicate' (see `triadcal --help`)");
+  const CliResult r = Run("fit " + Path("run.yaml") + " -o " + Path("out.json") +
+                          " -q --effects 'angle_latency, thermal_drift'");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
 TEST_F(CliInputErrors, ReadingsInMillivoltsDeclaredAsG) {
   WriteText("g.yaml",
             "data: run.csv\ncolumns: {wx: {source: wx, unit: g}, wy: {source: wy, unit: g}, "
@@ -364,7 +375,7 @@ TEST_F(CliInputErrors, JsonNumberOutOfRange) {
   const std::string cal = WriteText("cal.json", CalibrationJson(0.0, "1e309"));
   const CliResult r = Run("apply " + cal + " " + Path("run.yaml") + " -o " + Path("w.csv"));
   EXPECT_EQ(r.exit_code, 2) << r.err;
-  EXPECT_EQ(r.err.rfind("triadcal: error: " + cal + ": not valid JSON (", 0), 0u) << r.err;
+  EXPECT_EQ(r.err.rfind("triadcal: error: " + cal + ": not valid JSON: ", 0), 0u) << r.err;
   EXPECT_NE(r.err.find("1e309"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(Path("w.csv")));
 }

@@ -1,4 +1,5 @@
 // triadcal: calibration of a MEMS accelerometer triad from a two-axis bench run.
+#include <algorithm>
 #include <exception>
 #include <iostream>
 #include <map>
@@ -25,6 +26,22 @@ std::string Bounded(const std::string& line) {
   constexpr std::size_t kMax = 2000;
   if (line.size() <= kMax) return line;
   return line.substr(0, 1200) + " ... " + line.substr(line.size() - 600);
+}
+
+// Levenshtein distance (insertions, deletions, substitutions).
+std::size_t EditDistance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] != b[j - 1] ? 1 : 0)});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
 }
 
 }  // namespace
@@ -68,6 +85,26 @@ int main(int argc, char** argv) {
     c.app->add_flag("-q,--quiet", quiet, "no progress lines on stderr");
   }
   triadcal::SetCommandLine(argc, argv);
+  // An unknown command is named, with the nearest one (CLI11 says only
+  // "A subcommand is required" for `triadcal fitt`).
+  if (argc >= 2 && argv[1][0] != '-') {
+    const std::string word = argv[1];
+    std::string nearest;
+    std::size_t best = std::string::npos;
+    bool known = false;
+    for (const triadcal::Command& c : commands) {
+      const std::string& name = c.app->get_name();
+      known = known || name == word;
+      const std::size_t d = EditDistance(word, name);
+      if (d < best) best = d, nearest = name;
+    }
+    if (!known) {
+      std::cerr << "triadcal: error: unknown command '" << Bounded(triadcal::OneLine(word)) << "'"
+                << (best <= 2 ? " (did you mean '" + nearest + "'?)" : std::string())
+                << " (see `triadcal --help`)\n";
+      return 2;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

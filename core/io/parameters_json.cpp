@@ -102,7 +102,19 @@ json ParseJsonStrict(const std::string& text, const std::string& path) {
   try {
     return json::parse(text, callback);
   } catch (const json::exception& e) {  // syntax, or a number like 1e309
-    throw InputError(path + ": not valid JSON (" + Excerpt(e.what(), 300) + ")");
+    // The library's "[json.exception.parse_error.101] parse error at line 1,
+    // column 16: ..." said as "line 1, column 16: ...".
+    std::string what = e.what();
+    const std::size_t close = what.find("] ");
+    if (what.rfind("[json.exception.", 0) == 0 && close != std::string::npos) {
+      what = what.substr(close + 2);
+    }
+    if (what.rfind("parse error at ", 0) == 0) what = what.substr(15);
+    const std::size_t first = text.find_first_not_of(" \t\r\n");
+    const bool object = first != std::string::npos && text[first] == '{';
+    throw InputError(path + ": not valid JSON: " + Excerpt(what, 300) +
+                     (object ? "" : " (a calibration is a JSON object, the OUT of fit, static "
+                                    "or diagnose; this file does not start with '{')"));
   }
 }
 

@@ -39,7 +39,7 @@ struct ParametersFile {
 
 // Reads PATH and the first of `sections` that holds a "parameters" object
 // ("" for the top level, "rts", "batch"). Throws InputError:
-//   "PATH: not valid JSON (...)", "PATH: KEY: given twice ...",
+//   "PATH: not valid JSON: LINE, COLUMN: ...", "PATH: KEY: given twice ...",
 //   "PATH: parameters: missing (expected WHAT)",
 //   "PATH: SECTION.KEY: expected a number or {\"value\": number}" / "no \"value\"" /
 //   "unit U, expected \"V\" (docs/file-formats.md)" / "value is not a number: X" /

@@ -81,10 +81,27 @@ void DefaultTriadForGReadings(const YAML::Node& triad, RunDescription* run) {
                                       "be mixed (give all three in counts)");
   }
   if (in_g < 3 && in_counts < 3) return;
-  if (!triad || !triad["scale_mV_per_g"]) {
-    for (int i = 0; i < 3; ++i) {
-      const ColumnSource src = SourceOf(*run, channels[run->axis_source[i]]);
-      run->scale_mV_per_g[i] = in_counts == 3 ? *src.counts_per_g : 1000.0;
+  for (int i = 0; i < 3; ++i) {
+    const ColumnSource src = SourceOf(*run, channels[run->axis_source[i]]);
+    const double implied = in_counts == 3 ? *src.counts_per_g : 1000.0;
+    if (!triad || !triad["scale_mV_per_g"]) {
+      run->scale_mV_per_g[i] = implied;
+      continue;
+    }
+    // A nominal scale factor is the readings' own gain: readings in g are
+    // taken at 1000 mV/g (counts at the column's counts_per_g), so a nominal
+    // far from that is one left over from another sensor (the README's
+    // 174 mV/g with `unit: g`: Kx came out 35 +- 10 mg/g, exit 0).
+    const double k = run->scale_mV_per_g[i];
+    if (k < 0.5 * implied || k > 2.0 * implied) {
+      char what[320];
+      std::snprintf(what, sizeof(what),
+                    ": triad.scale_mV_per_g[%d]: %s declared for readings in %s, which are "
+                    "taken at %s per g; remove scale_mV_per_g or give the readings' own gain "
+                    "(within a factor 2 of it)",
+                    i, FormatDouble(k).c_str(), in_counts == 3 ? "counts" : src.unit.c_str(),
+                    FormatDouble(implied).c_str());
+      throw InputError(run->yaml_path + what);
     }
   }
   if (!triad || !triad["bias_mV"]) run->bias_mV.setZero();

@@ -185,6 +185,29 @@ TEST_F(RunDescriptionTest, ReadingsInGDefaultToAThousandMillivoltsPerG) {
   EXPECT_EQ(run.bias_mV, Eigen::Vector3d(0, 0, 0));
 }
 
+// The README's template with `unit: g` and its 174 mV/g left in: the
+// nominal gain is not the readings' (1000 mV/g for g): one line naming it.
+TEST_F(RunDescriptionTest, NominalScaleOfAnotherUnitIsRefused) {
+  const std::string yaml =
+      WriteYaml("data: run.csv\ncolumns: {wx: {source: a, unit: g}, wy: {source: b, unit: g},\n"
+                "          wz: {source: c, unit: g}}\n"
+                "triad: {scale_mV_per_g: [174, 174, 174], bias_mV: [0, 0, 0]}\n");
+  try {
+    LoadRunDescription(yaml);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              yaml + ": triad.scale_mV_per_g[0]: 174 declared for readings in g, which are taken "
+                     "at 1000 per g; remove scale_mV_per_g or give the readings' own gain (within "
+                     "a factor 2 of it)");
+  }
+  // The readings' own gain within a factor 2 is a nominal value, not a slip.
+  const RunDescription run = LoadRunDescription(
+      WriteYaml("data: run.csv\ncolumns: {wx: {source: a, unit: g}, wy: {source: b, unit: g},\n"
+                "          wz: {source: c, unit: g}}\ntriad: {scale_mV_per_g: [1010, 990, 1000]}\n"));
+  EXPECT_EQ(run.scale_mV_per_g, Eigen::Vector3d(1010, 990, 1000));
+}
+
 TEST_F(RunDescriptionTest, ScenarioSectionWithoutData) {
   const YAML::Node node = YAML::Load("{triad: {noise_mV: 3}}");
   const RunDescription run = ParseRunDescription(node, Path("scen.yaml"), "scen.yaml: run");

@@ -233,9 +233,13 @@ TEST_F(ApplyTest, BadCalibrationFilesGiveOneLine) {
   const std::string f = Path("cal.json");
   EXPECT_EQ(error_of("{\"parameters\": "),
             "triadcal: error: " + f +
-                ": not valid JSON ([json.exception.parse_error.101] parse error at line 1, "
-                "column 16: syntax error while parsing value - unexpected end of input; expected "
-                "'[', '{', or a literal)\n");
+                ": not valid JSON: line 1, column 16: syntax error while parsing value - "
+                "unexpected end of input; expected '[', '{', or a literal\n");
+  EXPECT_EQ(error_of("Kx: 174\n"),
+            "triadcal: error: " + f +
+                ": not valid JSON: line 1, column 1: syntax error while parsing value - invalid "
+                "literal; last read: 'K' (a calibration is a JSON object, the OUT of fit, static "
+                "or diagnose; this file does not start with '{')\n");
   EXPECT_EQ(error_of("{\"ekf\": {}}"),
             "triadcal: error: " + f +
                 ": parameters: missing (expected an OUT of fit, static, diagnose, filter "
