@@ -217,6 +217,57 @@ TEST_F(ReportBrowserTest, EveryCommandsReportDraws) {
   EXPECT_TRUE(r.console.empty()) << Joined(r.console);
 }
 
+// What a person files is on the page: the verdict's sentence (never
+// "[object Object]"), the provenance (date, version), the noise judged as the
+// verdict judges it; the diagnose report's could_hide; a batch summary's
+// units with their status.
+TEST_F(ReportBrowserTest, WhatAPersonFilesIsOnThePage) {
+  if (chromium_.empty()) GTEST_SKIP() << "chromium is not installed (setup.sh installs it)";
+  MakeFitReport("fit", 7);
+  const nlohmann::json fit = nlohmann::json::parse(Slurp(Path("fit.json")));
+  const std::string run = Path("fit/run.yaml");
+  ASSERT_EQ(Run("diagnose " + run + " -o " + Path("diag.json") +
+                " --candidates angle_latency,thermal_drift"),
+            0)
+      << Err();
+  const nlohmann::json diag = nlohmann::json::parse(Slurp(Path("diag.json")));
+  ASSERT_FALSE(diag["could_hide"].empty()) << diag["selected"].dump();
+  WriteText("manifest.csv", "serial,run,Kx_max\nU1," + run + ",171.6\nMISSING," +
+                                Path("none/run.yaml") + ",\n");
+  ASSERT_EQ(Run("batch " + Path("manifest.csv") + " -o " + Path("units") + " --date 2026-01-31"),
+            0)
+      << Err();
+  std::string summary;
+  for (const auto& e : fs::directory_iterator(Path("units"))) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind("summary_", 0) == 0 && e.path().extension() == ".json") summary = e.path();
+  }
+  ASSERT_FALSE(summary.empty());
+  ASSERT_EQ(Run("report " + Path("fit.json") + " " + Path("diag.json") + " " + summary + " -o " +
+                Path("filed.html")),
+            0)
+      << Err();
+  const BrowserResult r = Load(Path("filed.html"));
+  EXPECT_EQ(r.status, "ok") << r.result.dump();
+  EXPECT_TRUE(r.console.empty()) << Joined(r.console);
+  std::string dom;
+  for (int tag = 1; tag < 100 && dom.find("filed") == std::string::npos; ++tag) {
+    if (!fs::exists(Path("dom" + std::to_string(tag) + ".html"))) break;
+    dom = Slurp(Path("dom" + std::to_string(tag) + ".html"));
+  }
+  EXPECT_EQ(dom.find("[object Object]"), std::string::npos);
+  const std::string sentence = fit["verdict"]["sentence"].get<std::string>();
+  EXPECT_NE(dom.find(sentence.substr(0, sentence.find(';'))), std::string::npos) << sentence;
+  EXPECT_NE(dom.find("made " + fit["provenance"]["date_utc"].get<std::string>()), std::string::npos);
+  EXPECT_NE(dom.find("triadcal " + fit["provenance"]["version"].get<std::string>()),
+            std::string::npos);
+  const std::string hidden = diag["could_hide"][0]["effect"].get<std::string>() + ": ";
+  EXPECT_NE(dom.find(hidden), std::string::npos) << hidden;
+  EXPECT_NE(dom.find("Units of "), std::string::npos);
+  EXPECT_NE(dom.find("MISSING"), std::string::npos);
+  EXPECT_NE(dom.find("2 units: 1 pass, 0 fail, 1 error"), std::string::npos);
+}
+
 // The check fails when it should: a console error, a script error, or a
 // chart with nothing drawn.
 TEST_F(ReportBrowserTest, CheckFailsOnConsoleErrorScriptErrorAndBlankChart) {

@@ -6,6 +6,9 @@ namespace triadcal {
 
 std::string LimitViolation::Text() const {
   if (limit == "missing") return parameter + " not in the calibration";
+  if (limit == "not_determined") {
+    return parameter + " not determined by this run (kept at nominal): its limits cannot be judged";
+  }
   char buf[160];
   const char* what = limit == "sigma_max" ? " sigma" : "";
   const char* op = limit == "min" ? "<" : ">";
@@ -23,7 +26,13 @@ std::vector<LimitViolation> CheckLimits(const std::vector<ParameterLimit>& limit
       continue;
     }
     const nlohmann::json& p = parameters[l.parameter];
-    const double value = p.value("value", 0.0), sigma = p.value("sigma", 0.0);
+    // Held or considered (no sigma, or "determined": false): a nominal value,
+    // no result to hold against a limit.
+    if (!p.contains("sigma") || !p["sigma"].is_number() || !p.value("determined", true)) {
+      out.push_back({l.parameter, "not_determined", 0.0, 0.0, p.value("unit", "")});
+      continue;
+    }
+    const double value = p.value("value", 0.0), sigma = p["sigma"].get<double>();
     const std::string unit = p.value("unit", "");
     if (l.min && value < *l.min) out.push_back({l.parameter, "min", value, *l.min, unit});
     if (l.max && value > *l.max) out.push_back({l.parameter, "max", value, *l.max, unit});

@@ -96,7 +96,11 @@ nlohmann::json ChangeInSigma(const nlohmann::json& now, const nlohmann::json& be
     const nlohmann::json& a = it.value();
     const nlohmann::json& b = before[it.key()];
     if (!a.value("estimable", true) || !b.value("estimable", true)) continue;
-    const double s = std::hypot(a.value("sigma", 0.0), b.value("sigma", 0.0));
+    if (!a.contains("sigma") || !a["sigma"].is_number() || !b.contains("sigma") ||
+        !b["sigma"].is_number()) {
+      continue;  // held: no estimate to compare
+    }
+    const double s = std::hypot(a["sigma"].get<double>(), b["sigma"].get<double>());
     if (!(s > 0)) continue;
     out[it.key()] = (a.value("value", 0.0) - b.value("value", 0.0)) / s;
   }

@@ -77,6 +77,24 @@ TEST(Acceptance, EachViolatedLimitIsNamed) {
   EXPECT_EQ(low[0].Text(), "Kx 180.25 < min 181 mV/g");
 }
 
+// A limit on a parameter the run did not determine (held: sigma null;
+// considered: "determined": false) cannot be judged: named, never a crash or
+// a pass; a change against a previous calibration skips it.
+TEST(Acceptance, UndeterminedParameterIsNamedNotJudged) {
+  const nlohmann::json params = {
+      {"Kx", {{"value", 174.0}, {"sigma", nullptr}, {"unit", "mV/g"}, {"held", true}}},
+      {"Ky", {{"value", 174.0}, {"sigma", 9.0}, {"unit", "mV/g"}, {"determined", false}}}};
+  const std::vector<LimitViolation> v =
+      CheckLimits({{"Kx", std::nullopt, 171.6, std::nullopt}, {"Ky", 170.0, std::nullopt, 1.0}},
+                  params);
+  ASSERT_EQ(v.size(), 2u);
+  EXPECT_EQ(v[0].Text(),
+            "Kx not determined by this run (kept at nominal): its limits cannot be judged");
+  EXPECT_EQ(v[1].limit, "not_determined");
+  const nlohmann::json change = ChangeInSigma(params, params);
+  EXPECT_FALSE(change.contains("Kx"));
+}
+
 TEST(CalibrationStore, DateMustBeIso) {
   CheckDate("2026-01-31");
   for (const char* bad : {"2026-1-31", "31.01.2026", "2026-13-01", "2026-01-31x"}) {

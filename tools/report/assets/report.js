@@ -264,11 +264,16 @@
           ' Hz. Spectrum decimation: ' + sp.decimation + '.'}));
     }
   }
-  function residualStats(parent, ra, title) {
+  // noiseConsistent: the verdict's noise_consistent (false: the residual
+  // holds another noise than the declared one, whatever its structure).
+  function residualStats(parent, ra, title, noiseConsistent) {
     if (!ra || !ra.channels) return;
     var s = section(parent, title || 'Residual statistics',
                     ra.structure ? 'STRUCTURE: ' + ra.structure_summary :
-                                   'The residual is consistent with the declared noise.');
+                    noiseConsistent === false ?
+                        'No structure found in the residual, but its noise is NOT the declared ' +
+                        'one (the verdict gives both figures).' :
+                        'The residual is consistent with the declared noise.');
     s.appendChild(table(['channel', 'RMS', 'unit', 'Ljung-Box p', 'lag-1 autocorr.', 'strongest peak'],
         ra.channels.map(function (c) {
           var pk = c.spectrum_peaks && c.spectrum_peaks.length ?
@@ -297,6 +302,13 @@
                  out.residual_analysis.structure_summary);
         }
         if (out.unobservable && out.unobservable.length) r.push('some parameters are not separable');
+        if (out.verdict && out.verdict.noise_consistent === false) {
+          r.push('the reading noise in the residuals is not the declared one');
+        }
+        return {state: r.length ? 'fail' : 'pass', reasons: r};
+      case 'batch':
+        if (out.fail) r.push(out.fail + ' unit(s) outside their limits');
+        if (out.error) r.push(out.error + ' unit(s) could not be calibrated');
         return {state: r.length ? 'fail' : 'pass', reasons: r};
       case 'diagnose':
         if (out.unexplained_structure) r.push('structure remains that no candidate explains');
@@ -329,10 +341,16 @@
         return {state: 'info', reasons: r};
     }
   }
-  function verdictText(out) {
-    if (out.verdict) return out.verdict;
-    if (out.batch && out.batch.verdict) return out.batch.verdict;
+  // The verdict sentence: a string, or (fit, diagnose, joint fit) an object
+  // whose `sentence` says it.
+  function sentenceOf(v) {
+    if (!v) return '';
+    if (typeof v === 'string') return v;
+    if (typeof v.sentence === 'string') return v.sentence;
     return '';
+  }
+  function verdictText(out) {
+    return sentenceOf(out.verdict) || sentenceOf(out.batch && out.batch.verdict);
   }
   function header(parent, item) {
     var out = item.out;
@@ -348,7 +366,11 @@
     if (out.scenario) facts.push('scenario: ' + out.scenario);
     if (isNum(out.samples)) facts.push(out.samples + ' samples');
     if (isNum(out.chi2_per_dof)) facts.push('chi2/dof ' + g(out.chi2_per_dof, 4) + ' (1 expected)');
-    if (out.provenance && out.provenance.utc) facts.push('made ' + out.provenance.utc);
+    var pv = out.provenance || {};
+    if (pv.sensor && pv.sensor.serial) facts.push('sensor ' + pv.sensor.serial);
+    if (pv.sensor && pv.sensor.model) facts.push('model ' + pv.sensor.model);
+    if (pv.date_utc) facts.push('made ' + pv.date_utc);
+    if (pv.version) facts.push('triadcal ' + pv.version + (pv.git_commit ? ' (' + pv.git_commit + ')' : ''));
     if (facts.length) h.appendChild(el('p', {cls: 'facts', text: facts.join(' \u00b7 ')}));
     parent.appendChild(h);
     return j;
@@ -358,7 +380,7 @@
   function renderFit(p, out) {
     paramTable(p, out.parameters, fitFlags(out), null, out.sigma_method);
     residualCharts(p, out.residual_plot);
-    residualStats(p, out.residual_analysis);
+    residualStats(p, out.residual_analysis, null, (out.verdict || {}).noise_consistent);
     correlationSection(p, out.correlation);
   }
   function renderDiagnose(p, out) {
@@ -371,8 +393,22 @@
                   g(t.threshold, 3), t.selected ? 'yes' : '', t.note || ''];
         })));
     var hide = [];
+    var selected = out.selected || [];
     (out.ranking || []).forEach(function (t) {
-      if (t.note) hide.push(t.effect + ': ' + t.note);
+      if (t.note && !t.selected && selected.indexOf(t.effect) < 0) hide.push(t.effect + ': ' + t.note);
+    });
+    // What the loop's final fit could not see (could_hide): the smallest size
+    // of each effect not selected that the run would detect, and how far an
+    // effect of that size would move the estimates unseen.
+    (out.could_hide || []).forEach(function (h) {
+      if (h.undetectable || !isNum(h.minimal_detectable)) {
+        hide.push(h.effect + ': ' + (h.note || 'this run cannot detect it'));
+      } else {
+        hide.push(h.effect + ': up to ' + g(h.minimal_detectable, 3) + ' ' + (h.unit || '') +
+                  ' would go undetected (power ' + g(h.power, 2) + ' at alpha ' + g(h.alpha, 2) +
+                  '), moving ' + (h.parameter || 'the estimates') + ' by up to ' +
+                  g(h.max_shift_sigma, 3) + ' sigma');
+      }
     });
     // The last round's candidates with some evidence (p < 0.05) that did not
     // pass the selection threshold: present perhaps, too weak to add.
@@ -611,6 +647,25 @@
           })));
     }
   }
+  // A batch summary: the counts, then one row per unit with what failed.
+  function renderBatch(p, out) {
+    var s = section(p, 'Units of ' + (out.manifest || 'the batch'),
+                    (out.units || 0) + ' units: ' + (out.pass || 0) + ' pass, ' + (out.fail || 0) +
+                    ' fail, ' + (out.error || 0) + ' error' +
+                    (out.date ? ' (' + out.date + ')' : ''));
+    s.appendChild(table(['serial', 'status', 'reason', 'limits exceeded', 'largest change',
+                         'diagnose selected', 'time [s]'],
+        (out.results || []).map(function (u) {
+          var v = (u.violations || []).map(function (x) {
+            return typeof x === 'string' ? x : x.text || (x.parameter || '') + ' ' + (x.limit || '');
+          }).join('; ');
+          var change = u.previous && isNum(u.largest_change_sigma) ?
+              g(u.largest_change_sigma, 3) + ' sigma (' + u.largest_change_parameter + ')' : '';
+          return [u.serial, badge(u.status === 'pass' ? 'pass' : 'fail', u.status.toUpperCase()),
+                  u.reason || '', v, change, (u.diagnose_selected || []).join(', '),
+                  isNum(u.time_s) ? g(u.time_s, 3) : ''];
+        })));
+  }
   function renderOne(parent, item) {
     var out = item.out;
     var art = el('article', {cls: 'out'});
@@ -625,6 +680,7 @@
       case 'design': renderDesign(art, out); break;
       case 'montecarlo': renderMonteCarlo(art, out); break;
       case 'static': renderStatic(art, out); break;
+      case 'batch': renderBatch(art, out); break;
       default:
         if (out.parameters) paramTable(art, out.parameters);
     }
