@@ -161,6 +161,10 @@ TEST_F(ReportBrowserTest, FitReportLoadsWithEveryChartDrawnAndNoConsoleMessage) 
   EXPECT_TRUE(r.result["blank"].empty()) << r.result.dump();
   EXPECT_TRUE(r.result["errors"].empty()) << r.result.dump();
   EXPECT_TRUE(r.console.empty()) << Joined(r.console);
+  // `fit --report` carries the provenance the OUT has.
+  const nlohmann::json fit = nlohmann::json::parse(Slurp(Path("fit.json")));
+  EXPECT_NE(Slurp(Path("fit.html")).find(fit["provenance"]["version"].get<std::string>()),
+            std::string::npos);
 
   // The screenshot, kept as a test artefact next to the build.
   const fs::path artefacts = fs::path(TRIADCAL_BIN).parent_path().parent_path() / "test-artifacts";

@@ -250,6 +250,8 @@ void WriteReportIfAsked(const std::string& report_html, const nlohmann::json& ou
   ReportInput in;
   in.name = std::filesystem::path(out_json).filename().string();
   in.out = out;
+  // The provenance the OUT file carries (WriteJson stamps it), on the page too.
+  if (in.out.is_object() && !in.out.contains("provenance")) in.out["provenance"] = CurrentProvenance();
   WriteHtmlReport({in}, report_html);
   std::printf("wrote %s\n", report_html.c_str());
 }
