@@ -90,7 +90,9 @@ int RunFit(FitArgs a) {
 Command AddFitCommand(CLI::App& app) {
   auto a = std::make_shared<FitArgs>();
   Command c;
-  c.app = app.add_subcommand("fit", "Batch least-squares solution of the whole run (Ceres)");
+  c.app = app.add_subcommand("fit",
+                             "Batch least-squares solution of the whole run (Levenberg-Marquardt, "
+                             "the trajectory solved for exactly)");
   c.app->add_option("run", a->runs,
                     "run description (run.yaml); several, or a runs file, fit one IMU "
                     "from several runs (docs/multi-run.md)")

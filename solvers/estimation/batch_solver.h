@@ -23,7 +23,7 @@
 //      about beyond the others (a structural null) is held and the others of
 //      its direction are estimated relative to it. No misfit can move a
 //      parameter that is not estimated.
-//   2. The start: the EKF + RTS smoother on the samples thinned to 100 Hz, or
+//   2. The start: the EKF + RTS smoother on the samples thinned to 25 Hz (init_decimation_hz), or
 //      the nominal values.
 //   3. The minimum (batch_minimizer.h): Levenberg-Marquardt on theta with the
 //      trajectory solved for exactly at every step (run_evaluation.h) and the
