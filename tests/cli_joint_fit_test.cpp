@@ -68,6 +68,7 @@ temperature: {reference_C: 20, degree: {W0x: 1, Kx: 1}}
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(ReadFile(Path("out.json")));
   EXPECT_EQ(j["kind"], "joint");
+  EXPECT_EQ(j["termination"].get<std::string>().rfind("converged in ", 0), 0u) << j["termination"];
   EXPECT_EQ(j["axes"], "imu");
   EXPECT_EQ(j["temperature_model"]["reference_C"], 20.0);
   ASSERT_EQ(j["runs"].size(), 3u);

@@ -36,7 +36,9 @@ nlohmann::json Entry(const JointParam& p, double value, double var, Treatment t)
   e["estimable"] = estimated;
   if (t == Treatment::kHeld) {
     e["held"] = true;
-    e["reason"] = "no information in the runs together: held at its nominal value";
+    e["reason"] =
+        "held at its nominal value: no information in the runs together beyond the others "
+        "(a structural null), or held with --hold";
   } else if (t == Treatment::kConsidered) {
     e["considered"] = true;
     e["reason"] =
@@ -140,7 +142,7 @@ JointSpec JointSpecOf(const RunsFile& file) {
 }
 
 std::string JointVerdict(const JointLayout& jl, const JointResult& r) {
-  if (!r.converged) return "NOT CONVERGED (the joint solve stopped before its tolerance)";
+  if (!r.converged) return "NOT CONVERGED: " + r.termination;
   std::vector<std::string> bad;
   int tested = 0;
   for (const JointRunResult& rr : r.runs) {
@@ -282,6 +284,7 @@ nlohmann::json JointJson(const JointLayout& jl, const std::vector<JointRun>& run
   out["degrees_of_freedom"] = r.degrees_of_freedom;
   out["converged"] = r.converged;
   out["iterations"] = r.iterations;
+  out["termination"] = r.termination;
   out["verdict"] = JointVerdict(jl, r);
   out["timing_s"] = {{"runs_alone", r.seconds_alone}, {"joint", r.seconds_joint}};
   return out;
@@ -371,8 +374,8 @@ int RunJointFit(const FitSettings& s, const std::vector<std::string>& inputs,
   std::printf("determined only by the runs together: %s\n", Names(r.jointly_only).c_str());
   std::printf("wrote %s\n", out_json.c_str());
   if (!r.converged) {
-    std::fprintf(stderr, "triadcal: error: the joint fit did not converge (exit %d)\n",
-                 kExitNotConverged);
+    std::fprintf(stderr, "triadcal: error: the joint fit did not converge: %s (exit %d)\n",
+                 r.termination.c_str(), kExitNotConverged);
     return kExitNotConverged;
   }
   return 0;

@@ -516,6 +516,7 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
   MinimizerSummary summary;
   const BatchObjective::Point pt = minimizer.Minimize(phi, noise, &summary);
   res.converged = summary.converged;
+  res.termination = summary.termination;
   res.iterations = summary.iterations;
   phi = pt.phi;
   res.phi = phi;

@@ -116,6 +116,7 @@ struct JointResult {
   double cost = 0.0, chi2_per_dof = 0.0;
   int degrees_of_freedom = 0, iterations = 0;
   bool converged = false;
+  std::string termination;  // why the minimiser stopped (batch_minimizer.h)
   double seconds_alone = 0.0, seconds_joint = 0.0;
 };
 
