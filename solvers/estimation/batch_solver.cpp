@@ -451,6 +451,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   res.held = decision.held;
   res.consider = decision.consider;
   res.relative_to = decision.relative_to;
+  res.min_information = opt.holding.min_information;
   res.unsupported_at_start = decision.unsupported;
   res.information_at_start = decision.information;
   res.conditional_information = decision.conditional_information;

@@ -189,6 +189,9 @@ struct BatchResult {
   // parameters the run does not determine (consider); both at nominal.
   std::vector<std::string> held, consider;
   std::map<std::string, std::vector<std::string>> relative_to;  // HoldDecision
+  // What the hold rule asked of a determined parameter (HoldPolicy), in prior
+  // units: the reports judge the estimates' sigma by the same figure.
+  double min_information = HoldPolicy().min_information;
   std::vector<WeakDirection> unsupported_at_start;
   Eigen::MatrixXd information_at_start;       // HoldDecision::information
   Eigen::VectorXd conditional_information;    // HoldDecision::conditional_information

@@ -325,6 +325,29 @@ TEST(BatchSolver, EstimatesTheNoiseWhateverWasDeclared) {
   }
 }
 
+// The loop's likelihood ratio at the round's noise: cost_at_noise is the
+// minimum's cost reweighted at a given noise (no refit): at the fit's own
+// noise it is the fit's cost; at a larger noise every reading residual
+// weighs less (the angle-noise part stays), so the cost falls, by at most 4x
+// at twice the noise.
+TEST(BatchSolver, CostAtAGivenNoiseIsTheMinimumReweighted) {
+  const Scenario s = PaperScenario(50.0, 60.0, 2.0, 15.0, 23);
+  const RunData data = Simulate(s);
+  const BatchResult first = Fit(s, data);
+  ASSERT_TRUE(first.converged) << first.termination;
+  BatchOptions opt;
+  opt.cost_at_noise = first.noise_used_mV;
+  const BatchResult same = Fit(s, data, opt);
+  EXPECT_NEAR(same.cost_at_noise, same.final_cost, 1e-9 * same.final_cost);
+  opt.cost_at_noise = 2.0 * first.noise_used_mV;
+  const BatchResult wider = Fit(s, data, opt);
+  EXPECT_NEAR(wider.final_cost, same.final_cost, 1e-9 * same.final_cost);  // the fit itself
+  EXPECT_LT(wider.cost_at_noise, same.final_cost);
+  EXPECT_GT(wider.cost_at_noise, 0.25 * same.final_cost);
+  EXPECT_EQ(BatchResult().min_information, HoldPolicy().min_information);
+  EXPECT_EQ(same.min_information, opt.holding.min_information);
+}
+
 std::string Slurp(const std::string& path) {
   std::ifstream in(path);
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());

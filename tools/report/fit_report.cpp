@@ -30,7 +30,7 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
   if (m > 0 && r.consider_sensitivity.rows() == layout.size() &&
       r.consider_sensitivity.cols() == m && r.consider_cov.rows() == m &&
       r.cov_given_consider.rows() == layout.size()) {
-    const double min_information = HoldPolicy().min_information;
+    const double min_information = r.min_information;
     for (int i = 0; i < layout.size(); ++i) {
       const std::string& name = layout.info(i).name;
       if (rep.held.count(name) || rep.consider.count(name)) continue;

@@ -21,7 +21,7 @@ struct FitReport {
   std::set<std::string> held;
   std::set<std::string> consider;  // not determined: nominal, prior uncertainty carried
   // Estimated, but determined only together with considered parameters:
-  // sigma above the prior's / sqrt(HoldPolicy::min_information) (what the
+  // sigma above the prior's / sqrt(BatchResult::min_information) (what the
   // hold rule asks of a determined parameter), mostly from the considered
   // ones' prior uncertainty (more than half the variance). The value holds
   // for the considered ones at nominal; named with the considered parameters
