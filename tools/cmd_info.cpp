@@ -16,6 +16,10 @@ Command AddInfoCommand(CLI::App& app) {
     for (const ParameterInfo& p : BaseParameterInfo()) {
       std::printf("  %-10s %s\n", p.name.c_str(), p.unit.c_str());
     }
+    std::printf("\nGyro parameters (with a gyro block in run.yaml; docs/file-formats.md):\n");
+    for (const ParameterInfo& p : GyroParameterInfo()) {
+      std::printf("  %-13s %s\n", p.name.c_str(), p.unit.c_str());
+    }
     std::printf("\nEffects (docs/method.md), parameters named effect.param:\n");
     for (const EffectSpec& e : EffectCatalogue()) {
       std::printf("  %-26s %s\n", e.name.c_str(), e.description.c_str());

@@ -37,8 +37,16 @@ void PrintSummary(const Scenario& s, const RunData& data, const std::string& dir
   }
   std::printf("noise (1 sigma per sample): accelerometers %s mV, angles %g arcsec; seed %llu\n",
               accel, s.angle_noise_rad / kArcsecToRad, static_cast<unsigned long long>(s.seed));
+  if (s.run.gyro) {
+    const Eigen::Vector3d c = s.gyro_noise_rad_s / kDegToRad;
+    std::printf("gyro: gx gy gz written, noise %g %g %g deg/s%s\n", c[0], c[1], c[2],
+                s.run.latitude_rad ? ", with Earth's rate" : "");
+  }
   std::string effects;
-  for (int i = kNumBaseParams; i < s.truth_layout.size(); ++i) {
+  // The effects' parameters: after the base ones, before the gyro block.
+  const int effects_end =
+      s.truth_layout.has_gyro() ? s.truth_layout.gyro_offset() : s.truth_layout.size();
+  for (int i = kNumBaseParams; i < effects_end; ++i) {
     char value[32];
     std::snprintf(value, sizeof(value), "%g", TruthFileValue(s.truth_layout, s.truth, i));
     effects += (effects.empty() ? "" : ", ") + TruthFileKey(s.truth_layout, i) + " = " + value;

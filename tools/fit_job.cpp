@@ -88,7 +88,8 @@ FitOutcome FitRun(const FitSettings& a, const std::string& run_yaml, const Loade
                   const std::function<void(double)>& fraction) {
   CheckFitSettings(a);
   FitOutcome f;
-  f.layout = ParameterLayout(ParseEffectList(a.effects, run.data));
+  f.layout = ParameterLayout(ParseEffectList(a.effects, run.data),
+                             run.description.gyro.has_value() && run.data.has_gyro());
   BatchOptions opt = MakeBatchOptions(a);
   opt.progress = progress;
   opt.fraction = fraction;

@@ -38,7 +38,11 @@ ColumnSource ParseOneColumn(const ChannelInfo& ch, const YAML::Node& node, const
         "got " +
         DescribeNode(node));
   }
-  CheckKeys(node, at, {"source", "var", "unit", "scale", "offset", "value", "counts_per_g"});
+  // The count scale of a channel in counts: per g for the accelerometer's
+  // readings, per deg/s for the gyro's.
+  const bool gyro = ch.kind == ChannelKind::kGyro;
+  const char* counts_key = gyro ? "counts_per_dps" : "counts_per_g";
+  CheckKeys(node, at, {"source", "var", "unit", "scale", "offset", "value", counts_key});
   int given = 0;
   for (const char* key : {"source", "var"}) {
     if (node[key]) {
@@ -64,11 +68,13 @@ ColumnSource ParseOneColumn(const ChannelInfo& ch, const YAML::Node& node, const
     if (c.scale == 0.0) at.Child("scale").Fail("must not be 0");
   }
   if (node["offset"]) c.offset = ReadNumber(node["offset"], at.Child("offset"));
-  if (node["counts_per_g"]) {
-    if (c.unit != "counts") at.Child("counts_per_g").Fail("only with unit: counts");
-    c.counts_per_g = ReadPositive(node["counts_per_g"], at.Child("counts_per_g"));
+  if (node[counts_key]) {
+    if (c.unit != "counts") at.Child(counts_key).Fail("only with unit: counts");
+    const double per = ReadPositive(node[counts_key], at.Child(counts_key));
+    (gyro ? c.counts_per_dps : c.counts_per_g) = per;
   } else if (c.unit == "counts") {
-    at.Fail("readings in counts need their count scale: counts_per_g (e.g. 16384)");
+    at.Fail(gyro ? "gyro readings in counts need their count scale: counts_per_dps (e.g. 131)"
+                 : "readings in counts need their count scale: counts_per_g (e.g. 16384)");
   }
   return c;
 }
@@ -100,6 +106,9 @@ const std::vector<ChannelInfo>& Channels() {
       {"lambda1_rate", ChannelKind::kRate, false},
       {"lambda2_rate", ChannelKind::kRate, false},
       {"temp_C", ChannelKind::kTemperature, false},
+      {"gx", ChannelKind::kGyro, false},
+      {"gy", ChannelKind::kGyro, false},
+      {"gz", ChannelKind::kGyro, false},
   };
   return channels;
 }
@@ -125,6 +134,8 @@ std::vector<std::string> AllowedUnits(ChannelKind kind) {
       return {"mV", "V", "g", "mg", "m/s^2", "m/s\u00b2", "counts"};
     case ChannelKind::kTemperature:
       return {"C"};
+    case ChannelKind::kGyro:
+      return {"deg/s", "rad/s", "counts"};
   }
   return {};
 }
@@ -147,12 +158,18 @@ double OurUnitsPerSourceUnit(ChannelKind kind, const std::string& unit) {
       return u == "mV" ? 1.0 : u == "V" ? 1000.0 : u == "g" ? 1000.0 : u == "mg" ? 1.0 : 0.0;
     case ChannelKind::kTemperature:
       return u == "C" ? 1.0 : 0.0;
+    case ChannelKind::kGyro:
+      // counts: divided by the column's counts_per_dps when read (run_io.cpp).
+      if (u == "counts") return 1.0;
+      return u == "deg/s" ? 1.0 : u == "rad/s" ? 1.0 / kDegToRad : 0.0;
   }
   return 0.0;
 }
 
 double SiPerOurUnit(ChannelKind kind) {
-  return kind == ChannelKind::kAngle || kind == ChannelKind::kRate ? kDegToRad : 1.0;
+  return kind == ChannelKind::kAngle || kind == ChannelKind::kRate || kind == ChannelKind::kGyro
+             ? kDegToRad
+             : 1.0;
 }
 
 std::map<std::string, ColumnSource> ParseColumns(const YAML::Node& node, const YamlPlace& at) {
@@ -358,6 +375,9 @@ void EmitColumns(const std::map<std::string, ColumnSource>& columns, YAML::Emitt
     if (c.offset != 0.0) *out << YAML::Key << "offset" << YAML::Value << FormatDouble(c.offset);
     if (c.counts_per_g) {
       *out << YAML::Key << "counts_per_g" << YAML::Value << FormatDouble(*c.counts_per_g);
+    }
+    if (c.counts_per_dps) {
+      *out << YAML::Key << "counts_per_dps" << YAML::Value << FormatDouble(*c.counts_per_dps);
     }
     *out << YAML::EndMap;
   }

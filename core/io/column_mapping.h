@@ -14,14 +14,17 @@
 //     tilted: [0.7071, 0, 0.7071]
 //
 // A channel value is  our = source * unit_factor * scale + offset, in our units
-// (t: s, angles: deg, rates: deg/s, readings: mV, temp_C: degC), then SI.
-// Source units: t s|ms; angles deg|rad; rates deg/s|rad/s; readings mV|V|g|mg;
-// temp_C C. Readings in g, mg or m/s^2 (at standard gravity) become mg, so the
-// triad's nominal scale is then 1000 per g (and the bias 0); readings in counts
+// (t: s, angles: deg, rates: deg/s, readings: mV, temp_C: degC, gyro: deg/s),
+// then SI. Source units: t s|ms; angles deg|rad; rates deg/s|rad/s; readings
+// mV|V|g|mg; temp_C C; gyro gx gy gz deg/s|rad/s|counts (counts with
+// counts_per_dps: {source: gyr_x, unit: counts, counts_per_dps: 131}).
+// Readings in g, mg or m/s^2 (at standard gravity) become mg, so the triad's
+// nominal scale is then 1000 per g (and the bias 0); readings in counts
 // ({unit: counts, counts_per_g: 16384}) stay counts, and the nominal scale is
 // counts_per_g. Output units are named for what was read (ReadingsUnit).
-// The readings channels wx, wy, wz are the IMU's own axes; the mounting turns
-// them into the platform frame (docs/method.md) after the mapping.
+// The readings channels wx, wy, wz and the gyro channels gx, gy, gz are the
+// IMU's own axes; the mounting turns both into the platform frame
+// (docs/method.md) after the mapping.
 #pragma once
 
 #include <yaml-cpp/yaml.h>
@@ -35,7 +38,7 @@
 
 namespace triadcal {
 
-enum class ChannelKind { kTime, kAngle, kRate, kReading, kTemperature };
+enum class ChannelKind { kTime, kAngle, kRate, kReading, kTemperature, kGyro };
 
 struct ChannelInfo {
   std::string name;  // t, lambda1, ..., as in the CSV contract
@@ -43,17 +46,18 @@ struct ChannelInfo {
   bool required;
 };
 
-// The channels of the CSV contract, in its column order.
+// The channels of the CSV contract, in its column order, then the optional
+// gyro channels gx, gy, gz (SPEC section 10).
 const std::vector<ChannelInfo>& Channels();
 const ChannelInfo* FindChannel(const std::string& name);  // nullptr if unknown
 
-// The unit of our files for a kind ("s", "deg", "deg/s", "mV", "C"), the
+// The unit of our files for a kind ("s", "deg", "deg/s", "mV", "C", "deg/s"), the
 // allowed source units, and the factor from a source unit to ours (0 if the
 // unit is not allowed for the kind).
 std::string DefaultUnit(ChannelKind kind);
 std::vector<std::string> AllowedUnits(ChannelKind kind);
 double OurUnitsPerSourceUnit(ChannelKind kind, const std::string& unit);
-// SI per our unit: kDegToRad for angles and rates, 1 otherwise.
+// SI per our unit: kDegToRad for angles, rates and the gyro, 1 otherwise.
 double SiPerOurUnit(ChannelKind kind);
 
 // The optional text channel `label` (a position label per sample) is kept in

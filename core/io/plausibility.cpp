@@ -89,7 +89,7 @@ struct DefaultScales {
 DefaultScales MakeDefaultScales(const RunDescription& run) {
   std::vector<Effect> all;
   for (const EffectSpec& e : EffectCatalogue()) all.push_back(e.id);
-  DefaultScales d{ParameterLayout(all), {}};
+  DefaultScales d{ParameterLayout(all, /*gyro=*/true), {}};
   RunDescription plain = run;
   plain.prior_sigma.clear();
   d.sigma_si = MakePrior(plain, d.layout).sigma;
@@ -294,6 +294,67 @@ void CheckAnglesNotRadiansWindowed(const DataTable& table, const ChannelValues (
                      " g (gravity can turn by only 0.1 g there): the angles look like "
                      "radians, not degrees; set columns.lambda1.unit and "
                      "columns.lambda2.unit to rad");
+  }
+}
+
+void CheckGyroUnits(const DataTable& table, const ChannelValues& t,
+                    const ChannelValues (&lambda)[2], const ChannelValues (&g)[3],
+                    const std::string& declared_unit, double nominal_scale) {
+  const std::vector<double>& ts = t.values;
+  const std::size_t n = ts.size();
+  if (lambda[0].values.size() != n || lambda[1].values.size() != n) return;
+  for (const ChannelValues& c : g) {
+    if (c.values.size() != n) return;
+  }
+  // Windows of at least kWindow_s (one sample interval when that is longer),
+  // each weighted by its length; a window across a gap is left out.
+  double bench_ss = 0.0, gyro_ss = 0.0, span_s = 0.0;
+  std::size_t windows = 0;
+  for (std::size_t k = 0; k + 1 < n;) {
+    std::size_t j = k + 1;
+    while (j + 1 < n && ts[j] - ts[k] < B::kGyroWindow_s) ++j;
+    const double dt = ts[j] - ts[k];
+    if (dt > 0.0 && dt <= B::kGyroMaxWindow_s) {
+      const double d1 = lambda[0].values[j] - lambda[0].values[k];
+      const double d2 = lambda[1].values[j] - lambda[1].values[k];
+      double g2 = 0.0;
+      for (std::size_t m = k; m < j; ++m) {
+        for (const ChannelValues& c : g) g2 += c.values[m] * c.values[m];
+      }
+      bench_ss += (d1 * d1 + d2 * d2) / dt;  // (rate^2) * dt
+      gyro_ss += g2 / static_cast<double>(j - k) * dt;
+      span_s += dt;
+      ++windows;
+    }
+    k = j;
+  }
+  if (windows < 3 || !(span_s > 0.0)) return;
+  const double bench_rms = std::sqrt(bench_ss / span_s);
+  const double gyro_rms = std::sqrt(gyro_ss / span_s);
+  if (!(bench_rms > B::kGyroMinBenchRate_deg_s)) return;  // too still to judge by
+  const double ratio = gyro_rms / (bench_rms * std::abs(nominal_scale));
+  const double per_rad = 1.0 / kDegToRad;  // 57.3
+  const std::string labels = g[0].label + ", " + g[1].label + ", " + g[2].label;
+  const std::string measured =
+      "the RMS of |g| over the run is " + Num(gyro_rms) + " deg/s as declared, " + Num(ratio) +
+      " times the bench's angle rate (RMS " + Num(bench_rms) +
+      " deg/s from lambda1, lambda2) at the nominal scale " + Num(nominal_scale);
+  const double f = B::kGyroUnitFactorTolerance;
+  if (declared_unit == "deg/s" && ratio > 1.0 / (per_rad * f) && ratio < f / per_rad) {
+    throw InputError(table.path + ": " + labels + ": " + measured +
+                     ": the gyro readings look like rad/s, not deg/s; declare `unit: rad/s` "
+                     "(columns.gx, gy, gz)");
+  }
+  if (declared_unit == "rad/s" && ratio > per_rad / f && ratio < per_rad * f) {
+    throw InputError(table.path + ": " + labels + ": " + measured +
+                     ": the gyro readings look like deg/s declared as rad/s; declare `unit: "
+                     "deg/s` (columns.gx, gy, gz)");
+  }
+  if (ratio < 1.0 / B::kGyroMaxRatio || ratio > B::kGyroMaxRatio) {
+    throw InputError(table.path + ": " + labels + ": " + measured + " (bound: within a factor " +
+                     Num(B::kGyroMaxRatio) +
+                     "): check the gyro's unit (columns.gx, gy, gz: deg/s, rad/s or counts with "
+                     "counts_per_dps) and gyro.scale");
   }
 }
 

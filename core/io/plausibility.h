@@ -39,6 +39,12 @@ struct PlausibilityBounds {
   static constexpr double kMaxAbsAngle_deg = 1e7;
   static constexpr double kMaxRate_deg_s = 3600.0;
   static constexpr double kMaxReadingInG = 1000.0;  // |reading - bias| / scale
+  // The gyro's unit against the bench's angle rate (CheckGyroUnits).
+  static constexpr double kGyroWindow_s = 0.1;             // angle differencing window
+  static constexpr double kGyroMaxWindow_s = 1.0;          // longer: a gap, left out
+  static constexpr double kGyroMinBenchRate_deg_s = 5.0;   // RMS; below: not judged
+  static constexpr double kGyroUnitFactorTolerance = 4.0;  // around 57.3 (rad vs deg)
+  static constexpr double kGyroMaxRatio = 5.0;             // RMS|g| / (|scale| RMS bench rate)
 };
 
 // The run description: bench, triad, priors and constraints. `where` is the
@@ -68,6 +74,21 @@ void CheckAngleRates(const DataTable& table, const ChannelValues& t,
 void CheckAnglesNotRadiansWindowed(const DataTable& table, const ChannelValues (&lambda)[2],
                                    const ChannelValues (&w)[3], const double (&nominal_scale)[3],
                                    double nominal_noise);
+
+// The gyro's unit, judged by the bench (SPEC section 10): over windows of
+// about 0.1 s the recorded angles (unwrapped, deg) give the bench's rate,
+// |omega| = sqrt(lambda1'^2 + lambda2'^2) whatever the axes, and the RMS of
+// |g| over the run (g: gx gy gz in deg/s as declared, before mounting) is
+// about |nominal_scale| times its RMS (biases and Earth's rate are small
+// beside a bench moving at an RMS of more than 5 deg/s; below that nothing is
+// judged). 57 times smaller with deg/s declared: rad/s declared as deg/s; 57
+// times larger with rad/s declared: deg/s declared as rad/s (each within a
+// factor 4 of 57.3); any other ratio beyond a factor 5: a wrong unit or
+// count scale. Each one InputError line. declared_unit: the unit common to
+// gx gy gz, empty when they differ.
+void CheckGyroUnits(const DataTable& table, const ChannelValues& t,
+                    const ChannelValues (&lambda)[2], const ChannelValues (&g)[3],
+                    const std::string& declared_unit, double nominal_scale);
 
 // Channels read from the file (not declared constant) that never change where
 // motion is expected: both angles constant is an error (no bench motion; a run

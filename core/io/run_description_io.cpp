@@ -20,7 +20,8 @@ namespace triadcal {
 namespace {
 
 void ParseBench(const YAML::Node& node, const YamlPlace& at, RunDescription* run) {
-  CheckKeys(node, at, {"lever_arm_mm", "angle_noise_arcsec", "g_mps2"});
+  CheckKeys(node, at,
+            {"lever_arm_mm", "angle_noise_arcsec", "g_mps2", "latitude_deg", "heading_deg"});
   if (node["lever_arm_mm"]) {
     run->lever_arm0_m = ReadVector3(node["lever_arm_mm"], at.Child("lever_arm_mm")) * kMmToM;
   }
@@ -29,6 +30,25 @@ void ParseBench(const YAML::Node& node, const YamlPlace& at, RunDescription* run
         ReadNonNegative(node["angle_noise_arcsec"], at.Child("angle_noise_arcsec")) * kArcsecToRad;
   }
   if (node["g_mps2"]) run->g_mps2 = ReadPositive(node["g_mps2"], at.Child("g_mps2"));
+  // latitude_deg and heading_deg (the azimuth of the outer axis, L's y, from
+  // north towards east): Earth's rate in the gyro's input rate. One without
+  // the other cannot place Earth's rate.
+  const bool latitude = bool(node["latitude_deg"]), heading = bool(node["heading_deg"]);
+  if (latitude != heading) {
+    const char* given = latitude ? "latitude_deg" : "heading_deg";
+    const char* missing = latitude ? "heading_deg" : "latitude_deg";
+    at.Child(given).Fail(std::string("given without bench.") + missing +
+                         " (Earth's rate needs both; give both, or neither)");
+  }
+  if (latitude) {
+    const YamlPlace p = at.Child("latitude_deg");
+    const double lat = ReadNumber(node["latitude_deg"], p);
+    if (!(lat >= -90.0 && lat <= 90.0)) {
+      p.Fail("must be within [-90, 90] deg, got " + FormatDouble(lat));
+    }
+    run->latitude_rad = lat * kDegToRad;
+    run->heading_rad = ReadNumber(node["heading_deg"], at.Child("heading_deg")) * kDegToRad;
+  }
 }
 
 // noise_mV: a number (every channel), [x, y, z] (per channel) or `auto`
@@ -64,6 +84,40 @@ void ParseTriad(const YAML::Node& node, const YamlPlace& at, RunDescription* run
   }
   if (node["bias_mV"]) run->bias_mV = ReadVector3(node["bias_mV"], at.Child("bias_mV"));
   if (node["noise_mV"]) ParseNoise(node["noise_mV"], at.Child("noise_mV"), run);
+}
+
+// gyro: {scale: [x, y, z], bias_dps: [x, y, z], noise_dps: N | [x, y, z] | auto}
+// (SPEC section 10): the nominal gyro, SI inside. A scale may be negative (an
+// axis of the gyro reversed against the accelerometer's) but not 0.
+GyroDescription ParseGyro(const YAML::Node& node, const YamlPlace& at) {
+  CheckKeys(node, at, {"scale", "bias_dps", "noise_dps"});
+  GyroDescription g;
+  if (node["scale"]) {
+    const YamlPlace p = at.Child("scale");
+    g.scale = ReadVector3(node["scale"], p);
+    for (int i = 0; i < 3; ++i) {
+      if (g.scale[i] == 0.0) p.Index(i).Fail("must not be 0 (readings per deg/s; nominal 1)");
+    }
+  }
+  if (node["bias_dps"]) {
+    g.bias_rad_s = ReadVector3(node["bias_dps"], at.Child("bias_dps")) * kDegToRad;
+  }
+  if (node["noise_dps"]) {
+    const YamlPlace p = at.Child("noise_dps");
+    const YAML::Node n = node["noise_dps"];
+    if (n.IsScalar() && n.Scalar() == "auto") {
+      g.noise_auto = true;
+    } else if (n.IsSequence()) {
+      const Eigen::Vector3d v = ReadVector3(n, p);
+      for (int i = 0; i < 3; ++i) {
+        if (!(v[i] > 0.0)) p.Index(i).Fail("must be > 0, got " + FormatDouble(v[i]));
+      }
+      g.noise_rad_s = v * kDegToRad;
+    } else {
+      g.noise_rad_s = Eigen::Vector3d::Constant(ReadPositive(n, p) * kDegToRad);
+    }
+  }
+  return g;
 }
 
 // Readings in g or mg become mV at 1000 mV/g: without a triad section saying
@@ -113,16 +167,41 @@ YAML::Emitter& EmitVector(YAML::Emitter& out, const Eigen::Vector3d& v) {
   return out << YAML::EndSeq;
 }
 
-// priors: {NAME: SIGMA} in file units, for any base or effect parameter.
+// An SI value in a file unit (si_per_unit SI each) with the fewest digits that
+// read back, as the parser does (value * si_per_unit), to exactly si: 0.02
+// deg/s stays 0.02, not 0.020000000000000004.
+std::string FormatInUnit(double si, double si_per_unit) {
+  const double v = si / si_per_unit;
+  for (int digits = 1; digits <= 17; ++digits) {
+    char buf[40];
+    std::snprintf(buf, sizeof(buf), "%.*g", digits, v);
+    const double d = std::strtod(buf, nullptr);
+    if (d * si_per_unit == si) return FormatDouble(d);
+  }
+  return FormatDouble(v);
+}
+
+YAML::Emitter& EmitVectorInUnit(YAML::Emitter& out, const Eigen::Vector3d& si, double si_per_unit) {
+  out << YAML::Flow << YAML::BeginSeq;
+  for (int i = 0; i < 3; ++i) out << FormatInUnit(si[i], si_per_unit);
+  return out << YAML::EndSeq;
+}
+
+// priors: {NAME: SIGMA} in file units, for any base, effect or (with a gyro
+// block) gyro parameter.
 void ParsePriors(const YAML::Node& node, const YamlPlace& at, RunDescription* run) {
   if (!node.IsMap()) at.Fail("expected a map {parameter: sigma in file units}");
   std::vector<Effect> all;
   for (const EffectSpec& e : EffectCatalogue()) all.push_back(e.id);
-  const ParameterLayout every(all);
+  const ParameterLayout every(all, /*gyro=*/true);
   for (const auto& kv : node) {
     const std::string name = KeyOf(kv.first, at);
     const YamlPlace p = at.Child(name);
-    if (every.IndexOf(name) < 0) p.Fail("unknown parameter (see `triadcal params`)");
+    const int i = every.IndexOf(name);
+    if (i < 0) p.Fail("unknown parameter (see `triadcal params`)");
+    if (every.is_gyro(i) && !run->gyro) {
+      p.Fail("a gyro parameter, but this run has no gyro block");
+    }
     run->prior_sigma[name] = ReadPositive(kv.second, p);
   }
 }
@@ -187,7 +266,7 @@ RunDescription ParseRunDescription(const YAML::Node& node, const std::string& ya
   const YamlPlace at{where, ""};
   if (!node.IsDefined() || node.IsNull()) return run;
   CheckKeys(node, at,
-            {"data", "bench", "triad", "constraints", "columns", "mounting", "priors",
+            {"data", "bench", "triad", "gyro", "constraints", "columns", "mounting", "priors",
              "data_format", "positions", "sensor", "time_range_s", "temperature_C"});
   if (node["data"]) {
     const std::string data = ReadString(node["data"], at.Child("data"));
@@ -200,6 +279,7 @@ RunDescription ParseRunDescription(const YAML::Node& node, const std::string& ya
   }
   if (node["bench"]) ParseBench(node["bench"], at.Child("bench"), &run);
   if (node["triad"]) ParseTriad(node["triad"], at.Child("triad"), &run);
+  if (node["gyro"]) run.gyro = ParseGyro(node["gyro"], at.Child("gyro"));
   if (node["constraints"]) {
     run.constraints = ParseConstraints(node["constraints"], at.Child("constraints"));
   }
@@ -254,6 +334,10 @@ std::string RunDescriptionToYaml(const RunDescription& run, const std::string& d
   if (run.g_mps2 != kStandardGravity) {
     out << YAML::Key << "g_mps2" << YAML::Value << FormatDouble(run.g_mps2);
   }
+  if (run.latitude_rad && run.heading_rad) {
+    out << YAML::Key << "latitude_deg" << YAML::Value << FormatInUnit(*run.latitude_rad, kDegToRad);
+    out << YAML::Key << "heading_deg" << YAML::Value << FormatInUnit(*run.heading_rad, kDegToRad);
+  }
   out << YAML::EndMap;
 
   out << YAML::Key << "triad" << YAML::Value << YAML::BeginMap;
@@ -270,6 +354,25 @@ std::string RunDescriptionToYaml(const RunDescription& run, const std::string& d
     out << YAML::Key << "noise_mV" << YAML::Value << FormatDouble(run.noise_mV);
   }
   out << YAML::EndMap;
+
+  if (run.gyro) {
+    const GyroDescription& g = *run.gyro;
+    out << YAML::Key << "gyro" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "scale" << YAML::Value;
+    EmitVector(out, g.scale);
+    out << YAML::Key << "bias_dps" << YAML::Value;
+    EmitVectorInUnit(out, g.bias_rad_s, kDegToRad);
+    out << YAML::Key << "noise_dps" << YAML::Value;
+    const Eigen::Vector3d& noise = g.noise_rad_s;
+    if (g.noise_auto) {
+      out << "auto";
+    } else if (noise[0] == noise[1] && noise[1] == noise[2]) {
+      out << FormatInUnit(noise[0], kDegToRad);
+    } else {
+      EmitVectorInUnit(out, noise, kDegToRad);
+    }
+    out << YAML::EndMap;
+  }
 
   out << YAML::Key << "constraints" << YAML::Value;
   if (run.constraints.empty()) {

@@ -244,7 +244,7 @@ TEST_F(RunDescriptionTest, NominalThetaAndModelConfig) {
 TEST_F(RunDescriptionTest, ErrorsNameTheKey) {
   const std::string f = Path();
   EXPECT_EQ(ErrorOf("data: run.csv\ntrid: {}\n"),
-            f + ": trid: unknown key (allowed: data, bench, triad, constraints, columns, "
+            f + ": trid: unknown key (allowed: data, bench, triad, gyro, constraints, columns, "
                 "mounting, priors, data_format, positions, sensor, time_range_s, temperature_C)");
   EXPECT_EQ(ErrorOf("data: run.csv\ntemperature_C: 400\n"),
             f + ": temperature_C: expected a temperature of -100 to 200 degC, got 400");
@@ -257,7 +257,7 @@ TEST_F(RunDescriptionTest, ErrorsNameTheKey) {
                 "mounting.axes)");
   EXPECT_EQ(ErrorOf("data: run.csv\nbench: {lever_arm: [1, 2, 3]}\n"),
             f + ": bench.lever_arm: unknown key (allowed: lever_arm_mm, angle_noise_arcsec, "
-                "g_mps2)");
+                "g_mps2, latitude_deg, heading_deg)");
   EXPECT_EQ(ErrorOf("data: run.csv\ntriad: {noise_mV: 1}\ntriad: {noise_mV: 2}\n"),
             f + ": triad: given twice");
   EXPECT_EQ(ErrorOf("data: run.csv\ntriad: {noise_mV: 1, noise_mV: 2}\n"),
@@ -278,7 +278,7 @@ TEST_F(RunDescriptionTest, ErrorsNameTheKey) {
                 "m/s\xC2\xB2, counts)");
   EXPECT_EQ(ErrorOf("data: run.csv\ncolumns: {w_x: a}\n"),
             f + ": columns.w_x: unknown key (allowed: t, lambda1, lambda2, wx, wy, wz, "
-                "lambda1_rate, lambda2_rate, temp_C, label)");
+                "lambda1_rate, lambda2_rate, temp_C, gx, gy, gz, label)");
   EXPECT_EQ(ErrorOf("data: run.csv\ncolumns: {lambda2: {source: a, value: 0}}\n"),
             f + ": columns.lambda2: give exactly one of source, var or value");
   EXPECT_EQ(ErrorOf("data: run.csv\ncolumns: {lambda2: 0}\n"),
@@ -357,6 +357,19 @@ void ExpectSameDescription(const RunDescription& a, const RunDescription& b) {
   EXPECT_NEAR(a.angle_noise_rad, b.angle_noise_rad, 1e-15 * a.angle_noise_rad);
   EXPECT_EQ(a.g_mps2, b.g_mps2);
   EXPECT_EQ(a.noise_mV, b.noise_mV);
+  ASSERT_EQ(a.latitude_rad.has_value(), b.latitude_rad.has_value());
+  ASSERT_EQ(a.heading_rad.has_value(), b.heading_rad.has_value());
+  if (a.latitude_rad) {
+    EXPECT_NEAR(*a.latitude_rad, *b.latitude_rad, 1e-15);
+    EXPECT_NEAR(*a.heading_rad, *b.heading_rad, 1e-15);
+  }
+  ASSERT_EQ(a.gyro.has_value(), b.gyro.has_value());
+  if (a.gyro) {
+    EXPECT_EQ(a.gyro->scale, b.gyro->scale);
+    EXPECT_NEAR((a.gyro->bias_rad_s - b.gyro->bias_rad_s).norm(), 0.0, 1e-15);
+    EXPECT_NEAR((a.gyro->noise_rad_s - b.gyro->noise_rad_s).norm(), 0.0, 1e-15);
+    EXPECT_EQ(a.gyro->noise_auto, b.gyro->noise_auto);
+  }
   ASSERT_EQ(a.constraints.size(), b.constraints.size());
   for (std::size_t j = 0; j < a.constraints.size(); ++j) {
     EXPECT_EQ(a.constraints[j].terms, b.constraints[j].terms);
@@ -373,6 +386,8 @@ void ExpectSameDescription(const RunDescription& a, const RunDescription& b) {
     EXPECT_EQ(c.unit, d.unit) << name;
     EXPECT_EQ(c.scale, d.scale) << name;
     EXPECT_EQ(c.offset, d.offset) << name;
+    EXPECT_EQ(c.counts_per_g, d.counts_per_g) << name;
+    EXPECT_EQ(c.counts_per_dps, d.counts_per_dps) << name;
   }
 }
 

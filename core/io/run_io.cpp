@@ -1,11 +1,13 @@
 // Run data in and out: reads the data file of a run.yaml (text or MATLAB),
 // maps its columns onto our channels, converts units, unwraps the angles,
-// validates, applies the IMU mounting, and writes the CSV contract back.
+// validates, applies the IMU mounting (to the accelerometer's readings and the
+// gyro's alike), and writes the CSV contract back.
 #include "core/io/run_io.h"
 
 #include <algorithm>
 #include <cctype>
 #include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -66,7 +68,8 @@ ChannelValues ReadChannel(const DataTable& table, const RunDescription& run,
   ChannelValues out;
   out.name = ch.name;
   out.label = Label(table, ch.name, src);
-  const double factor = OurUnitsPerSourceUnit(ch.kind, src.unit) * src.scale;
+  double factor = OurUnitsPerSourceUnit(ch.kind, src.unit) * src.scale;
+  if (src.counts_per_dps) factor /= *src.counts_per_dps;  // gyro counts -> deg/s
   if (factor == 0.0) {
     throw InputError(run.yaml_path + ": columns." + ch.name + ": unit '" + src.unit +
                      "' or scale 0 not allowed");
@@ -104,6 +107,38 @@ void Warn(RunWarnings* warnings, const std::optional<std::string>& line) {
   if (warnings && line) warnings->lines.push_back(*line);
 }
 
+bool IsGyroChannel(const ChannelInfo& ch) { return ch.kind == ChannelKind::kGyro; }
+
+// Whether channel `name` is in the file (or held constant by the mapping).
+bool InTable(const DataTable& table, const RunDescription& run, const std::string& name) {
+  const ColumnSource src = SourceOf(run, name);
+  if (src.constant) return true;
+  return std::find(table.names.begin(), table.names.end(), src.source) != table.names.end();
+}
+
+// A run with a gyro block needs the three gyro channels: the ones the file
+// lacks, in one line.
+void CheckGyroColumnsPresent(const DataTable& table, const RunDescription& run) {
+  std::vector<std::string> missing;
+  for (const char* name : {"gx", "gy", "gz"}) {
+    if (InTable(table, run, name)) continue;
+    const ColumnSource src = SourceOf(run, name);
+    missing.push_back("'" + Excerpt(src.source) + "'" +
+                      (src.source == name ? "" : " (" + std::string(name) + ")"));
+  }
+  if (missing.empty()) return;
+  std::string list;
+  for (const std::string& m : missing) list += (list.empty() ? "" : ", ") + m;
+  const std::string what = missing.size() == 1 ? "" : "s";
+  const std::string why = " (run.yaml has a gyro block: give gx, gy and gz, or remove the block; ";
+  if (table.is_mat) {
+    throw InputError(table.path + ": gyro variable" + what + " " + list + " not found" + why +
+                     "the file has: " + JoinNames(table.names) + ")");
+  }
+  throw InputError(table.path + ":" + std::to_string(table.header_line) + ": missing gyro column" +
+                   what + " " + list + why + "header: " + JoinNames(table.names) + ")");
+}
+
 std::vector<double> Scaled(const std::vector<double>& v, double factor) {
   std::vector<double> out(v.size());
   for (std::size_t k = 0; k < v.size(); ++k) out[k] = v[k] * factor;
@@ -132,6 +167,7 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
   // Read the columns the mapping asks for.
   std::vector<std::string> wanted;
   for (const ChannelInfo& ch : Channels()) {
+    if (IsGyroChannel(ch) && !run.gyro) continue;  // not calibrated: not read
     const ColumnSource src = SourceOf(run, ch.name);
     if (!src.constant) wanted.push_back(src.source);
   }
@@ -157,15 +193,26 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
     }
     labels = it->second;
   }
-  const std::vector<ChannelInfo>& chs = Channels();  // t, l1, l2, wx, wy, wz, r1, r2, temp
+  // t, l1, l2, wx, wy, wz, r1, r2, temp, gx, gy, gz
+  const std::vector<ChannelInfo>& chs = Channels();
   ChannelValues t = ReadChannel(table, run, chs[0]);
   ChannelValues lambda[2] = {ReadChannel(table, run, chs[1]), ReadChannel(table, run, chs[2])};
   ChannelValues w[3] = {ReadChannel(table, run, chs[3]), ReadChannel(table, run, chs[4]),
                         ReadChannel(table, run, chs[5])};
   ChannelValues rate[2] = {ReadChannel(table, run, chs[6]), ReadChannel(table, run, chs[7])};
   ChannelValues temp = ReadChannel(table, run, chs[8]);
-  std::vector<ChannelValues*> all = {&t,    &lambda[0], &lambda[1], &w[0], &w[1],
-                                     &w[2], &rate[0],   &rate[1],   &temp};
+  // The gyro (SPEC section 10), in deg/s on the IMU's own axes: read with a
+  // gyro block, all three; without one, the columns are left alone.
+  ChannelValues g[3];
+  if (run.gyro) {
+    CheckGyroColumnsPresent(table, run);
+    for (int i = 0; i < 3; ++i) g[i] = ReadChannel(table, run, chs[9 + i]);
+  } else if (InTable(table, run, "gx") && InTable(table, run, "gy") && InTable(table, run, "gz")) {
+    Warn(warnings, std::string("gx gy gz present but run.yaml has no gyro block: the gyro is "
+                               "not calibrated"));
+  }
+  std::vector<ChannelValues*> all = {&t,       &lambda[0], &lambda[1], &w[0], &w[1], &w[2],
+                                     &rate[0], &rate[1],   &temp,      &g[0], &g[1], &g[2]};
   if (rate[0].present() != rate[1].present()) {
     const ChannelValues& given = rate[0].present() ? rate[0] : rate[1];
     throw InputError(table.path + ": " + given.label +
@@ -254,6 +301,13 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
     CheckAnglesNotRadiansWindowed(table, lambda, w, scale_of_imu_axis, noise_mV);
   }
   for (const ChannelValues& c : w) Warn(warnings, SaturationWarning(c));
+  if (run.gyro) {
+    std::string unit = SourceOf(run, "gx").unit;
+    for (const char* name : {"gy", "gz"}) {
+      if (SourceOf(run, name).unit != unit) unit.clear();  // mixed: no single unit to name
+    }
+    CheckGyroUnits(table, t, lambda, g, unit, std::sqrt(run.gyro->scale.squaredNorm() / 3.0));
+  }
 
   RunData data;
   data.t_s = std::move(t.values);
@@ -264,6 +318,12 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
   for (int i = 0; i < 3; ++i) {
     data.w_mV[i] = run.axis_sign[i] == 1.0 ? w[run.axis_source[i]].values
                                            : Scaled(w[run.axis_source[i]].values, -1.0);
+  }
+  if (run.gyro) {
+    // The mounting turns the gyro's axes as the accelerometer's (one IMU).
+    for (int i = 0; i < 3; ++i) {
+      data.gyro_rad_s[i] = Scaled(g[run.axis_source[i]].values, run.axis_sign[i] * kDegToRad);
+    }
   }
   data.temp_C = std::move(temp.values);
   data.label = std::move(labels);
@@ -287,6 +347,7 @@ void WriteRunCsv(const RunData& run, const std::string& path, const std::string&
   out += "t,lambda1,lambda2,wx,wy,wz";
   if (run.has_rates()) out += ",lambda1_rate,lambda2_rate";
   if (run.has_temp()) out += ",temp_C";
+  if (run.has_gyro()) out += ",gx,gy,gz";
   out += "\n";
   for (std::size_t k = 0; k < run.size(); ++k) {
     AppendDouble(run.t_s[k], &out);
@@ -307,6 +368,12 @@ void WriteRunCsv(const RunData& run, const std::string& path, const std::string&
     if (run.has_temp()) {
       out += ',';
       AppendDouble(run.temp_C[k], &out);
+    }
+    if (run.has_gyro()) {
+      for (int i = 0; i < 3; ++i) {
+        out += ',';
+        AppendDouble(run.gyro_rad_s[i][k] / kDegToRad, &out);
+      }
     }
     out += '\n';
   }

@@ -15,10 +15,14 @@ namespace triadcal {
 // MATLAB via matio), applies the column mapping, units, mounting and unwrapping,
 // validates, and returns the run. Non-fatal findings go to *warnings (one line
 // each, with counts). Throws InputError("FILE:LINE: what is wrong") on bad input.
+// The gyro columns gx gy gz (SPEC section 10) are read when run.gyro is set
+// (all three required; RunData::gyro_rad_s in rad/s, platform frame) and
+// otherwise left alone, with a warning when the file has them.
 RunData LoadRunData(const RunDescription& run, RunWarnings* warnings);
 
 // Writes the CSV contract: t, lambda1, lambda2 [deg], wx, wy, wz [mV], and
-// lambda1_rate, lambda2_rate [deg/s] / temp_C when present, with shortest
+// lambda1_rate, lambda2_rate [deg/s] / temp_C / gx, gy, gz [deg/s] when
+// present (in that order), with shortest
 // round-trip formatting (no precision lost). Writes to a temporary file and
 // renames it, so a failure leaves no partial file.
 void WriteRunCsv(const RunData& run, const std::string& path, const std::string& comment);

@@ -29,6 +29,9 @@ struct ModelConfig {
   // signal is orthogonal over them to a constant and a linear drift).
   double time_start_s = 0.0;
   double time_span_s = 0.0;
+  // Earth's rate in L [rad/s] (gyro_model.h): zero unless the run gives the
+  // bench's latitude and heading.
+  Eigen::Vector3d earth_rate_L = Eigen::Vector3d::Zero();
   ParameterLayout layout;
 };
 

@@ -25,6 +25,25 @@ const std::vector<ParameterInfo>& BaseParameterInfo() {
   return info;
 }
 
+const std::vector<ParameterInfo>& GyroParameterInfo() {
+  static const std::vector<ParameterInfo> info = [] {
+    std::vector<ParameterInfo> v;
+    auto add = [&v](const std::string& name, const char* unit, double f) {
+      v.push_back({"gyro." + name, unit, f, std::nullopt});
+    };
+    for (const char* n : {"Kx", "Ky", "Kz"}) add(n, "1", 1.0);
+    for (const char* n : {"W0x", "W0y", "W0z"}) add(n, "deg/s", kDegToRad);
+    for (const char* n : {"alpha_x", "alpha_y", "beta_x", "beta_z", "gamma_y", "gamma_z"}) {
+      add(n, "arcmin", kArcminToRad);
+    }
+    for (const char* n : {"Gxx", "Gxy", "Gxz", "Gyx", "Gyy", "Gyz", "Gzx", "Gzy", "Gzz"}) {
+      add(n, "(deg/s)/g", kDegToRad);
+    }
+    return v;
+  }();
+  return info;
+}
+
 ParameterLayout::ParameterLayout() : ParameterLayout(std::vector<Effect>{}) {}
 
 namespace {
@@ -44,7 +63,7 @@ std::string InReadingsUnit(const std::string& unit) {
   return unit.substr(0, at) + name + unit.substr(at + 2);
 }
 
-ParameterLayout::ParameterLayout(const std::vector<Effect>& effects) {
+ParameterLayout::ParameterLayout(const std::vector<Effect>& effects, bool gyro) {
   info_ = BaseParameterInfo();
   for (ParameterInfo& p : info_) p.unit = InReadingsUnit(p.unit);
   for (int i = 0; i < kNumEffects; ++i) offset_[i] = -1;
@@ -60,6 +79,10 @@ ParameterLayout::ParameterLayout(const std::vector<Effect>& effects) {
     for (const ParamSpec& p : spec.params) {
       info_.push_back({spec.name + "." + p.name, InReadingsUnit(p.unit), p.si_per_unit, e});
     }
+  }
+  if (gyro) {
+    gyro_offset_ = size();
+    for (const ParameterInfo& p : GyroParameterInfo()) info_.push_back(p);
   }
   for (int i = 0; i < size(); ++i) index_[info_[i].name] = i;
 }

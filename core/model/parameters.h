@@ -1,5 +1,6 @@
 // The parameter vector theta: the 27 base parameters of docs/file-formats.md followed
-// by the parameters of each effect switched on in the layout.
+// by the parameters of each effect switched on in the layout, and, when the run
+// carries a gyro triad (SPEC section 10), the 21 gyro parameters last.
 //
 // Internally every entry is in SI/radians (see units.h); ParameterInfo gives the
 // name and the unit used in every file the tool reads or writes, and the factor
@@ -31,6 +32,18 @@ enum BaseParam : int {
   kNumBaseParams
 };
 
+// The gyro block (SPEC section 10), in the order it occupies at gyro_offset():
+// scale factors [1: readings per input rate], biases [rad/s], the six
+// misalignment angles [rad] in the order of the accelerometer's, and the
+// g-sensitivity G_ij [rad/s per g], row-major.
+enum GyroParam : int {
+  kGKx = 0, kGKy, kGKz,
+  kGW0x, kGW0y, kGW0z,
+  kGAlphaX, kGAlphaY, kGBetaX, kGBetaZ, kGGammaY, kGGammaZ,
+  kGGxx, kGGxy, kGGxz, kGGyx, kGGyy, kGGyz, kGGzx, kGGzy, kGGzz,
+  kNumGyroParams
+};
+
 struct ParameterInfo {
   std::string name;  // file name: "Kx", "alpha_y", "angle_latency.tau"
   std::string unit;  // unit in files: "mV/g", "arcmin", "ms"
@@ -40,6 +53,8 @@ struct ParameterInfo {
 
 // Names and units of the 27 base parameters (docs/file-formats.md).
 const std::vector<ParameterInfo>& BaseParameterInfo();
+// Names (gyro.Kx, ...) and units of the 21 gyro parameters (SPEC section 10).
+const std::vector<ParameterInfo>& GyroParameterInfo();
 
 // The unit of the readings, for naming the parameter units of the layouts made
 // afterwards ("mV/g" becomes "counts/g" when the readings are counts, "mg/g"
@@ -53,7 +68,9 @@ std::string InReadingsUnit(const std::string& unit);
 class ParameterLayout {
  public:
   ParameterLayout();  // base parameters only
-  explicit ParameterLayout(const std::vector<Effect>& effects);
+  explicit ParameterLayout(const std::vector<Effect>& effects, bool gyro = false);
+  // The same parameters with the gyro block on or off.
+  ParameterLayout WithGyro(bool gyro) const { return ParameterLayout(effects_, gyro); }
 
   int size() const { return static_cast<int>(info_.size()); }
   const ParameterInfo& info(int i) const { return info_[i]; }
@@ -61,6 +78,11 @@ class ParameterLayout {
   const std::vector<Effect>& effects() const { return effects_; }
 
   bool has(Effect e) const { return offset_[static_cast<int>(e)] >= 0; }
+  // The gyro block: on when the run carries a gyro triad; its first index.
+  bool has_gyro() const { return gyro_offset_ >= 0; }
+  int gyro_offset() const { return gyro_offset_; }
+  // True for the gyro block's indices.
+  bool is_gyro(int i) const { return gyro_offset_ >= 0 && i >= gyro_offset_; }
   // Index in theta of the first parameter of effect e, or -1 when it is off.
   int offset(Effect e) const { return offset_[static_cast<int>(e)]; }
   // Index of a parameter by its file name, or -1.
@@ -81,6 +103,7 @@ class ParameterLayout {
   std::vector<Effect> effects_;
   std::vector<ParameterInfo> info_;
   int offset_[kNumEffects];
+  int gyro_offset_ = -1;
   bool has_stage_[3] = {false, false, false};
   std::vector<ZeroOffsetTerm> zero_offset_terms_;
   std::map<std::string, int> index_;

@@ -1,8 +1,22 @@
 #include "core/model/priors.h"
 
+#include <cmath>
+
 #include "core/model/errors.h"
 
 namespace triadcal {
+namespace {
+
+// Gyro defaults (file units): scale 10 % of nominal, bias 10 deg/s, angles
+// 3 deg, g-sensitivity 1 (deg/s)/g (MEMS datasheets: about 0.1).
+double GyroPriorSigma(const RunDescription& run, int j) {
+  if (j <= kGKz) return 0.1 * std::abs(run.gyro.value_or(GyroDescription{}).scale[j - kGKx]);
+  if (j <= kGW0z) return 10.0;
+  if (j <= kGGammaZ) return 180.0;
+  return 1.0;
+}
+
+}  // namespace
 
 Prior MakePrior(const RunDescription& run, const ParameterLayout& layout) {
   Prior p;
@@ -12,7 +26,9 @@ Prior MakePrior(const RunDescription& run, const ParameterLayout& layout) {
   for (int i = 0; i < layout.size(); ++i) {
     const ParameterInfo& info = layout.info(i);
     double s = 0.0;  // file units
-    if (i <= kKz) {
+    if (layout.is_gyro(i)) {
+      s = GyroPriorSigma(run, i - layout.gyro_offset());
+    } else if (i <= kKz) {
       s = 0.1 * std::abs(run.scale_mV_per_g[i - kKx]);
     } else if (i <= kW0z) {
       s = 0.2 * std::abs(run.scale_mV_per_g[i - kW0x]);

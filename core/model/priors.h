@@ -10,6 +10,10 @@
 //   K_ij              0.02                                1/g
 //   dpsi dtheta_c dlambda2   180 (3 deg)                  arcmin
 //   dx2 dy2 dz2       50                                  mm
+//   gyro.K*           10 % of the gyro's nominal scale        1
+//   gyro.W0*          10                                      deg/s
+//   gyro angles       180 (3 deg)                             arcmin
+//   gyro.G*           1                                       (deg/s)/g
 //   effects           ParamSpec::prior_sigma of the catalogue (effects.cpp):
 //                     angle_latency.tau 20 ms, encoder_harmonic 10 arcmin,
 //                     axis_nonintersection.d 10 mm, axis_nonperpendicularity.eps

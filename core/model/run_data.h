@@ -17,12 +17,19 @@ struct RunData {
   std::vector<double> lambda_rad[2];    // recorded lambda1, lambda2 (unwrapped)
   std::vector<double> rate_rad_s[2];    // recorded rates, empty when not in the file
   std::vector<double> w_mV[3];          // readings wx, wy, wz
+  // gyro readings gx, gy, gz converted to rad/s (platform frame, like w_mV),
+  // empty when the run has no gyro triad (SPEC section 10)
+  std::vector<double> gyro_rad_s[3];
   std::vector<double> temp_C;           // empty when not in the file
   std::vector<std::string> label;       // per-sample position label (columns.label), or empty
 
   std::size_t size() const { return t_s.size(); }
   bool has_rates() const { return !rate_rad_s[0].empty(); }
   bool has_temp() const { return !temp_C.empty(); }
+  bool has_gyro() const { return !gyro_rad_s[0].empty(); }
+  Eigen::Vector3d gyro(std::size_t k) const {
+    return {gyro_rad_s[0][k], gyro_rad_s[1][k], gyro_rad_s[2][k]};
+  }
   bool has_label() const { return !label.empty(); }
   Eigen::Vector3d readings_mV(std::size_t k) const {
     return {w_mV[0][k], w_mV[1][k], w_mV[2][k]};

@@ -1,5 +1,7 @@
 #include "core/model/run_description.h"
 
+#include "core/model/gyro_model.h"
+
 namespace triadcal {
 
 Eigen::VectorXd NominalTheta(const RunDescription& run, const ParameterLayout& layout) {
@@ -8,6 +10,13 @@ Eigen::VectorXd NominalTheta(const RunDescription& run, const ParameterLayout& l
     theta[kKx + i] = run.scale_mV_per_g[i];
     theta[kW0x + i] = run.bias_mV[i];
   }
+  if (layout.has_gyro()) {
+    const GyroDescription g = run.gyro.value_or(GyroDescription{});
+    for (int i = 0; i < 3; ++i) {
+      theta[layout.gyro_offset() + kGKx + i] = g.scale[i];
+      theta[layout.gyro_offset() + kGW0x + i] = g.bias_rad_s[i];
+    }
+  }
   return theta;
 }
 
@@ -15,6 +24,9 @@ ModelConfig MakeModelConfig(const RunDescription& run, const ParameterLayout& la
   ModelConfig cfg;
   cfg.lever_arm0_m = run.lever_arm0_m;
   cfg.g_mps2 = run.g_mps2;
+  if (run.latitude_rad && run.heading_rad) {
+    cfg.earth_rate_L = EarthRateInL(*run.latitude_rad, *run.heading_rad);
+  }
   cfg.layout = layout;
   return cfg;
 }

@@ -8,10 +8,16 @@
 //     lever_arm_mm: [138, 20, 20]       # R0
 //     angle_noise_arcsec: 15            # 1 sigma white noise of the recorded angles
 //     g_mps2: 9.80665                   # optional
+//     latitude_deg: 48.1                # optional, with heading_deg: Earth's rate
+//     heading_deg: 0                    # in the gyro's input rate
 //   triad:
 //     scale_mV_per_g: [174, 174, 174]
 //     bias_mV: [1500, 1500, 1500]
 //     noise_mV: 2.0
+//   gyro:           # optional: the IMU's gyro triad (columns gx, gy, gz)
+//     scale: [1, 1, 1]
+//     bias_dps: [0, 0, 0]
+//     noise_dps: 0.05
 //   constraints:
 //     - {expr: "dpsi - dlambda2", value_arcmin: 0, sigma_arcsec: 30}
 //   columns:        # optional; see docs/file-formats.md for the full mapping syntax
@@ -45,10 +51,22 @@ struct Constraint {
 struct ColumnSource {
   std::string source;            // column or MAT variable name; empty when constant
   std::optional<double> constant;  // channel held at this value (file units)
-  std::string unit;              // unit of the source: deg|rad (angles), mV|V|g|mg|m/s^2|counts (readings), s|ms
+  std::string unit;              // unit of the source: deg|rad (angles), mV|V|g|mg|m/s^2|counts (readings),
+                                 // deg/s|rad/s|counts (gyro), s|ms
   std::optional<double> counts_per_g;  // readings in counts: the nominal count scale (required)
+  std::optional<double> counts_per_dps;  // gyro in counts: counts per deg/s (required)
   double scale = 1.0;            // applied after the unit conversion
   double offset = 0.0;           // added after scaling, in our units (deg, mV, s)
+};
+
+// The gyro block of run.yaml (SPEC section 10): nominal scale (start value and
+// prior mean), biases, and the reading noise per sample, SI inside:
+//   gyro: {scale: [1, 1, 1], bias_dps: [0, 0, 0], noise_dps: 0.05 | [x, y, z] | auto}
+struct GyroDescription {
+  Eigen::Vector3d scale{1.0, 1.0, 1.0};
+  Eigen::Vector3d bias_rad_s = Eigen::Vector3d::Zero();
+  Eigen::Vector3d noise_rad_s = Eigen::Vector3d::Constant(0.05 * kDegToRad);
+  bool noise_auto = false;  // estimated from the run (noise_rad_s is the start)
 };
 
 struct RunDescription {
@@ -59,6 +77,9 @@ struct RunDescription {
   Eigen::Vector3d lever_arm0_m{0.138, 0.020, 0.020};
   double angle_noise_rad = 15.0 * kArcsecToRad;
   double g_mps2 = kStandardGravity;
+  // bench: {latitude_deg, heading_deg} (both or neither): Earth's rate is
+  // added to the gyro's input rate (gyro_model.h).
+  std::optional<double> latitude_rad, heading_rad;
 
   // triad (nominal values, start and prior mean)
   Eigen::Vector3d scale_mV_per_g{174.0, 174.0, 174.0};
@@ -73,10 +94,14 @@ struct RunDescription {
     return noise_channel_mV ? *noise_channel_mV : Eigen::Vector3d::Constant(noise_mV);
   }
 
+  // The gyro triad, when the run.yaml has a gyro block.
+  std::optional<GyroDescription> gyro;
+
   std::vector<Constraint> constraints;
 
   // input mapping: keys are our channel names (t, lambda1, lambda2, wx, wy, wz,
-  // lambda1_rate, lambda2_rate, temp_C); absent keys use the CSV contract names.
+  // lambda1_rate, lambda2_rate, temp_C, gx, gy, gz); absent keys use the CSV
+  // contract names.
   std::map<std::string, ColumnSource> columns;
   // mounting: platform axis i carries IMU channel axis_source[i] times axis_sign[i].
   int axis_source[3] = {0, 1, 2};

@@ -156,14 +156,40 @@ std::vector<InjectedEffect> ParseEffects(const YAML::Node& n, const YamlPlace& a
   return out;
 }
 
-// The truth: the nominal of the run, then the base parameters the file gives,
-// then the injected effects' parameters.
+// The truth's keys: the base parameters, and the gyro's (gyro.Kx ...) only
+// with a run.gyro block. An unknown name lists the keys of its own group.
+void CheckTruthKeys(const YAML::Node& n, const YamlPlace& at, bool gyro) {
+  if (n.IsNull()) return;
+  std::vector<std::string> base, gyro_names;
+  for (const ParameterInfo& p : BaseParameterInfo()) base.push_back(p.name);
+  for (const ParameterInfo& p : GyroParameterInfo()) gyro_names.push_back(p.name);
+  if (n.IsMap()) {
+    for (const auto& kv : n) {
+      const std::string name = KeyOf(kv.first, at);
+      if (name.rfind("gyro.", 0) != 0) continue;
+      const YamlPlace p = at.Child(name);
+      if (std::find(gyro_names.begin(), gyro_names.end(), name) == gyro_names.end()) {
+        std::string list;
+        for (const std::string& g : gyro_names) list += (list.empty() ? "" : ", ") + g;
+        p.Fail("unknown key (allowed: " + list + ")");
+      }
+      if (!gyro) {
+        p.Fail(
+            "a gyro parameter, but the scenario has no run.gyro block (add run: {gyro: "
+            "{scale: [1, 1, 1]}} to simulate gx gy gz)");
+      }
+    }
+  }
+  if (gyro) base.insert(base.end(), gyro_names.begin(), gyro_names.end());
+  CheckSection(n, at, base);
+}
+
+// The truth: the nominal of the run, then the base (and gyro) parameters the
+// file gives, then the injected effects' parameters.
 Eigen::VectorXd ParseTruth(const YAML::Node& n, const YamlPlace& at, const RunDescription& run,
                            const ParameterLayout& layout,
                            const std::vector<InjectedEffect>& effects) {
-  std::vector<std::string> allowed;
-  for (const ParameterInfo& p : BaseParameterInfo()) allowed.push_back(p.name);
-  CheckSection(n, at, allowed);
+  CheckTruthKeys(n, at, layout.has_gyro());
   Eigen::VectorXd theta = NominalTheta(run, layout);
   if (!n.IsNull()) {
     for (const auto& kv : n) {
@@ -185,11 +211,12 @@ Eigen::VectorXd ParseTruth(const YAML::Node& n, const YamlPlace& at, const RunDe
 // The `run` section: what run.yaml will declare. Its noise defaults to the
 // true noise of the scenario: angles as given (0 included), readings
 // sqrt(accel^2 + q^2 / 12) with the quantization step q, floored at
-// kMinDeclaredNoise_mV because run.yaml requires noise_mV > 0.
+// kMinDeclaredNoise_mV because run.yaml requires noise_mV > 0; the gyro's
+// (with a gyro block) noise.gyro_dps, floored at kMinDeclaredNoise_dps.
 RunDescription ParseRunSection(const YAML::Node& n, const YamlPlace& at,
-                               const std::string& yaml_path,
-                               const Eigen::Vector3d& accel_noise_mV, bool per_channel,
-                               double quantization_mV, double angle_noise_rad) {
+                               const std::string& yaml_path, const Eigen::Vector3d& accel_noise_mV,
+                               bool per_channel, double quantization_mV, double angle_noise_rad,
+                               const Eigen::Vector3d& gyro_noise_rad_s) {
   if (!n.IsNull() && !n.IsMap()) at.Fail("expected a map, got " + DescribeNode(n));
   const YAML::Node node = n.IsNull() ? YAML::Node(YAML::NodeType::Map) : n;
   for (const char* key : {"data", "columns", "mounting"}) {
@@ -212,6 +239,11 @@ RunDescription ParseRunSection(const YAML::Node& n, const YamlPlace& at,
   }
   if (!(bench && bench.IsMap() && bench["angle_noise_arcsec"])) {
     run.angle_noise_rad = angle_noise_rad;
+  }
+  const YAML::Node gyro = node["gyro"];
+  if (run.gyro && !(gyro && gyro.IsMap() && gyro["noise_dps"])) {
+    run.gyro->noise_rad_s =
+        gyro_noise_rad_s.cwiseMax(Eigen::Vector3d::Constant(kMinDeclaredNoise_dps * kDegToRad));
   }
   return run;
 }
@@ -237,7 +269,7 @@ Scenario LoadScenario(const std::string& yaml_path) {
 
   const YAML::Node noise = section("noise");
   const YamlPlace noise_at = top.Child("noise");
-  CheckSection(noise, noise_at, {"accel_mV", "angle_arcsec", "accel_correlation_s"});
+  CheckSection(noise, noise_at, {"accel_mV", "angle_arcsec", "accel_correlation_s", "gyro_dps"});
   if (!noise.IsNull() && noise["accel_mV"]) {
     const YamlPlace accel_at = noise_at.Child("accel_mV");
     if (noise["accel_mV"].IsSequence()) {
@@ -259,6 +291,23 @@ Scenario LoadScenario(const std::string& yaml_path) {
   if (!noise.IsNull() && noise["angle_arcsec"]) {
     s.angle_noise_rad =
         ReadNonNegative(noise["angle_arcsec"], noise_at.Child("angle_arcsec")) * kArcsecToRad;
+  }
+  // noise.gyro_dps: one figure or [x, y, z]; only a scenario whose run has a
+  // gyro block simulates a gyro (checked with the run section below).
+  const bool gyro_noise_given = !noise.IsNull() && noise["gyro_dps"];
+  if (gyro_noise_given) {
+    const YamlPlace gyro_at = noise_at.Child("gyro_dps");
+    if (noise["gyro_dps"].IsSequence()) {
+      const Eigen::Vector3d v = ReadVector3(noise["gyro_dps"], gyro_at);
+      for (int i = 0; i < 3; ++i) {
+        if (!(v[i] >= 0.0)) gyro_at.Index(i).Fail("must be >= 0, got " + FormatDouble(v[i]));
+      }
+      s.gyro_noise_rad_s = v * kDegToRad;
+      s.gyro_noise_per_channel = true;
+    } else {
+      s.gyro_noise_rad_s =
+          Eigen::Vector3d::Constant(ReadNonNegative(noise["gyro_dps"], gyro_at) * kDegToRad);
+    }
   }
 
   const YAML::Node sensor = section("sensor");
@@ -282,13 +331,19 @@ Scenario LoadScenario(const std::string& yaml_path) {
 
   s.run = ParseRunSection(section("run"), top.Child("run"), yaml_path, s.AccelNoise_mV(),
                           s.accel_noise_channel_mV.has_value(), s.quantization_mV,
-                          s.angle_noise_rad);
+                          s.angle_noise_rad, s.gyro_noise_rad_s);
+  if (gyro_noise_given && !s.run.gyro) {
+    noise_at.Child("gyro_dps")
+        .Fail(
+            "a gyro noise, but the scenario has no run.gyro block (add run: {gyro: {scale: [1, 1, "
+            "1]}} to simulate gx gy gz)");
+  }
 
   const std::vector<InjectedEffect> effects =
       ParseEffects(section("effects"), top.Child("effects"));
   std::vector<Effect> ids;
   for (const InjectedEffect& e : effects) ids.push_back(e.id);
-  s.truth_layout = ParameterLayout(ids);
+  s.truth_layout = ParameterLayout(ids, /*gyro=*/s.run.gyro.has_value());
   s.truth = ParseTruth(section("truth"), top.Child("truth"), s.run, s.truth_layout, effects);
 
   const YAML::Node temp = section("temperature");

@@ -66,6 +66,14 @@ std::string TruthJson(const Scenario& s, const RunData& data, const std::string&
     const Eigen::Vector3d& c = *s.accel_noise_channel_mV;
     j["noise"]["accel_mV"] = {c[0], c[1], c[2]};
   }
+  if (s.run.gyro) {
+    const Eigen::Vector3d c = s.gyro_noise_rad_s / kDegToRad;
+    if (s.gyro_noise_per_channel) {
+      j["noise"]["gyro_dps"] = {c[0], c[1], c[2]};
+    } else {
+      j["noise"]["gyro_dps"] = c[0];
+    }
+  }
   j["samples"] = data.size();
   if (!provenance.empty()) j["provenance"] = nlohmann::ordered_json::parse(provenance);
   return j.dump(2) + "\n";

@@ -1,14 +1,17 @@
 // The harmonic bench profile and the generation of a simulated run (simulator.h):
 // exact profile derivatives, the model of bench_model.h for the readings and
-// the recorded angles, then noise, quantization and saturation.
+// the recorded angles, then noise, quantization and saturation; the gyro's
+// readings from gyro_model.h.
 #include "core/simulation/simulator.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <stdexcept>
 
 #include "core/model/errors.h"
+#include "core/model/gyro_model.h"
 
 namespace triadcal {
 
@@ -66,6 +69,19 @@ RunData Simulate(const Scenario& s) {
   }
   for (int i = 0; i < 3; ++i) d.w_mV[i].reserve(n);
   if (s.write_temp) d.temp_C.reserve(n);
+  const bool gyro = s.run.gyro.has_value();
+  if (gyro && !cfg.layout.has_gyro()) {
+    throw std::logic_error("Simulate: run.gyro without the gyro block in truth_layout");
+  }
+  if (gyro) {
+    for (int i = 0; i < 3; ++i) d.gyro_rad_s[i].reserve(n);
+  }
+  // The gyro's noise: a stream of its own, so the accelerometer's draws are
+  // those of the same scenario without a gyro.
+  // (A distribution of its own too: std::normal_distribution keeps the second
+  // value of each pair it draws.)
+  std::mt19937_64 gyro_rng(s.seed ^ 0x6779726f6e6f6973ULL);
+  std::normal_distribution<double> gyro_normal(0.0, 1.0);
 
   // Reading noise: white, or first-order Gauss-Markov with correlation time
   // accel_correlation_s (same per-sample sigma, the same unit draws).
@@ -115,6 +131,20 @@ RunData Simulate(const Scenario& s) {
       d.w_mV[i].push_back(w);
     }
     if (s.write_temp) d.temp_C.push_back(ctx.temp_C);
+    if (gyro) {
+      // At the bench's true angles (not the recorded ones), rad/s.
+      const Eigen::Vector3d g_rad_s = PredictGyroReadings(cfg, theta, bench);
+      if (!g_rad_s.allFinite()) {
+        char t_text[32];
+        std::snprintf(t_text, sizeof(t_text), "%g", t_s);
+        throw InputError(s.yaml_path + ": the simulated gyro readings at t = " + t_text +
+                         " s are not finite numbers: check the profile and the gyro.* truth "
+                         "values");
+      }
+      for (int i = 0; i < 3; ++i) {
+        d.gyro_rad_s[i].push_back(g_rad_s[i] + s.gyro_noise_rad_s[i] * gyro_normal(gyro_rng));
+      }
+    }
   }
   return d;
 }

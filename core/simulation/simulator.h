@@ -8,11 +8,14 @@
 //             duration_s: 90, rate_hz: 100}
 //   truth: {Kx: 171.5, dpsi: -33, dx2: -7}   # docs/file-formats.md names, file units;
 //                                             # absent: nominal (Kx..Kz, W0x..W0z
-//                                             # from run.triad) or 0
+//                                             # from run.triad) or 0; with a run.gyro
+//                                             # block also gyro.Kx .. gyro.Gzz (nominal
+//                                             # gyro.K*, gyro.W0* from run.gyro)
 //   noise: {accel_mV: 2.0, angle_arcsec: 0}   # white, 1 sigma per sample; accel_mV
 //                                             # may be [x, y, z], one per channel
 //          # accel_correlation_s: 0.5 makes the reading noise first-order
 //          # Gauss-Markov (correlated in time) with the same sigma per sample
+//          # gyro_dps: 0.05 (or [x, y, z]), white, only with run.gyro
 //   effects: {angle_latency: {tau_ms: 2}}     # injected into the data, NOT declared
 //                                             # in run.yaml; a parameter is written
 //                                             # as its name or name_unit (tau or
@@ -23,6 +26,10 @@
 //        # (q = sensor.quantization_mV), at least kMinDeclaredNoise_mV since
 //        # run.yaml needs noise_mV > 0; `data`, `columns` and `mounting` are not
 //        # allowed (simulate writes the CSV contract itself)
+//        # run.gyro: {scale, bias_dps, noise_dps} (SPEC section 10) makes the
+//        # run carry a gyro triad: gx gy gz [deg/s] in run.csv; its noise_dps
+//        # defaults to noise.gyro_dps (at least kMinDeclaredNoise_dps);
+//        # run.bench.latitude_deg/heading_deg put Earth's rate into them
 //   # optional keys beyond docs/file-formats.md:
 //   seed: 1                                   # overridden by `simulate --seed N`
 //   truth_spread: {dlambda2: 0.5}             # per-seed Gaussian spread added to
@@ -49,13 +56,19 @@
 //   readings  = PredictReadings_mV(bench, t_k, temp_C(t_k)) + accel noise,
 //               then rounded to multiples of quantization_mV, then clipped to
 //               saturation_mV
+//   gyro      = PredictGyroReadings(bench) + gyro noise   (with run.gyro; the
+//               gyro_model.h readings at the true bench angles, rad/s inside,
+//               deg/s in run.csv; no quantization or saturation)
 //
 // Noise: one std::mt19937_64 seeded with `seed` feeds one
 // std::normal_distribution<double>(0, 1); per sample the draws are, in this
 // order, lambda1, lambda2, wx, wy, wz, each times its sigma. All five are drawn
 // even when a sigma is 0, so the sequence of one channel does not depend on the
-// others. The same seed gives the same data with the same C++ standard library
-// (the normal distribution's algorithm is implementation-defined).
+// others. The gyro's noise (gx, gy, gz per sample) comes from a second
+// std::mt19937_64 of its own (seeded from `seed`), so a gyro block leaves the
+// accelerometer's data of a scenario unchanged. The same seed gives the same
+// data with the same C++ standard library (the normal distribution's algorithm
+// is implementation-defined).
 #pragma once
 
 #include <Eigen/Core>
@@ -90,7 +103,7 @@ struct Scenario {
   std::string yaml_path;
   HarmonicProfile profile;
   RunDescription run;            // what run.yaml declares
-  ParameterLayout truth_layout;  // base + injected effects
+  ParameterLayout truth_layout;  // base + injected effects (+ the gyro block with run.gyro)
   Eigen::VectorXd truth;         // SI, in truth_layout
   // noise, 1 sigma per sample: one figure for every channel, or one per
   // channel (noise.accel_mV: [x, y, z]; accel_noise_mV is then their RMS)
@@ -104,6 +117,10 @@ struct Scenario {
   // time (same sigma per sample): residuals correlated in time
   double accel_correlation_s = 0.0;
   double angle_noise_rad = 0.0;
+  // the gyro's reading noise per channel (noise.gyro_dps), used when run.gyro
+  // is set; per_channel: given as [x, y, z]
+  Eigen::Vector3d gyro_noise_rad_s = Eigen::Vector3d::Constant(0.05 * kDegToRad);
+  bool gyro_noise_per_channel = false;
   // optional sensor imperfections of the recording chain
   double quantization_mV = 0.0;  // 0: none
   double saturation_low_mV = -1e300, saturation_high_mV = 1e300;
@@ -122,6 +139,7 @@ void SampleTruth(Scenario* s);
 
 // The reading noise a run declares for noise-free data (run.yaml requires > 0).
 constexpr double kMinDeclaredNoise_mV = 1e-3;
+constexpr double kMinDeclaredNoise_dps = 1e-4;  // the gyro's
 
 // Most samples a scenario may ask for (about 2 GB of run data).
 constexpr std::size_t kMaxSimulatedSamples = 20000000;
@@ -137,11 +155,12 @@ double ScenarioTemperature_C(const Scenario& s, double t_s);
 // truth_layout) with temp_ref_C = the temperature of the first sample.
 ModelConfig TruthModelConfig(const Scenario& s);
 
-// Generates the run: samples t_k = k / rate_hz < duration_s.
+// Generates the run: samples t_k = k / rate_hz < duration_s (with gx gy gz
+// when s.run.gyro is set).
 RunData Simulate(const Scenario& s);
 
-// The key of parameter i of the layout in truth.json: base parameters by name
-// ("Kx"), effect parameters as effect.name_unit ("angle_latency.tau_ms", the
+// The key of parameter i of the layout in truth.json: base and gyro parameters
+// by name ("Kx", "gyro.W0z"), effect parameters as effect.name_unit ("angle_latency.tau_ms", the
 // the OUT form of docs/file-formats.md), and its value in file units, written with the fewest
 // digits that read back (value * si_per_unit) to exactly theta[i].
 std::string TruthFileKey(const ParameterLayout& layout, int i);
@@ -155,7 +174,8 @@ double TruthFileValue(const ParameterLayout& layout, const Eigen::VectorXd& thet
 //   run.yaml    RunDescriptionToYaml(run, "run.csv"): injected effects NOT declared
 //   truth.json  {"parameters": {"Kx": 171.5, ..., "angle_latency.tau_ms": 2},
 //                "units": {...}, "injected_effects": [...], "scenario": NAME,
-//                "seed": N, "noise": {"accel_mV", "angle_arcsec"}, "samples": N,
+//                "seed": N, "noise": {"accel_mV", "angle_arcsec", "gyro_dps" (with a
+//                gyro)}, "samples": N,
 //                "provenance": {...}}  (provenance_json, when not empty)
 void WriteSimulation(const Scenario& s, const RunData& data, const std::string& dir,
                      const std::string& provenance_json = "");

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "core/model/errors.h"
+#include "core/model/gyro_model.h"
 #include "core/io/file_util.h"
 #include "core/io/run_io.h"
 #include "core/simulation/simulator.h"
@@ -591,6 +592,26 @@ TEST(ScenarioErrors, EveryBadInputNamesFileKeyAndProblem) {
       {"effects: {angle_latency: {tau: 1}, angle_latency: {tau: 2}}\n",
        f + ": effects.angle_latency: given twice"},
       {"- 1\n- 2\n", f + ": expected a map with the sections profile, truth, noise, effects, run"},
+      // The gyro (SPEC section 10): its truth and noise need a run.gyro block.
+      {"truth: {gyro.Kx: 1.002}\n",
+       f + ": truth.gyro.Kx: a gyro parameter, but the scenario has no run.gyro block (add run: "
+           "{gyro: {scale: [1, 1, 1]}} to simulate gx gy gz)"},
+      {"noise: {gyro_dps: 0.1}\n",
+       f + ": noise.gyro_dps: a gyro noise, but the scenario has no run.gyro block (add run: "
+           "{gyro: {scale: [1, 1, 1]}} to simulate gx gy gz)"},
+      {"truth: {gyro.Kq: 1}\nrun: {gyro: {}}\n",
+       f + ": truth.gyro.Kq: unknown key (allowed: gyro.Kx, gyro.Ky, gyro.Kz, gyro.W0x, "
+           "gyro.W0y, gyro.W0z, gyro.alpha_x, gyro.alpha_y, gyro.beta_x, gyro.beta_z, "
+           "gyro.gamma_y, gyro.gamma_z, gyro.Gxx, gyro.Gxy, gyro.Gxz, gyro.Gyx, gyro.Gyy, "
+           "gyro.Gyz, gyro.Gzx, gyro.Gzy, gyro.Gzz)"},
+      {"noise: {gyro_dps: -1}\nrun: {gyro: {}}\n", f + ": noise.gyro_dps: must be >= 0, got -1"},
+      {"noise: {gyro_dps: [0.1, 0.1]}\nrun: {gyro: {}}\n",
+       f + ": noise.gyro_dps: expected a list of 3 numbers, got 2"},
+      {"run: {gyro: {scale: [1, 0, 1]}}\n",
+       f + ": run: gyro.scale[1]: must not be 0 (readings per deg/s; nominal 1)"},
+      {"run: {bench: {latitude_deg: 48}}\n",
+       f + ": run: bench.latitude_deg: given without bench.heading_deg (Earth's rate needs "
+           "both; give both, or neither)"},
   };
   for (const auto& [text, message] : cases) {
     EXPECT_EQ(LoadError(dir, text), message) << text;
@@ -780,6 +801,246 @@ TEST(Scenario, TruthSpreadIsPerSeedAndLeavesNoiseAlone) {
   EXPECT_NE(draws[0], draws[1]);
   EXPECT_EQ(draws[0], draws[2]);
   EXPECT_LT(std::abs(draws[0]), 5 * 0.5 * kArcminToRad);
+}
+
+}  // namespace
+}  // namespace triadcal
+
+namespace triadcal {
+namespace {
+
+// ---------------------------------------------------------------------------
+// The gyro triad (SPEC section 10).
+
+// kTruthYaml's accelerometer and bench, with a gyro of every group non-zero,
+// at a bench with Earth's rate, and a latency so that the recorded angles are
+// not the true ones: 10 s at 50 Hz.
+std::string GyroScenario(const std::string& gyro_noise = "0") {
+  return std::string(kTruthYaml) +
+         "profile: {amplitude_deg: [360, 90], period_s: [30, 12], phase_deg: [0, 0],\n"
+         "          duration_s: 10, rate_hz: 50}\n"
+         "noise: {accel_mV: 0, angle_arcsec: 0, gyro_dps: " +
+         gyro_noise +
+         "}\n"
+         "effects: {angle_latency: {tau_ms: 2}}\n"
+         "run:\n"
+         "  bench: {latitude_deg: 48.15, heading_deg: 30}\n"
+         "  gyro: {scale: [1, 1, 1], bias_dps: [0.2, -0.1, 0.3]}\n";
+}
+
+// GyroScenario with its gyro truth (the truth section of kTruthYaml, widened).
+std::string GyroScenarioWithTruth(const std::string& gyro_noise = "0") {
+  std::string text = GyroScenario(gyro_noise);
+  text.replace(text.find("dx2: -7, dy2: 16, dz2: 4}"),
+               std::string("dx2: -7, dy2: 16, dz2: 4}").size(),
+               "dx2: -7, dy2: 16, dz2: 4,\n        gyro.Kx: 1.002, gyro.Kz: -0.998, gyro.W0z: "
+               "0.3, gyro.alpha_x: -20, gyro.beta_z: 10, gyro.gamma_y: 5, gyro.Gxy: 0.05, "
+               "gyro.Gzz: -0.02}");
+  return text;
+}
+
+TEST(SimulatorGyro, ScenarioGyroTruthNoiseAndDeclaredRun) {
+  TempDir dir("gyro_load");
+  const Scenario s = LoadFromText(dir, GyroScenarioWithTruth("[0.1, 0.2, 0.05]"));
+  ASSERT_TRUE(s.run.gyro.has_value());
+  ASSERT_TRUE(s.truth_layout.has_gyro());
+  const int o = s.truth_layout.gyro_offset();
+  EXPECT_EQ(o, kNumBaseParams + 1);  // after angle_latency.tau
+  EXPECT_EQ(s.truth[o + kGKx], 1.002);
+  EXPECT_EQ(s.truth[o + kGKy], 1.0);  // nominal from run.gyro
+  EXPECT_EQ(s.truth[o + kGKz], -0.998);
+  EXPECT_DOUBLE_EQ(s.truth[o + kGW0x], 0.2 * kDegToRad);  // nominal from run.gyro
+  EXPECT_DOUBLE_EQ(s.truth[o + kGW0z], 0.3 * kDegToRad);
+  EXPECT_DOUBLE_EQ(s.truth[o + kGBetaZ], 10 * kArcminToRad);
+  EXPECT_DOUBLE_EQ(s.truth[o + kGGxy], 0.05 * kDegToRad);
+  EXPECT_EQ(s.truth[o + kGGxx], 0.0);
+  EXPECT_TRUE(s.gyro_noise_per_channel);
+  EXPECT_NEAR((s.gyro_noise_rad_s - Eigen::Vector3d(0.1, 0.2, 0.05) * kDegToRad).norm(), 0, 1e-18);
+  // The run declares the true gyro noise, floored above 0.
+  EXPECT_NEAR((s.run.gyro->noise_rad_s - s.gyro_noise_rad_s).norm(), 0.0, 1e-18);
+  const Scenario quiet = LoadFromText(dir, GyroScenario("0"));
+  EXPECT_EQ(quiet.run.gyro->noise_rad_s,
+            Eigen::Vector3d::Constant(kMinDeclaredNoise_dps * kDegToRad));
+  EXPECT_EQ(quiet.gyro_noise_rad_s, Eigen::Vector3d::Zero());
+  ASSERT_TRUE(quiet.run.latitude_rad && quiet.run.heading_rad);
+  EXPECT_DOUBLE_EQ(*quiet.run.latitude_rad, 48.15 * kDegToRad);
+  EXPECT_FALSE(TruthModelConfig(quiet).earth_rate_L.isZero());
+  // A declared gyro noise is kept; without a gyro block nothing changes.
+  std::string declared = GyroScenario("0.1");
+  declared.replace(declared.find("bias_dps: [0.2, -0.1, 0.3]}"),
+                   std::string("bias_dps: [0.2, -0.1, 0.3]}").size(),
+                   "bias_dps: [0.2, -0.1, 0.3], noise_dps: 0.07}");
+  EXPECT_NEAR(LoadFromText(dir, declared).run.gyro->noise_rad_s[1], 0.07 * kDegToRad, 1e-18);
+  const Scenario plain = LoadFromText(dir, NoisyScenario(1.0, 0.0));
+  EXPECT_FALSE(plain.run.gyro.has_value());
+  EXPECT_FALSE(plain.truth_layout.has_gyro());
+}
+
+// Noise-free gx gy gz, written to run.csv [deg/s] and read back through the
+// written run.yaml, are PredictGyroReadings at the true (not the recorded)
+// angles and the true theta, Earth's rate included.
+TEST(SimulatorGyro, NoiseFreeGyroReadsBackAsTheModelAtTheTrueAngles) {
+  TempDir dir("gyro_model");
+  const Scenario s = LoadFromText(dir, GyroScenarioWithTruth());
+  const RunData d = Simulate(s);
+  ASSERT_TRUE(d.has_gyro());
+  WriteSimulation(s, d, dir / "out");
+
+  const RunDescription run = LoadRunDescription(dir / "out/run.yaml");
+  ASSERT_TRUE(run.gyro.has_value());
+  ASSERT_TRUE(run.latitude_rad.has_value());
+  RunWarnings warnings;
+  const RunData back = LoadRunData(run, &warnings);
+  ASSERT_TRUE(back.has_gyro());
+  ASSERT_EQ(back.size(), 500u);
+  const ModelConfig cfg = TruthModelConfig(s);
+  double worst_dps = 0.0, latency_dps = 0.0;
+  for (std::size_t k = 0; k < back.size(); ++k) {
+    const double t = back.t_s[k];
+    const Eigen::Vector3d g = PredictGyroReadings(cfg, s.truth.data(), s.profile.At(t));
+    worst_dps = std::max(worst_dps, (back.gyro(k) - g).cwiseAbs().maxCoeff() / kDegToRad);
+    // The recorded angles are 2 ms late: the gyro at them differs.
+    const Eigen::Vector3d late = PredictGyroReadings(cfg, s.truth.data(), s.profile.At(t - 0.002));
+    latency_dps = std::max(latency_dps, (late - g).cwiseAbs().maxCoeff() / kDegToRad);
+  }
+  EXPECT_LT(worst_dps, 1e-9);
+  EXPECT_GT(latency_dps, 1e-3);
+  // The same without Earth's rate differs by about Omega_E (0.0042 deg/s).
+  ModelConfig no_earth = cfg;
+  no_earth.earth_rate_L.setZero();
+  const Eigen::Vector3d g0 = PredictGyroReadings(no_earth, s.truth.data(), s.profile.At(0.0));
+  EXPECT_NEAR((back.gyro(0) - g0).norm(), kEarthRate_rad_s, 0.01 * kEarthRate_rad_s);
+}
+
+TEST(SimulatorGyro, TruthJsonRunYamlAndCsvCarryTheGyro) {
+  TempDir dir("gyro_files");
+  Scenario s = LoadFromText(dir, GyroScenarioWithTruth("0.05"));
+  WriteSimulation(s, Simulate(s), dir / "out");
+  const nlohmann::json j = nlohmann::json::parse(ReadText(dir / "out/truth.json"));
+  const nlohmann::json& p = j.at("parameters");
+  EXPECT_EQ(p.size(), static_cast<std::size_t>(kNumBaseParams + 1 + kNumGyroParams));
+  for (const ParameterInfo& info : GyroParameterInfo()) {
+    EXPECT_TRUE(p.contains(info.name)) << info.name;
+    EXPECT_EQ(j.at("units").at(info.name), info.unit) << info.name;
+  }
+  EXPECT_EQ(p.at("gyro.Kx").get<double>(), 1.002);
+  EXPECT_EQ(p.at("gyro.Ky").get<double>(), 1.0);
+  EXPECT_EQ(p.at("gyro.W0x").get<double>(), 0.2);  // nominal, in deg/s
+  EXPECT_EQ(p.at("gyro.W0z").get<double>(), 0.3);
+  EXPECT_EQ(p.at("gyro.beta_z").get<double>(), 10.0);
+  EXPECT_EQ(p.at("gyro.Gxy").get<double>(), 0.05);
+  EXPECT_EQ(p.at("gyro.Gzz").get<double>(), -0.02);
+  EXPECT_EQ(p.at("gyro.Gyx").get<double>(), 0.0);
+  EXPECT_EQ(j.at("units").at("gyro.W0x"), "deg/s");
+  EXPECT_EQ(j.at("noise").at("gyro_dps").get<double>(), 0.05);
+  EXPECT_EQ(p.at("Kx").get<double>(), 171.5);
+
+  const std::string yaml = ReadText(dir / "out/run.yaml");
+  EXPECT_NE(yaml.find("latitude_deg: 48.15"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("gyro:\n  scale: [1, 1, 1]\n  bias_dps: [0.2, -0.1, 0.3]\n"
+                      "  noise_dps: 0.05\n"),
+            std::string::npos)
+      << yaml;
+  const std::string csv = ReadText(dir / "out/run.csv");
+  EXPECT_NE(csv.find("\nt,lambda1,lambda2,wx,wy,wz,gx,gy,gz\n"), std::string::npos)
+      << csv.substr(0, 200);
+  // Without a gyro, no gyro anywhere.
+  Scenario plain = LoadFromText(dir, NoisyScenario(1.0, 0.0));
+  plain.profile.duration_s = 1.0;
+  WriteSimulation(plain, Simulate(plain), dir / "plain");
+  EXPECT_EQ(ReadText(dir / "plain/run.csv").find("gx"), std::string::npos);
+  EXPECT_EQ(ReadText(dir / "plain/run.yaml").find("gyro"), std::string::npos);
+  EXPECT_EQ(ReadText(dir / "plain/truth.json").find("gyro"), std::string::npos);
+}
+
+// The gyro's noise is white with its sigma per channel, and comes from a
+// stream of its own: the accelerometer's data and the angles are those of the
+// same scenario without a gyro.
+TEST(SimulatorGyro, NoiseIsWhiteAndLeavesTheAccelerometerAlone) {
+  TempDir dir("gyro_noise");
+  std::string text = GyroScenarioWithTruth("[0.1, 0.2, 0.05]");
+  text.replace(text.find("accel_mV: 0, angle_arcsec: 0"),
+               std::string("accel_mV: 0, angle_arcsec: 0").size(), "accel_mV: 2, angle_arcsec: 15");
+  text.replace(text.find("duration_s: 10"), std::string("duration_s: 10").size(), "duration_s: 60");
+  const Scenario s = LoadFromText(dir, text);
+  const ModelConfig cfg = TruthModelConfig(s);
+  const RunData d = Simulate(s);
+  std::vector<double> e[3];
+  for (std::size_t k = 0; k < d.size(); ++k) {
+    const Eigen::Vector3d g = PredictGyroReadings(cfg, s.truth.data(), s.profile.At(d.t_s[k]));
+    for (int i = 0; i < 3; ++i) e[i].push_back((d.gyro_rad_s[i][k] - g[i]) / kDegToRad);
+  }
+  const Eigen::Vector3d sigma(0.1, 0.2, 0.05);
+  for (int i = 0; i < 3; ++i) ExpectWhiteNoise(e[i], sigma[i], std::string("g") + "xyz"[i]);
+
+  Scenario without = s;
+  without.run.gyro.reset();
+  without.truth_layout = without.truth_layout.WithGyro(false);
+  without.truth.conservativeResize(without.truth_layout.size());
+  const RunData a = Simulate(without);
+  EXPECT_FALSE(a.has_gyro());
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(a.w_mV[i], d.w_mV[i]);
+  for (int i = 0; i < 2; ++i) EXPECT_EQ(a.lambda_rad[i], d.lambda_rad[i]);
+}
+
+// A simulated run whose gyro columns are rewritten in rad/s (still declared
+// deg/s) is refused by the reader, and so is the reverse.
+TEST(SimulatorGyro, RadiansPerSecondDeclaredAsDegreesIsRefused) {
+  TempDir dir("gyro_units");
+  const Scenario s = LoadFromText(dir, GyroScenarioWithTruth("0.01"));
+  RunData d = Simulate(s);
+  for (auto& g : d.gyro_rad_s) {
+    for (double& v : g) v *= kDegToRad;  // written as deg/s: the rad/s numbers
+  }
+  WriteSimulation(s, d, dir / "out");
+  const std::string csv = dir / "out/run.csv";
+  try {
+    RunWarnings w;
+    LoadRunData(LoadRunDescription(dir / "out/run.yaml"), &w);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_EQ(m.rfind(csv + ": column 'gx', column 'gy', column 'gz': the RMS of |g| over the "
+                            "run is ",
+                      0),
+              0u)
+        << m;
+    EXPECT_NE(m.find(": the gyro readings look like rad/s, not deg/s; declare `unit: rad/s` "
+                     "(columns.gx, gy, gz)"),
+              std::string::npos)
+        << m;
+  }
+  // The original run, declared rad/s: the reverse.
+  WriteSimulation(s, Simulate(s), dir / "ok");
+  const std::string yaml =
+      ReadText(dir / "ok/run.yaml") +
+      "columns: {gx: {source: gx, unit: rad/s}, gy: {source: gy, unit: rad/s}, gz: {source: gz, "
+      "unit: rad/s}}\n";
+  try {
+    RunWarnings w;
+    LoadRunData(LoadRunDescription(WriteText(dir / "ok/rad.yaml", yaml)), &w);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("the gyro readings look like deg/s declared as rad/s"),
+              std::string::npos)
+        << e.what();
+  }
+  RunWarnings w;
+  EXPECT_TRUE(LoadRunData(LoadRunDescription(dir / "ok/run.yaml"), &w).has_gyro());
+}
+
+TEST(SimulateCommand, GyroRunSaysSoAndListsNoGyroParameterAsAnEffect) {
+  TempDir dir("cmd_gyro");
+  const std::string scenario = WriteText(dir / "scen.yaml", GyroScenarioWithTruth("0.05"));
+  std::string out, err;
+  ASSERT_EQ(RunCommand("simulate " + scenario + " -o " + (dir / "run"), dir, &out, &err), 0) << err;
+  EXPECT_EQ(err, "");
+  EXPECT_NE(out.find("gyro: gx gy gz written, noise 0.05 0.05 0.05 deg/s, with Earth's rate\n"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("effects injected (not declared in run.yaml): angle_latency.tau_ms = 2\n"),
+            std::string::npos)
+      << out;
 }
 
 }  // namespace

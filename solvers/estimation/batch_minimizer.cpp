@@ -223,6 +223,7 @@ void BatchMinimizer::MeasureCurvature(const BatchObjective::Point& trial,
   // run: 13 steps with the noise held, 5 with S).
   BatchObjective::Point at = current_;
   objective_.Reweight(&at, trial_noise, true);
+  objective_.ReweightGyro(&at, trial);
   Eigen::VectorXd g0, g1;
   Eigen::MatrixXd H0, H1;
   Model(at, &g0, &H0);

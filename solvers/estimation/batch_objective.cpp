@@ -5,6 +5,10 @@
 
 namespace triadcal {
 
+bool BatchObjective::HasGyroPart(const Point& pt, int r) const {
+  return has_gyro_[r] && r < static_cast<int>(pt.gyro.size()) && pt.gyro[r].degrees_of_freedom > 0;
+}
+
 bool BatchObjective::Point::finite() const {
   return std::isfinite(cost) && (gradient.size() == 0 || gradient.allFinite());
 }
@@ -22,6 +26,8 @@ BatchObjective::BatchObjective(std::vector<LinkedRun> runs, Eigen::MatrixXd A, E
   }
   for (int r = 0; r < this->runs(); ++r) {
     weights_.push_back(EvaluatePass(*runs_[r].problem, ThetaOf(r, weights_phi), false, threads_));
+    has_gyro_.push_back(RunHasGyro(*runs_[r].problem));
+    gyro_noise_hint_.push_back(runs_[r].problem->gyro_noise_rad_s);
   }
 }
 
@@ -46,6 +52,16 @@ BatchObjective::Point BatchObjective::Evaluate(const Eigen::VectorXd& phi,
   for (int r = 0; r < runs(); ++r) {
     pt.passes.push_back(EvaluatePass(*runs_[r].problem, ThetaOf(r, phi), with_jacobian, threads_));
   }
+  pt.gyro_passes.resize(runs_.size());
+  pt.gyro.resize(runs_.size());
+  for (int r = 0; r < runs(); ++r) {
+    if (!has_gyro_[r]) continue;
+    const RunProblem& p = *runs_[r].problem;
+    pt.gyro_passes[r] = EvaluateGyroPass(p, ThetaOf(r, phi), with_jacobian, threads_);
+    const int fitted = p.cfg.layout.has_gyro() ? kNumGyroParams : 0;
+    pt.gyro[r] = ReduceGyroAtBestNoise(pt.gyro_passes[r], gyro_noise_hint_[r], fitted, true);
+    if (pt.gyro[r].noise_rad_s.allFinite()) gyro_noise_hint_[r] = pt.gyro[r].noise_rad_s;
+  }
   Reweight(&pt, noise);
   return pt;
 }
@@ -60,11 +76,23 @@ void BatchObjective::Reweight(Point* pt, const std::vector<Eigen::Vector3d>& noi
   Assemble(pt);
 }
 
+void BatchObjective::ReweightGyro(Point* pt, const Point& other) const {
+  for (int r = 0; r < runs(); ++r) {
+    if (!HasGyroPart(*pt, r) || !HasGyroPart(other, r)) continue;
+    pt->gyro[r] = ReduceGyro(pt->gyro_passes[r], other.gyro[r].noise_rad_s, pt->gyro[r].rho, true);
+  }
+  Assemble(pt);
+}
+
 void BatchObjective::Assemble(Point* pt) const {
   const Eigen::VectorXd res = A_ * pt->phi - b_;
   pt->data_cost = 0.0;
   for (const RunReduction& red : pt->reductions) pt->data_cost += red.cost;
-  pt->cost = pt->data_cost + 0.5 * res.squaredNorm();
+  pt->gyro_cost = 0.0;
+  for (int r = 0; r < runs(); ++r) {
+    if (HasGyroPart(*pt, r)) pt->gyro_cost += pt->gyro[r].neg_log_l;
+  }
+  pt->cost = pt->data_cost + pt->gyro_cost + 0.5 * res.squaredNorm();
   const bool with_jacobian = !pt->reductions.empty() && pt->reductions[0].gradient.size() > 0;
   if (!with_jacobian) {
     pt->gradient.resize(0);
@@ -76,13 +104,19 @@ void BatchObjective::Assemble(Point* pt) const {
   pt->data_information = Eigen::MatrixXd::Zero(m_, m_);
   for (int r = 0; r < runs(); ++r) {
     const RunReduction& red = pt->reductions[r];
+    Eigen::VectorXd g = red.gradient;
+    Eigen::MatrixXd I = red.information;
+    if (HasGyroPart(*pt, r) && pt->gyro[r].gradient.size() > 0) {
+      g += pt->gyro[r].gradient;
+      I += pt->gyro[r].information;
+    }
     if (runs_[r].map.size() == 0) {
-      pt->gradient += red.gradient;
-      pt->data_information += red.information;
+      pt->gradient += g;
+      pt->data_information += I;
     } else {
       const Eigen::MatrixXd& T = runs_[r].map;
-      pt->gradient.noalias() += T.transpose() * red.gradient;
-      pt->data_information.noalias() += T.transpose() * red.information * T;
+      pt->gradient.noalias() += T.transpose() * g;
+      pt->data_information.noalias() += T.transpose() * I * T;
     }
   }
   pt->information = pt->data_information + A_.transpose() * A_;

@@ -21,6 +21,7 @@
 
 #include <Eigen/Core>
 
+#include "solvers/estimation/gyro_term.h"
 #include "solvers/estimation/run_evaluation.h"
 #include "solvers/estimation/run_problem.h"
 
@@ -44,8 +45,13 @@ class BatchObjective {
     Eigen::VectorXd phi;
     std::vector<RunPass> passes;            // per run
     std::vector<RunReduction> reductions;   // per run, at its noise
-    double cost = 0.0;                      // 0.5 chi^2: data, priors, constraints
-    double data_cost = 0.0;                 // the runs' part
+    // Per run with a gyro triad (gyro_term.h; empty entries for the others):
+    // its pass, and its reduction at its noise's maximum there.
+    std::vector<GyroPass> gyro_passes;
+    std::vector<GyroReduction> gyro;
+    double cost = 0.0;                      // 0.5 chi^2: data, priors, constraints, + gyro_cost
+    double data_cost = 0.0;                 // the runs' accelerometer part
+    double gyro_cost = 0.0;                 // the gyros' -log L, their noise profiled
     Eigen::VectorXd gradient;               // m (empty without the Jacobian)
     Eigen::MatrixXd data_information;       // m x m, sum_r T_r^T I_r T_r
     Eigen::MatrixXd information;            // m x m, with A^T A
@@ -53,6 +59,9 @@ class BatchObjective {
   };
 
   int size() const { return m_; }
+  bool has_gyro(int r) const { return has_gyro_[r]; }
+  // True when pt carries run r's gyro part.
+  bool HasGyroPart(const Point& pt, int r) const;
   int runs() const { return static_cast<int>(runs_.size()); }
   const LinkedRun& run(int r) const { return runs_[r]; }
   const Eigen::MatrixXd& rows() const { return A_; }
@@ -68,12 +77,19 @@ class BatchObjective {
   // theta_part, only the costs and the noises' parts (no gradient).
   void Reweight(Point* pt, const std::vector<Eigen::Vector3d>& noise,
                 bool theta_part = true) const;
+  // The same point with each gyro's part at the gyro noise of `other` (not
+  // at its own maximum): what a change of the gradient at fixed noise needs.
+  void ReweightGyro(Point* pt, const Point& other) const;
 
  private:
   void Assemble(Point* pt) const;
 
   std::vector<LinkedRun> runs_;
   std::vector<RunPass> weights_;  // per run, at weights_phi
+  std::vector<bool> has_gyro_;    // per run
+  // The gyros' noise at the last evaluation: where the next one's profile
+  // starts (the objective is evaluated by one minimiser at a time).
+  mutable std::vector<Eigen::Vector3d> gyro_noise_hint_;
   Eigen::MatrixXd A_;
   Eigen::VectorXd b_;
   int m_ = 0;

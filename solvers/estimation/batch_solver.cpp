@@ -288,7 +288,11 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
     MinimizerOptions mo;
     mo.max_iterations = 3;  // a point to linearise at, not an estimate
     mo.tolerance = 5e-3;
-    BatchMinimizer scale_and_offset(objective, {kKx, kKy, kKz, kW0x, kW0y, kW0z}, mo);
+    std::vector<int> scale_offset = {kKx, kKy, kKz, kW0x, kW0y, kW0z};
+    if (objective.has_gyro(0)) {  // the gyro's too: a bias of degrees per second is common
+      for (int i = kGKx; i <= kGW0z; ++i) scale_offset.push_back(layout.gyro_offset() + i);
+    }
+    BatchMinimizer scale_and_offset(objective, scale_offset, mo);
     MinimizerSummary summary;
     const BatchObjective::Point at =
         scale_and_offset.Minimize(pt.prior.mean, {pt.noise_mV}, &summary);
@@ -491,11 +495,23 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   res.iterations = summary.iterations;
   res.passes = summary.passes;
   say(summary.termination);
-  res.final_cost = pt.cost;
+  res.final_cost = pt.cost - pt.gyro_cost;
   if (opt.cost_at_noise.minCoeff() > 0.0) {
     BatchObjective::Point at = pt;
     objective.Reweight(&at, {opt.cost_at_noise}, false);
-    res.cost_at_noise = at.cost;
+    res.cost_at_noise = at.cost - at.gyro_cost;
+  }
+  if (objective.HasGyroPart(pt, 0)) {
+    const GyroReduction& g = pt.gyro[0];
+    res.gyro.present = true;
+    res.gyro.noise_rad_s = g.noise_rad_s;
+    res.gyro.noise_declared_rad_s = run.gyro ? run.gyro->noise_rad_s : p.gyro_noise_rad_s;
+    res.gyro.degrees_of_freedom = g.degrees_of_freedom;
+    res.gyro.neg_log_likelihood = g.neg_log_l;
+    Eigen::Vector3d ss = Eigen::Vector3d::Zero();
+    for (const Eigen::Vector3d& r : pt.gyro_passes[0].r) ss += r.cwiseAbs2();
+    res.gyro.residual_rms_rad = (ss / std::max<std::size_t>(1, pt.gyro_passes[0].r.size())).cwiseSqrt();
+    res.gyro.whitened_rms = std::sqrt(2.0 * g.cost / std::max(1, g.degrees_of_freedom));
   }
   res.estimate.theta = pt.phi;
   res.noise_used_mV = red.noise_mV;
@@ -574,8 +590,20 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   Eigen::MatrixXd Aa(A.rows(), est.size());
   for (std::size_t k = 0; k < est.size(); ++k) Aa.col(k) = A.col(est[k]);
   const Eigen::MatrixXd rows_info = Aa.transpose() * Aa;
+  std::vector<Eigen::VectorXd> scores = EpochScores(pb, mb);
+  if (objective.HasGyroPart(pt, 0)) {
+    // Each gyro interval's score at the first epoch at or after its end,
+    // beside the accelerometer's.
+    const std::vector<Eigen::VectorXd>& gs = pt.gyro[0].scores;
+    std::size_t e = 0;
+    for (std::size_t k = 0; k < gs.size(); ++k) {
+      const std::size_t end = p.gyro_epochs[k + 1];
+      while (e + 1 < E && p.epochs[e] < end) ++e;
+      for (std::size_t q = 0; q < est.size(); ++q) scores[e][q] += gs[k][est[q]];
+    }
+  }
   const HacCovariance hac =
-      HacThetaCovariance(EpochScores(pb, mb), Iaa, rows_info, opt.hac_bandwidth_epochs, false,
+      HacThetaCovariance(scores, Iaa, rows_info, opt.hac_bandwidth_epochs, false,
                          opt.hac_kernel_bias_correction);
   res.hac_bandwidth_epochs = hac.bandwidth;
   res.hac_kernel_bias_corrected = opt.hac_kernel_bias_correction;

@@ -256,6 +256,21 @@ struct BatchResult {
   double hac_kernel_bias_factor_max = 1.0;
   double init_seconds = 0.0, solve_seconds = 0.0, covariance_seconds = 0.0;
   int epochs = 0;
+  // The gyro triad's part (gyro_term.h), when the run has one: its rate
+  // noise per channel at the maximum likelihood [rad/s of input rate; the
+  // readings' is |gyro.K_i| times it], the declared one, its increment
+  // residuals' RMS per component (inner, outer, normal) [rad] and whitened
+  // RMS (1 when the model holds), chi^2 per degree of freedom. final_cost
+  // and chi2_per_dof above are the accelerometer's.
+  struct Gyro {
+    bool present = false;
+    Eigen::Vector3d noise_rad_s = Eigen::Vector3d::Zero();
+    Eigen::Vector3d noise_declared_rad_s = Eigen::Vector3d::Zero();
+    Eigen::Vector3d residual_rms_rad = Eigen::Vector3d::Zero();
+    double whitened_rms = 0.0;
+    int degrees_of_freedom = 0;
+    double neg_log_likelihood = 0.0;
+  } gyro;
 };
 
 BatchResult SolveBatch(const RunDescription& run, const RunData& data,

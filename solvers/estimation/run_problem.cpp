@@ -42,6 +42,7 @@ RunData SelectSamples(const RunData& d, const std::vector<std::size_t>& idx) {
     out.rate_rad_s[i] = pick(d.rate_rad_s[i]);
   }
   for (int i = 0; i < 3; ++i) out.w_mV[i] = pick(d.w_mV[i]);
+  for (int i = 0; i < 3; ++i) out.gyro_rad_s[i] = pick(d.gyro_rad_s[i]);
   out.temp_C = pick(d.temp_C);
   return out;
 }
@@ -91,6 +92,10 @@ RunProblem BuildRunProblem(const RunDescription& run, const RunData& data,
   p.Hold({});
   p.constraints = ResolveConstraints(run, layout);
   p.noise_mV = run.ChannelNoise_mV();
+  if (run.gyro) p.gyro_noise_rad_s = run.gyro->noise_rad_s;
+  if (layout.has_gyro() && data.has_gyro()) {
+    p.gyro_epochs = ChooseEpochs(data, std::min(epoch_s, kGyroEpoch_s));
+  }
   p.isotropic_var = IsotropicSampleVariance(run.angle_noise_rad, run.g_mps2);
   p.sigma_angle = run.angle_noise_rad;
   const double dt =

@@ -27,6 +27,10 @@ struct ConstraintRow {
 // unless the user says otherwise [s]. 0.5 s halves the errors-in-variables
 // bias of the scale factors against 0.2 s for +0.8 % sigma (README).
 constexpr double kDefaultEpoch_s = 0.5;
+// The gyro's increments are compared with the angles this often [s]: the
+// angle noise costs the gyro's estimates in proportion to the interval
+// (gyro_term.h), the cost grows as its inverse.
+constexpr double kGyroEpoch_s = 0.1;
 
 // The estimation set-up of one run, built once (BuildRunProblem) and handed to
 // every estimator: the model configuration, the data with their derivatives,
@@ -37,6 +41,8 @@ struct RunProblem {
   ModelConfig cfg;
   SampleSeries series;
   std::vector<std::size_t> epochs;  // sample index of each epoch
+  // The gyro's epochs (gyro_term.h), every kGyroEpoch_s: empty without a gyro.
+  std::vector<std::size_t> gyro_epochs;
   Prior prior;
   std::vector<ConstraintRow> constraints;
   // Noise of one sample: the reading noise of each channel [mV] (declared,
@@ -44,6 +50,9 @@ struct RunProblem {
   // axis of L [m^2/s^4] (angle noise rotating g).
   Eigen::Vector3d noise_mV = Eigen::Vector3d::Constant(2.0);
   double isotropic_var = 0.0;
+  // The gyro's rate noise per sample, each channel [rad/s] (gyro_term.h): the
+  // declared figures, the start of its estimate.
+  Eigen::Vector3d gyro_noise_rad_s = Eigen::Vector3d::Constant(0.05 * kDegToRad);
   double sigma_angle = 0.0;   // [rad]
   double sigma_rate = 0.0;    // [rad/s], of lambda' from the angles
   int n = 0;                  // parameters of the layout

@@ -12,6 +12,18 @@ Mat6 ProcessStep::F() const {
   return F;
 }
 
+StateSpaceModel::StateSpaceModel(const RunProblem& problem) : p_(problem), acc_cfg_(problem.cfg) {
+  if (acc_cfg_.layout.has_gyro()) acc_cfg_.layout = acc_cfg_.layout.WithGyro(false);
+  n_acc_ = acc_cfg_.layout.size();
+}
+
+Eigen::MatrixXd StateSpaceModel::Widen(const Eigen::MatrixXd& J) const {
+  if (J.cols() == p_.n) return J;
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(J.rows(), p_.n);
+  out.leftCols(J.cols()) = J;
+  return out;
+}
+
 Mat6 WhiteningOf(const Mat6& cov) {
   const Eigen::LLT<Mat6> llt(cov);
   const Mat6 Lc = llt.matrixL();
@@ -55,15 +67,16 @@ Eigen::MatrixXd StateSpaceModel::FreeColumns(const Eigen::MatrixXd& J) const {
 
 ProcessStep StateSpaceModel::Process(std::size_t e, const Eigen::VectorXd& theta,
                                      bool with_jacobian) const {
-  const IntervalIncrement inc =
-      IntegrateInterval(p_.cfg, theta, p_.series, p_.epochs[e], p_.epochs[e + 1], with_jacobian);
+  const Eigen::VectorXd theta_acc = theta.head(n_acc_);
+  const IntervalIncrement inc = IntegrateInterval(acc_cfg_, theta_acc, p_.series, p_.epochs[e],
+                                                  p_.epochs[e + 1], with_jacobian);
   ProcessStep s;
   s.T_s = inc.T_s;
   s.u << inc.dv_mps, inc.ds_m;
   if (with_jacobian) {
-    Eigen::MatrixXd U(6, theta.size());
+    Eigen::MatrixXd U(6, n_acc_);
     U << inc.ddv_dtheta, inc.dds_dtheta;
-    s.U = FreeColumns(U);
+    s.U = FreeColumns(Widen(U));
   }
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
   s.Q.block<3, 3>(0, 0) = p_.isotropic_var * inc.sum_alpha2 * I;
@@ -85,12 +98,13 @@ ProcessStep StateSpaceModel::Process(std::size_t e, const Eigen::VectorXd& theta
 MeasurementStep StateSpaceModel::Measurement(std::size_t e, const Eigen::VectorXd& theta,
                                              bool with_jacobian, bool with_noise) const {
   const BenchAngles<double>& recorded = p_.series.recorded[p_.epochs[e]];
-  const ReferenceSample ref = EvaluateReference(p_.cfg, theta, recorded, with_jacobian);
+  const Eigen::VectorXd theta_acc = theta.head(n_acc_);
+  const ReferenceSample ref = EvaluateReference(acc_cfg_, theta_acc, recorded, with_jacobian);
   MeasurementStep m;
   m.h << ref.v_mps, ref.p_m;
-  if (with_jacobian) m.H = FreeColumns(ref.dref_dtheta);
+  if (with_jacobian) m.H = FreeColumns(Widen(ref.dref_dtheta));
   if (with_noise) {
-    m.R = ReferenceNoiseCovariance(p_.cfg, theta, recorded, p_.sigma_angle, p_.sigma_rate);
+    m.R = ReferenceNoiseCovariance(acc_cfg_, theta_acc, recorded, p_.sigma_angle, p_.sigma_rate);
   }
   return m;
 }

@@ -80,7 +80,10 @@ struct MeasurementStep {
 class StateSpaceModel {
  public:
   // The problem must outlive the model.
-  explicit StateSpaceModel(const RunProblem& problem) : p_(problem) {}
+  // The accelerometer's model does not depend on the gyro block (last in the
+  // layout, gyro_term.h): it is evaluated without it, and its Jacobians get
+  // zero columns there.
+  explicit StateSpaceModel(const RunProblem& problem);
 
   const RunProblem& problem() const { return p_; }
   // s_i^2 [m^2/s^4] of each channel at theta.
@@ -131,7 +134,11 @@ class StateSpaceModel {
 
  private:
   Eigen::MatrixXd FreeColumns(const Eigen::MatrixXd& J) const;
+  // J (rows x accelerometer parameters) widened to the layout's n columns.
+  Eigen::MatrixXd Widen(const Eigen::MatrixXd& J) const;
   const RunProblem& p_;
+  ModelConfig acc_cfg_;  // p_.cfg without the gyro block
+  int n_acc_ = 0;
 };
 
 // Whitening L with L^T L = cov^-1 (L = chol(cov)^-1, lower-triangular inverse).

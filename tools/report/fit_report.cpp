@@ -266,6 +266,30 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
                   {"source", r.noise_source},
                   {"residual_lag1", std::vector<double>(r.noise_check.lag1.data(),
                                                         r.noise_check.lag1.data() + 6)}};
+  if (r.gyro.present) {
+    // The gyro triad's part (SPEC section 10): its noise in the readings'
+    // unit (deg/s: |gyro.K_i| times the rate noise), the increment residuals.
+    constexpr double kDeg = 180.0 / 3.14159265358979323846;
+    const int go = layout.gyro_offset();
+    Eigen::Vector3d est_dps, decl_dps;
+    for (int i = 0; i < 3; ++i) {
+      const double k = std::abs(r.estimate.theta[go + kGKx + i]);
+      est_dps[i] = r.gyro.noise_rad_s[i] * k * kDeg;
+      decl_dps[i] = r.gyro.noise_declared_rad_s[i] * k * kDeg;
+    }
+    out["gyro"] = {{"noise", {{"estimated_dps", vec(est_dps)},
+                              {"declared_dps", vec(decl_dps)},
+                              {"unit", "deg/s"},
+                              {"source", "estimated"}}},
+                   {"residual_rms_arcsec",
+                    {{"inner", r.gyro.residual_rms_rad[0] * kDeg * 3600.0},
+                     {"outer", r.gyro.residual_rms_rad[1] * kDeg * 3600.0},
+                     {"normal", r.gyro.residual_rms_rad[2] * kDeg * 3600.0}}},
+                   {"residual", "attitude increments between epochs: gyro integrated "
+                                "against the angle sensors (outer-axis frame)"},
+                   {"whitened_rms", r.gyro.whitened_rms},
+                   {"degrees_of_freedom", r.gyro.degrees_of_freedom}};
+  }
   out["final_cost"] = r.final_cost;
   out["residual_count"] = r.residual_count;
   out["iterations"] = {{"steps", r.iterations}, {"passes", r.passes}};

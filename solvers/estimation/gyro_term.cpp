@@ -1,0 +1,275 @@
+#include "solvers/estimation/gyro_term.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "core/model/gyro_model.h"
+#include "solvers/estimation/parallel.h"
+
+namespace triadcal {
+namespace {
+
+using Mat3d = Eigen::Matrix3d;
+using Vec3d = Eigen::Vector3d;
+
+// The columns the gyro residual depends on: the gyro block, then dlambda2.
+constexpr int kLocal = kNumGyroParams + 1;
+constexpr int kLocalDlambda2 = kNumGyroParams;
+
+// Which entry of Mg each misalignment angle sits at, with its sign
+// (gyro_model.h): alpha_x, alpha_y, beta_x, beta_z, gamma_y, gamma_z.
+struct AngleEntry {
+  int row, col;
+  double sign;
+};
+constexpr AngleEntry kAngleEntries[6] = {{1, 0, 1.0},  {0, 1, -1.0}, {2, 0, -1.0},
+                                         {0, 2, 1.0},  {2, 1, 1.0},  {1, 2, -1.0}};
+
+Mat3d Skew(const Vec3d& v) {
+  Mat3d s;
+  s << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  return s;
+}
+
+// The trapezoid weight of sample k in the interval k0..k1 [s].
+double TrapezoidWeight(const RunData& d, std::size_t k0, std::size_t k1, std::size_t k) {
+  double w = 0.0;
+  if (k > k0) w += 0.5 * (d.t_s[k] - d.t_s[k - 1]);
+  if (k < k1) w += 0.5 * (d.t_s[k + 1] - d.t_s[k]);
+  return w;
+}
+
+// Channel i's noise direction at sample k, outer-axis frame: Rx(l2) e_i.
+Mat3d NoiseRotation(const RunData& d, std::size_t k) {
+  return Rx<double>(d.lambda_rad[1][k]);
+}
+
+}  // namespace
+
+bool RunHasGyro(const RunProblem& p) {
+  return p.cfg.layout.has_gyro() && p.series.run && p.series.run->has_gyro() &&
+         p.gyro_epochs.size() >= 3;
+}
+
+GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, bool with_jacobian,
+                          int threads) {
+  if (!RunHasGyro(p)) throw std::logic_error("EvaluateGyroPass: the run has no gyro");
+  const RunData& d = *p.series.run;
+  const ModelConfig& cfg = p.cfg;
+  const int go = cfg.layout.gyro_offset();
+  const int n = static_cast<int>(theta.size());
+  const double* th = theta.data();
+  const double* g = th + go;
+  const std::vector<std::size_t>& epochs = p.gyro_epochs;
+  const std::size_t E = epochs.size();
+
+  const Mat3d Mg_inv = GyroMisalignmentMatrix(g).inverse();
+  Mat3d A = Mg_inv;  // Mg^-1 diag(K)^-1
+  for (int i = 0; i < 3; ++i) A.col(i) /= g[kGKx + i];
+  const Mat3d Gs = GyroGSensitivity(g);
+  const bool earth = !cfg.earth_rate_L.isZero();
+
+  GyroPass pass;
+  pass.theta = theta;
+  pass.with_jacobian = with_jacobian;
+  pass.angle_var = p.sigma_angle * p.sigma_angle;
+  pass.r.resize(E - 1);
+  pass.weight.resize(E - 1);
+  pass.cross.resize(E - 1);
+  if (with_jacobian) pass.J.resize(E - 1);
+
+  ParallelFor(E - 1, threads, [&](std::size_t e) {
+    const std::size_t k0 = epochs[e], k1 = epochs[e + 1];
+    Vec3d r = Vec3d::Zero();
+    Eigen::Matrix<double, 3, kLocal> Jl = Eigen::Matrix<double, 3, kLocal>::Zero();
+    std::array<Mat3d, 3> wgt;
+    for (Mat3d& m : wgt) m.setZero();
+    for (std::size_t k = k0; k <= k1; ++k) {
+      const double w = TrapezoidWeight(d, k0, k1, k);
+      const SampleContext ctx{d.t_s[k], d.has_temp() ? d.temp_C[k] : 0.0};
+      // The specific force at O from the accelerometers, at theta (taken as data).
+      const Vec3d W = SpecificForceFromReadings_g<double>(cfg, th, d.readings_mV(k), ctx);
+      const Vec3d y = d.gyro(k) - Vec3d(g[kGW0x], g[kGW0y], g[kGW0z]) - Gs * W;
+      Vec3d rate = A * y;
+      if (earth) {
+        const double l1 = d.lambda_rad[0][k] + th[kDthetaC];
+        const double l2 = d.lambda_rad[1][k] + th[kDlambda2];
+        const Mat3d C_L2 = Rz<double>(th[kDpsi]) * Ry<double>(l1) * Rx<double>(l2);
+        rate -= C_L2.transpose() * cfg.earth_rate_L;
+      }
+      const Mat3d P = Rx<double>(d.lambda_rad[1][k] + th[kDlambda2]);
+      r += w * (P * rate);
+      const Mat3d Pn = NoiseRotation(d, k);
+      for (int i = 0; i < 3; ++i) wgt[i] += (w * w) * Pn.col(i) * Pn.col(i).transpose();
+      if (!with_jacobian) continue;
+      const Mat3d PA = w * P * A;
+      const Mat3d PM = w * P * Mg_inv;
+      for (int i = 0; i < 3; ++i) {
+        Jl.col(kGW0x + i) -= PA.col(i);
+        Jl.col(kGKx + i) -= PA.col(i) * (y[i] / g[kGKx + i]);
+        for (int j = 0; j < 3; ++j) Jl.col(kGGxx + 3 * i + j) -= PA.col(i) * W[j];
+      }
+      const Vec3d w_dps = A * y;  // the gyro's rate before Earth's is taken off
+      for (int a = 0; a < 6; ++a) {
+        const AngleEntry& en = kAngleEntries[a];
+        Jl.col(kGAlphaX + a) -= PM.col(en.row) * (en.sign * w_dps[en.col]);
+      }
+      Jl.col(kLocalDlambda2) += w * P * Vec3d::UnitX().cross(rate);
+    }
+    r -= Vec3d(d.lambda_rad[1][k1] - d.lambda_rad[1][k0], d.lambda_rad[0][k1] - d.lambda_rad[0][k0],
+               0.0);
+    pass.r[e] = r;
+    pass.weight[e] = wgt;
+    // The sample at epoch e+1 ends this interval and starts the next.
+    if (e + 2 < E) {
+      const double w_last = TrapezoidWeight(d, k0, k1, k1);
+      const double w_first = TrapezoidWeight(d, k1, epochs[e + 2], k1);
+      const Mat3d Pn = NoiseRotation(d, k1);
+      for (int i = 0; i < 3; ++i) {
+        pass.cross[e][i] = (w_last * w_first) * Pn.col(i) * Pn.col(i).transpose();
+      }
+    } else {
+      for (Mat3d& m : pass.cross[e]) m.setZero();
+    }
+    if (with_jacobian) {
+      Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, n);
+      J.middleCols(go, kNumGyroParams) = Jl.leftCols(kNumGyroParams);
+      J.col(kDlambda2) = Jl.col(kLocalDlambda2);
+      pass.J[e] = std::move(J);
+    }
+  });
+  return pass;
+}
+
+GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_s, double rho,
+                         bool theta_part) {
+  const std::size_t K = pass.r.size();
+  const int n = static_cast<int>(pass.theta.size());
+  const bool jac = theta_part && pass.with_jacobian;
+  const Vec3d var = noise_rad_s.cwiseProduct(noise_rad_s);
+  Mat3d R3 = Mat3d::Zero();
+  R3(0, 0) = R3(1, 1) = pass.angle_var;
+  GyroReduction out;
+  out.noise_rad_s = noise_rad_s;
+  out.rho = rho;
+  out.degrees_of_freedom = static_cast<int>(3 * K);
+  out.whitened.resize(K);
+  // The columns with a derivative (others are zero): every run's Jacobian
+  // has the same pattern, taken from the first interval.
+  std::vector<int> cols;
+  if (jac) {
+    for (int c = 0; c < n; ++c) {
+      if (pass.J[0].col(c).squaredNorm() > 0.0) cols.push_back(c);
+    }
+    out.gradient = Eigen::VectorXd::Zero(n);
+    out.information = Eigen::MatrixXd::Zero(n, n);
+  }
+  const int m = static_cast<int>(cols.size());
+  Eigen::MatrixXd Jnu_prev(3, m), Jnu(3, m), Jk(3, m);
+  Eigen::VectorXd grad = Eigen::VectorXd::Zero(m);
+  Eigen::MatrixXd info = Eigen::MatrixXd::Zero(m, m);
+  Mat3d S_prev, C_prev;
+  Vec3d nu_prev;
+  for (std::size_t k = 0; k < K; ++k) {
+    Mat3d C = 2.0 * R3;
+    for (int i = 0; i < 3; ++i) C += var[i] * pass.weight[k][i];
+    Vec3d nu = pass.r[k];
+    if (jac) {
+      for (int q = 0; q < m; ++q) Jk.col(q) = pass.J[k].col(cols[q]);
+    }
+    Mat3d S = C;
+    if (k > 0) {
+      const Mat3d Gk = S_prev.llt().solve(C_prev).transpose();  // C_prev^T S_prev^-1
+      S -= Gk * C_prev;
+      nu -= Gk * nu_prev;
+      if (jac) Jnu = Jk - Gk * Jnu_prev;
+    } else if (jac) {
+      Jnu = Jk;
+    }
+    const Eigen::LLT<Mat3d> llt(S);
+    const Mat3d L = llt.matrixL();
+    out.log_det += L.diagonal().array().log().sum();  // 0.5 log det S
+    const Vec3d z = L.triangularView<Eigen::Lower>().solve(nu);
+    out.whitened[k] = z;
+    out.cost += 0.5 * z.squaredNorm();
+    if (jac) {
+      const Eigen::MatrixXd Jz = L.triangularView<Eigen::Lower>().solve(Jnu);
+      const Eigen::VectorXd sc = Jz.transpose() * z;
+      Eigen::VectorXd full = Eigen::VectorXd::Zero(n);
+      for (int q = 0; q < m; ++q) full[cols[q]] = sc[q];
+      out.scores.push_back(std::move(full));
+      grad += sc;
+      info.noalias() += Jz.transpose() * Jz;
+      Jnu_prev = Jnu;
+    }
+    // The covariance of this residual with the next one.
+    C_prev = -R3;
+    for (int i = 0; i < 3; ++i) C_prev += var[i] * pass.cross[k][i];
+    S_prev = S;
+    nu_prev = nu;
+  }
+  out.neg_log_l = out.cost + rho * out.log_det;
+  if (jac) {
+    for (int a = 0; a < m; ++a) {
+      out.gradient[cols[a]] = grad[a];
+      for (int b = 0; b < m; ++b) out.information(cols[a], cols[b]) = info(a, b);
+    }
+  }
+  return out;
+}
+
+GyroReduction ReduceGyroAtBestNoise(const GyroPass& pass, const Eigen::Vector3d& start,
+                                    int fitted_parameters, bool theta_part) {
+  const double dof = 3.0 * static_cast<double>(pass.r.size());
+  const double rho = std::max(0.1, 1.0 - fitted_parameters / dof);
+  // -log L in s = log sigma, by Newton's method on its central differences
+  // (each a reduction without the Jacobian, O(E); 19 per step): quadratic
+  // convergence, so the profile is a smooth function of theta to rounding.
+  auto f = [&](const Eigen::Vector3d& s) {
+    return ReduceGyro(pass, s.array().exp(), rho, false).neg_log_l;
+  };
+  Eigen::Vector3d s = start.array().max(1e-12).log();
+  const double h = 1e-3;
+  for (int it = 0; it < 30; ++it) {
+    const double f0 = f(s);
+    Eigen::Vector3d g, fp, fm;
+    Eigen::Matrix3d H;
+    for (int i = 0; i < 3; ++i) {
+      Eigen::Vector3d a = s, b = s;
+      a[i] += h;
+      b[i] -= h;
+      fp[i] = f(a);
+      fm[i] = f(b);
+      g[i] = (fp[i] - fm[i]) / (2.0 * h);
+      H(i, i) = (fp[i] - 2.0 * f0 + fm[i]) / (h * h);
+    }
+    for (int i = 0; i < 3; ++i) {
+      for (int j = i + 1; j < 3; ++j) {
+        Eigen::Vector3d pp = s, pm = s, mp = s, mm = s;
+        pp[i] += h, pp[j] += h;
+        pm[i] += h, pm[j] -= h;
+        mp[i] -= h, mp[j] += h;
+        mm[i] -= h, mm[j] -= h;
+        H(i, j) = H(j, i) = (f(pp) - f(pm) - f(mp) + f(mm)) / (4.0 * h * h);
+      }
+    }
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(H);
+    Eigen::Vector3d step;
+    if (ldlt.info() == Eigen::Success && ldlt.isPositive() && (ldlt.vectorD().array() > 0.0).all()) {
+      step = -ldlt.solve(g);
+    } else {
+      step = -g.cwiseQuotient(H.diagonal().cwiseAbs().cwiseMax(1.0));  // far out: gradient
+    }
+    // At most a factor e per step (the cost is far from quadratic far out).
+    const double big = step.cwiseAbs().maxCoeff();
+    if (big > 1.0) step /= big;
+    s += step;
+    if (-g.dot(step) < 1e-12) break;
+  }
+  return ReduceGyro(pass, s.array().exp(), rho, theta_part);
+}
+
+}  // namespace triadcal

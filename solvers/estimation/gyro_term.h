@@ -1,0 +1,105 @@
+// The gyro triad's part of the batch problem (SPEC section 10): what the gyro
+// adds to a run's negative log-likelihood, as a function of theta alone.
+//
+// Residual. The angle sensors give the bench's attitude, the gyro its rate. As
+// the paper integrates the accelerometers against the angles (velocity and
+// position, never lambda''), the gyro is integrated against them, never
+// against lambda' (differentiating angles with 15'' noise at 100 Hz gives a
+// rate noise of ~0.6 deg/s, ten times a MEMS gyro's). Frame 2's rate turned
+// into the outer-axis frame is exactly the bench's angle rates,
+//
+//   Rx(l2 + dlambda2) w_2 = (l2', l1', 0)            (gyro_model.h)
+//
+// so with the gyro's rate w^_j = GyroRateFromReadings at each sample j, the
+// increment residual of interval e (epochs e -> e+1, trapezoid weights a_j)
+//
+//   r_e = sum_j a_j Rx(l2_j + dlambda2) (w^_j - C_L2,j^T Omega_L)
+//         - (l2_{e+1} - l2_e, l1_{e+1} - l1_e, 0)
+//
+// is zero but for noise: each gyro channel's white noise integrated, and the
+// angle noise at the two epochs (15'' on each, the same size as 0.05 deg/s
+// integrated over 0.5 s at 100 Hz). Consecutive residuals share an epoch's
+// angle noise (and the trapezoid's shared sample): their covariance is block
+// tridiagonal, and the innovations of its block LDL^T whiten them exactly, in
+// O(E) (the same likelihood as keeping the attitude as a state and solving
+// for it; no state is needed since the residual is linear in it):
+//
+//   S_0 = C_00, nu_0 = r_0;  G_e = C_{e-1,e}^T S_{e-1}^-1,
+//   S_e = C_ee - G_e C_{e-1,e},  nu_e = r_e - G_e nu_{e-1}
+//   -log L = 0.5 sum nu^T S^-1 nu + rho 0.5 sum log det S_e
+//
+// Noise. Each channel's noise is a parameter of the same likelihood, in
+// input-rate units (rad/s of rate; the readings' noise is K_i times it), so
+// the covariance does not depend on theta and the gyro's scale factors need
+// no whitening derivative. It is held at its maximum (restricted share rho =
+// 1 - fitted / (3 (E - 1)), as the accelerometer's) at every theta: the
+// minimiser works on the likelihood profiled over it. The angle noise is the
+// run's declared one. The rotation in the noise's weights uses the recorded
+// inner angle (dlambda2 turns it by arcminutes: no effect on the weights).
+//
+// Jacobian (written out; GyroRateFromReadings is linear in the readings):
+// by the gyro's 21 parameters and dlambda2. The specific force W of the
+// g-sensitivity is the accelerometers' at the current theta (readings model
+// inverted, bench_model.h), taken as data: its derivatives by the
+// accelerometer's parameters carry G_ij W / K_acc, about 1e-4 of what the
+// accelerometers themselves give those parameters. Earth's rate enters with
+// its value only (7e-5 rad/s times angles of arcminutes).
+//
+// Left out (docs/method.md): the angle-stage effects (latency, encoder
+// harmonic, angle scale) act on the accelerometer's residuals only; the
+// gyro's residual uses the recorded angles.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "solvers/estimation/run_problem.h"
+
+namespace triadcal {
+
+// True when the run's layout has the gyro block and its data the gyro columns.
+bool RunHasGyro(const RunProblem& p);
+
+// The pass over the samples at theta (all n parameters of the run's layout).
+struct GyroPass {
+  Eigen::VectorXd theta;
+  std::vector<Eigen::Vector3d> r;   // E - 1 increment residuals [rad]
+  std::vector<Eigen::MatrixXd> J;   // E - 1 of 3 x n, dr/dtheta (with the Jacobian)
+  // Per interval and channel i: the residual's covariance per unit variance
+  // of channel i's rate noise, on the interval (weight) and with the next
+  // interval (the shared sample, cross).
+  std::vector<std::array<Eigen::Matrix3d, 3>> weight, cross;
+  double angle_var = 0.0;           // [rad^2] of each recorded angle
+  bool with_jacobian = false;
+};
+
+GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, bool with_jacobian,
+                          int threads);
+
+struct GyroReduction {
+  double cost = 0.0;       // 0.5 sum nu^T S^-1 nu at noise
+  double log_det = 0.0;    // 0.5 sum log det S_e
+  double neg_log_l = 0.0;  // cost + rho log_det: what the minimiser sees
+  double rho = 1.0;
+  Eigen::Vector3d noise_rad_s = Eigen::Vector3d::Zero();  // each channel, input-rate units
+  Eigen::VectorXd gradient;     // n (with the pass's Jacobian)
+  Eigen::MatrixXd information;  // n x n
+  int degrees_of_freedom = 0;   // 3 (E - 1)
+  std::vector<Eigen::Vector3d> whitened;  // nu_e whitened by chol(S_e): unit white under the model
+  // Per interval (with the Jacobian): its score, the gradient of what it adds
+  // to the cost given the intervals before it (n), for the HAC covariance.
+  std::vector<Eigen::VectorXd> scores;
+};
+
+// At a given noise [rad/s per channel].
+GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_s,
+                         double rho, bool theta_part);
+
+// The noise at the maximum of the restricted likelihood (from `start`),
+// reduced there.
+GyroReduction ReduceGyroAtBestNoise(const GyroPass& pass, const Eigen::Vector3d& start,
+                                    int fitted_parameters, bool theta_part);
+
+}  // namespace triadcal
