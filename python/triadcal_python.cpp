@@ -3,6 +3,7 @@
 //
 //   triadcal.fit(run, **options) -> dict         the OUT of `triadcal fit`
 //   triadcal.apply(calibration, readings_mV, t_s=None, temp_C=None) -> (N, 3)
+//   triadcal.apply_gyro(calibration, gyro_dps, W_g) -> (N, 3)     [deg/s]
 //   triadcal.simulate(scenario, seed=None, out_dir=None) -> dict of arrays
 //   triadcal.load_run(run) -> dict of arrays
 //
@@ -91,13 +92,37 @@ py::array_t<double> Column(const std::vector<double>& v) {
   return a;
 }
 
-py::array_t<double> Readings(const RunData& d) {
-  py::array_t<double> a({static_cast<py::ssize_t>(d.size()), py::ssize_t(3)});
+// Three channels of N samples as an (N, 3) array, each times `factor`.
+py::array_t<double> Triple(const std::vector<double> (&c)[3], double factor = 1.0) {
+  const std::size_t n = c[0].size();
+  py::array_t<double> a({static_cast<py::ssize_t>(n), py::ssize_t(3)});
   auto r = a.mutable_unchecked<2>();
-  for (std::size_t k = 0; k < d.size(); ++k) {
-    for (int i = 0; i < 3; ++i) r(k, i) = d.w_mV[i][k];
+  for (std::size_t k = 0; k < n; ++k) {
+    for (int i = 0; i < 3; ++i) r(k, i) = c[i][k] * factor;
   }
   return a;
+}
+
+// An (N, 3) array argument as three channels; InputError naming it otherwise.
+void ReadTriple(const py::array_t<double, py::array::c_style | py::array::forcecast>& a,
+                const char* name, std::vector<double> (&out)[3]) {
+  if (a.ndim() != 2 || a.shape(1) != 3) {
+    throw InputError(std::string(name) + ": expected an array of shape (N, 3)");
+  }
+  auto r = a.unchecked<2>();
+  for (int i = 0; i < 3; ++i) {
+    out[i].resize(static_cast<std::size_t>(a.shape(0)));
+    for (std::size_t k = 0; k < out[i].size(); ++k) out[i][k] = r(k, i);
+  }
+}
+
+py::array_t<double> Rows(const std::vector<Eigen::Vector3d>& v, double factor = 1.0) {
+  py::array_t<double> out({static_cast<py::ssize_t>(v.size()), py::ssize_t(3)});
+  auto o = out.mutable_unchecked<2>();
+  for (std::size_t k = 0; k < v.size(); ++k) {
+    for (int i = 0; i < 3; ++i) o(k, i) = v[k][i] * factor;
+  }
+  return out;
 }
 
 py::dict RunDataDict(const RunData& d) {
@@ -108,7 +133,8 @@ py::dict RunDataDict(const RunData& d) {
   for (double& x : l2) x /= kDegToRad;
   out["lambda1_deg"] = Column(l1);
   out["lambda2_deg"] = Column(l2);
-  out["readings_mV"] = Readings(d);
+  out["readings_mV"] = Triple(d.w_mV);
+  if (d.has_gyro()) out["gyro_dps"] = Triple(d.gyro_rad_s, 1.0 / kDegToRad);
   if (d.has_temp()) out["temp_C"] = Column(d.temp_C);
   return out;
 }
@@ -135,7 +161,8 @@ py::object Fit(const py::object& run_arg, const std::string& effects, double epo
     }
     start = end + 1;
   }
-  const ParameterLayout layout(list);
+  // The gyro with a gyro block, as `triadcal fit` (its columns are then read).
+  const ParameterLayout layout(list, /*gyro=*/run.gyro.has_value());
   BatchResult r;
   std::size_t samples = 0;
   {
@@ -165,17 +192,10 @@ py::array_t<double> Apply(const py::object& cal_arg,
                           std::optional<py::array_t<double, py::array::forcecast>> t_s,
                           std::optional<py::array_t<double, py::array::forcecast>> temp_C) {
   const Calibration cal = CalibrationFrom(cal_arg);
-  if (z.ndim() != 2 || z.shape(1) != 3) {
-    throw InputError("readings_mV: expected an array of shape (N, 3)");
-  }
-  const std::size_t n = static_cast<std::size_t>(z.shape(0));
   RunData data;
+  ReadTriple(z, "readings_mV", data.w_mV);
+  const std::size_t n = data.w_mV[0].size();
   data.t_s.assign(n, 0.0);
-  auto zr = z.unchecked<2>();
-  for (int i = 0; i < 3; ++i) {
-    data.w_mV[i].resize(n);
-    for (std::size_t k = 0; k < n; ++k) data.w_mV[i][k] = zr(k, i);
-  }
   auto copy = [n](const py::array_t<double, py::array::forcecast>& a, const char* name,
                   std::vector<double>* out) {
     if (a.ndim() != 1 || static_cast<std::size_t>(a.shape(0)) != n) {
@@ -192,13 +212,31 @@ py::array_t<double> Apply(const py::object& cal_arg,
   if (cal.layout.has(Effect::kThermalDriftTemp) && !temp_C) {
     throw InputError("temp_C: needed by the calibration's thermal_drift_temp");
   }
-  const std::vector<Eigen::Vector3d> W = ApplyCalibration(cal, RunDescription(), data);
-  py::array_t<double> out({static_cast<py::ssize_t>(n), py::ssize_t(3)});
-  auto o = out.mutable_unchecked<2>();
-  for (std::size_t k = 0; k < n; ++k) {
-    for (int i = 0; i < 3; ++i) o(k, i) = W[k][i];
+  return Rows(ApplyCalibration(cal, RunDescription(), data));
+}
+
+// Gyro readings (N, 3) [deg/s] and the specific force W (N, 3) [g] of the same
+// samples (from Apply) -> angular rate (N, 3) [deg/s], as `triadcal apply`.
+py::array_t<double> ApplyGyro(const py::object& cal_arg,
+                              py::array_t<double, py::array::c_style | py::array::forcecast> g,
+                              py::array_t<double, py::array::c_style | py::array::forcecast> W) {
+  const Calibration cal = CalibrationFrom(cal_arg);
+  RunData data;
+  ReadTriple(g, "gyro_dps", data.gyro_rad_s);
+  for (std::vector<double>& c : data.gyro_rad_s) {
+    for (double& x : c) x *= kDegToRad;
   }
-  return out;
+  std::vector<double> w[3];
+  ReadTriple(W, "W_g", w);
+  const std::size_t n = data.gyro_rad_s[0].size();
+  if (w[0].size() != n) {
+    throw InputError("W_g: expected the " + std::to_string(n) + " samples of gyro_dps, got " +
+                     std::to_string(w[0].size()));
+  }
+  data.t_s.assign(n, 0.0);
+  std::vector<Eigen::Vector3d> W_g(n);
+  for (std::size_t k = 0; k < n; ++k) W_g[k] = {w[0][k], w[1][k], w[2][k]};
+  return Rows(ApplyGyroCalibration(cal, RunDescription(), data, W_g), 1.0 / kDegToRad);
 }
 
 py::dict SimulateScenario(const std::string& scenario, std::optional<std::uint64_t> seed,
@@ -253,11 +291,18 @@ PYBIND11_MODULE(triadcal, m) {
         "Raw readings (N, 3) [mV, triad axes] -> specific force W (N, 3) [g] by the exact "
         "inverse of the readings model, as `triadcal apply`. temp_C counts from its first "
         "value (thermal_drift_temp).");
+  m.def("apply_gyro", &triadcal::ApplyGyro, "calibration"_a, "gyro_dps"_a, "W_g"_a,
+        "Gyro readings (N, 3) [deg/s, triad axes] and the specific force W (N, 3) [g] of the "
+        "same samples (from apply) -> angular rate (N, 3) [deg/s] in the triad frame by the "
+        "exact inverse of the gyro's readings model, as `triadcal apply`; the calibration "
+        "must have the gyro (gyro.*).");
   m.def("simulate", &triadcal::SimulateScenario, "scenario"_a, "seed"_a = py::none(),
         "out_dir"_a = "",
         "Simulate a scenario.yaml: dict with t_s, lambda1_deg, lambda2_deg, readings_mV (N, 3), "
-        "truth {name: value in file units}; also writes run.csv, run.yaml, truth.json to "
+        "gyro_dps (N, 3) with a gyro, truth {name: value in file units}; also writes run.csv, "
+        "run.yaml, truth.json to "
         "out_dir when given.");
   m.def("load_run", &triadcal::LoadRun, "run"_a,
-        "The data of a run (run.yaml path or dict) as numpy arrays.");
+        "The data of a run (run.yaml path or dict) as numpy arrays (gyro_dps (N, 3) when it "
+        "has a gyro block).");
 }

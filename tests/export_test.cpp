@@ -1,8 +1,9 @@
 // `triadcal export`: the exported C99 code, compiled with `cc -std=c99 -Wall
 // -Wextra -pedantic -Werror`, gives what `triadcal apply` gives to 1e-9 g on a
 // simulated run with every K_ij non-zero (with and without the sensor-stage
-// effects) and on the Ferraris real run; the matrix form reproduces the
-// readings model; bad options give their exact message.
+// effects) and on the Ferraris real run, and with the gyro to 1e-9 deg/s; the
+// matrix form reproduces the readings model (the gyro's too); bad options give
+// their exact message.
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -21,6 +22,8 @@
 #include "core/io/run_io.h"
 #include "core/model/bench_model.h"
 #include "core/model/effects.h"
+#include "core/model/gyro_model.h"
+#include "core/model/units.h"
 #include "tools/report/calibration_export.h"
 #include "tests/command_runner.h"
 #include "tests/temp_dir_test.h"
@@ -49,8 +52,10 @@ class ExportTest : public testing_fixtures::TempDirTest {
  protected:
   std::string Err() const { return Path("err.txt"); }
 
-  // W [g] per sample from `triadcal apply CAL RUN`.
-  std::vector<Eigen::Vector3d> Apply(const std::string& cal, const std::string& run_yaml) {
+  // W [g] per sample from `triadcal apply CAL RUN`, and with the gyro the
+  // rates omega [deg/s] into *omega.
+  std::vector<Eigen::Vector3d> Apply(const std::string& cal, const std::string& run_yaml,
+                                     std::vector<Eigen::Vector3d>* omega = nullptr) {
     const auto r =
         RunTriadcal("apply " + cal + " " + run_yaml + " -o " + Path("applied.csv"), Err());
     EXPECT_EQ(r.status, 0) << r.err;
@@ -62,6 +67,9 @@ class ExportTest : public testing_fixtures::TempDirTest {
       if (line.empty() || line[0] == '#') continue;
       if (header) {
         header = false;
+        // t,Wx,Wy,Wz[,omega_x,omega_y,omega_z],...
+        EXPECT_EQ(line.rfind(omega ? "t,Wx,Wy,Wz,omega_x,omega_y,omega_z" : "t,Wx,Wy,Wz", 0), 0u)
+            << line;
         continue;
       }
       std::stringstream ss(line);
@@ -73,12 +81,21 @@ class ExportTest : public testing_fixtures::TempDirTest {
         w[i] = std::stod(cell);
       }
       W.push_back(w);
+      if (!omega) continue;
+      for (int i = 0; i < 3; ++i) {
+        std::getline(ss, cell, ',');
+        w[i] = std::stod(cell);
+      }
+      omega->push_back(w);
     }
     return W;
   }
 
-  // Exports CAL as C, compiles it with a driver and runs it on every sample of RUN.
-  std::vector<Eigen::Vector3d> ExportedC(const std::string& cal, const std::string& run_yaml) {
+  // Exports CAL as C, compiles it with a driver and runs it on every sample of
+  // RUN: W [g] by NAME_apply, and with `omega` the rates [deg/s] by
+  // NAME_apply_gyro from the run's gyro readings and that W.
+  std::vector<Eigen::Vector3d> ExportedC(const std::string& cal, const std::string& run_yaml,
+                                         std::vector<Eigen::Vector3d>* omega = nullptr) {
     const auto e = RunTriadcal("export " + cal + " --format c -o " + Path("cal.c"), Err());
     EXPECT_EQ(e.status, 0) << e.err;
     // The exported code alone, with every warning an error.
@@ -87,14 +104,24 @@ class ExportTest : public testing_fixtures::TempDirTest {
         Err());
     EXPECT_EQ(cc.status, 0) << cc.err;
     WriteText("driver.c",
-              "#include <stdio.h>\n#include \"cal.h\"\n"
-              "int main(void) {\n"
-              "  double t, z[3], T, Tref, W[3];\n"
-              "  while (scanf(\"%lf %lf %lf %lf %lf %lf\", &t, &z[0], &z[1], &z[2], &T, &Tref) "
-              "== 6) {\n"
-              "    cal_apply(z, t, T, Tref, W);\n"
-              "    printf(\"%.17g %.17g %.17g\\n\", W[0], W[1], W[2]);\n"
-              "  }\n  return 0;\n}\n");
+              omega ? "#include <stdio.h>\n#include \"cal.h\"\n"
+                      "int main(void) {\n"
+                      "  double t, z[3], T, Tref, W[3], g[3], w[3];\n"
+                      "  while (scanf(\"%lf %lf %lf %lf %lf %lf %lf %lf %lf\", &t, &z[0], &z[1], "
+                      "&z[2], &T, &Tref, &g[0], &g[1], &g[2]) == 9) {\n"
+                      "    cal_apply(z, t, T, Tref, W);\n"
+                      "    cal_apply_gyro(g, W, w);\n"
+                      "    printf(\"%.17g %.17g %.17g %.17g %.17g %.17g\\n\", W[0], W[1], W[2], "
+                      "w[0], w[1], w[2]);\n"
+                      "  }\n  return 0;\n}\n"
+                    : "#include <stdio.h>\n#include \"cal.h\"\n"
+                      "int main(void) {\n"
+                      "  double t, z[3], T, Tref, W[3];\n"
+                      "  while (scanf(\"%lf %lf %lf %lf %lf %lf\", &t, &z[0], &z[1], &z[2], &T, "
+                      "&Tref) == 6) {\n"
+                      "    cal_apply(z, t, T, Tref, W);\n"
+                      "    printf(\"%.17g %.17g %.17g\\n\", W[0], W[1], W[2]);\n"
+                      "  }\n  return 0;\n}\n");
     const auto link = RunCommand("cc -std=c99 -Wall -Werror " + Path("driver.c") + " " +
                                      Path("cal.o") + " -o " + Path("driver"),
                                  Err());
@@ -104,13 +131,21 @@ class ExportTest : public testing_fixtures::TempDirTest {
     const RunData data = LoadRunData(run, nullptr);
     {
       std::ofstream in(Path("readings.txt"));
-      char buf[256];
+      char buf[512];
       for (std::size_t k = 0; k < data.size(); ++k) {
         const Eigen::Vector3d z = data.readings_mV(k);
-        std::snprintf(buf, sizeof(buf), "%.17g %.17g %.17g %.17g %.17g %.17g\n", data.t_s[k], z[0],
+        std::snprintf(buf, sizeof(buf), "%.17g %.17g %.17g %.17g %.17g %.17g", data.t_s[k], z[0],
                       z[1], z[2], data.has_temp() ? data.temp_C[k] : 0.0,
                       data.has_temp() ? data.temp_C.front() : 0.0);
         in << buf;
+        if (omega) {
+          // The gyro readings in deg/s, in the triad's axes (after run.yaml's
+          // unit conversion and mounting).
+          const Eigen::Vector3d g = data.gyro(k) / kDegToRad;
+          std::snprintf(buf, sizeof(buf), " %.17g %.17g %.17g", g[0], g[1], g[2]);
+          in << buf;
+        }
+        in << "\n";
       }
     }
     const auto r = RunCommand(
@@ -118,21 +153,38 @@ class ExportTest : public testing_fixtures::TempDirTest {
         Err());
     std::vector<Eigen::Vector3d> W;
     std::ifstream out(Path("c_out.txt"));
-    Eigen::Vector3d w;
-    while (out >> w[0] >> w[1] >> w[2]) W.push_back(w);
+    Eigen::Vector3d w, g;
+    while (out >> w[0] >> w[1] >> w[2]) {
+      W.push_back(w);
+      if (omega && out >> g[0] >> g[1] >> g[2]) omega->push_back(g);
+    }
     EXPECT_EQ(W.size(), data.size()) << r.err;
+    if (omega) {
+      EXPECT_EQ(omega->size(), data.size()) << r.err;
+    }
     return W;
   }
 
-  // Largest |C - apply| over every sample and axis [g].
-  double LargestDifference(const std::string& cal, const std::string& run_yaml) {
-    const std::vector<Eigen::Vector3d> a = Apply(cal, run_yaml);
-    const std::vector<Eigen::Vector3d> c = ExportedC(cal, run_yaml);
+  // Largest |C - apply| over every sample and axis [g]; with `gyro_dps`, the
+  // same for the gyro's rates [deg/s] into *gyro_dps.
+  double LargestDifference(const std::string& cal, const std::string& run_yaml,
+                           double* gyro_dps = nullptr) {
+    std::vector<Eigen::Vector3d> a_omega, c_omega;
+    const std::vector<Eigen::Vector3d> a = Apply(cal, run_yaml, gyro_dps ? &a_omega : nullptr);
+    const std::vector<Eigen::Vector3d> c = ExportedC(cal, run_yaml, gyro_dps ? &c_omega : nullptr);
     EXPECT_EQ(a.size(), c.size());
     EXPECT_GT(a.size(), 0u);
     double worst = 0.0;
     for (std::size_t k = 0; k < std::min(a.size(), c.size()); ++k) {
       worst = std::max(worst, (a[k] - c[k]).cwiseAbs().maxCoeff());
+    }
+    if (gyro_dps) {
+      EXPECT_EQ(a_omega.size(), a.size());
+      EXPECT_EQ(c_omega.size(), a.size());
+      *gyro_dps = a_omega.empty() ? 1e300 : 0.0;
+      for (std::size_t k = 0; k < std::min(a_omega.size(), c_omega.size()); ++k) {
+        *gyro_dps = std::max(*gyro_dps, (a_omega[k] - c_omega[k]).cwiseAbs().maxCoeff());
+      }
     }
     return worst;
   }
@@ -151,6 +203,106 @@ TEST_F(ExportTest, CMatchesApplyOnASimulatedRunWithEveryKij) {
   EXPECT_LE(worst, 1e-9);
   // The nonlinearity matters at this size: a wrong inverse would show.
   EXPECT_EQ(LoadCalibration(Path("sim/truth.json")).theta[kKxy], -0.0012);
+}
+
+// The gyro (SPEC section 10), every parameter of it non-zero and a reversed z
+// gyro, on a run with the gyro's noise: NAME_apply_gyro gives the rates apply
+// gives to 1e-9 deg/s, from the truth and from a fit.
+const char kGyroScenario[] =
+    "truth: {Kx: 171.5, Ky: 175.8, Kz: 174.8, W0x: 1504.2, W0y: 1498.0, W0z: 1502.5,\n"
+    "        alpha_x: 16, alpha_y: -32, beta_x: 11, beta_z: 26, gamma_y: 140, gamma_z: 64,\n"
+    "        Kxx: 0.002, Kxy: -0.0012, Kxz: 0.0007, Kyx: 0.0009, Kyy: -0.0015,\n"
+    "        Kyz: -0.001, Kzx: 0.0011, Kzy: 0.0015, Kzz: -0.0008,\n"
+    "        gyro.Kx: 1.004, gyro.Ky: 0.997, gyro.Kz: -1.002,\n"
+    "        gyro.W0x: 0.31, gyro.W0y: -0.52, gyro.W0z: 0.2,\n"
+    "        gyro.alpha_x: 12, gyro.alpha_y: -8, gyro.beta_x: 5, gyro.beta_z: 15,\n"
+    "        gyro.gamma_y: -20, gyro.gamma_z: 7,\n"
+    "        gyro.Gxx: 0.02, gyro.Gxy: 0.05, gyro.Gxz: -0.03, gyro.Gyx: 0.01, gyro.Gyy: -0.04,\n"
+    "        gyro.Gyz: 0.02, gyro.Gzx: -0.01, gyro.Gzy: 0.03, gyro.Gzz: 0.06}\n"
+    "noise: {accel_mV: 1, angle_arcsec: 15, gyro_dps: 0.05}\n"
+    "run:\n"
+    "  bench: {lever_arm_mm: [138, 20, 20], angle_noise_arcsec: 15}\n"
+    "  triad: {scale_mV_per_g: [174, 174, 174], bias_mV: [1500, 1500, 1500], noise_mV: 1}\n"
+    "  gyro: {scale: [1, 1, -1], noise_dps: 0.05}\n";
+
+TEST_F(ExportTest, CGyroMatchesApply) {
+  const std::string run = Simulate(
+      "seed: 7\n"
+      "profile: {amplitude_deg: [360, 90], period_s: [30, 12], duration_s: 30, rate_hz: 200}\n" +
+      std::string(kGyroScenario));
+  ASSERT_TRUE(LoadCalibration(Path("sim/truth.json")).layout.has_gyro());
+  double gyro_dps = 0.0;
+  EXPECT_LE(LargestDifference(Path("sim/truth.json"), run, &gyro_dps), 1e-9);
+  EXPECT_LE(gyro_dps, 1e-9);
+  // A fit of the run: its OUT carries the gyro too. (The outputs of the truth's
+  // inputs go first: apply and export do not replace them.)
+  for (const char* file : {"applied.csv", "cal.c", "cal.h"}) fs::remove(Path(file));
+  const auto f = RunTriadcal("fit " + run + " -o " + Path("fit.json"), Err());
+  ASSERT_EQ(f.status, 0) << f.err;
+  ASSERT_TRUE(LoadCalibration(Path("fit.json")).layout.has_gyro());
+  EXPECT_LE(LargestDifference(Path("fit.json"), run, &gyro_dps), 1e-9);
+  EXPECT_LE(gyro_dps, 1e-9);
+  EXPECT_NE(ReadFile(Path("cal.h"))
+                .find("void cal_apply_gyro(const double g_dps[3], const double W_g[3], double "
+                      "omega_dps[3]);"),
+            std::string::npos);
+}
+
+// Without the gyro the C has no gyro function and the matrix form no "gyro".
+TEST_F(ExportTest, NoGyroFunctionWithoutTheGyro) {
+  Simulate(Scenario(""));
+  const std::string cal = Path("sim/truth.json");
+  ASSERT_EQ(RunTriadcal("export " + cal + " --format c -o " + Path("cal.c"), Err()).status, 0);
+  EXPECT_EQ(ReadFile(Path("cal.h")).find("gyro"), std::string::npos);
+  EXPECT_EQ(ReadFile(Path("cal.c")).find("gyro"), std::string::npos);
+  ASSERT_EQ(
+      RunTriadcal("export " + cal + " --format json-matrix -o " + Path("m.json"), Err()).status, 0);
+  EXPECT_FALSE(nlohmann::json::parse(ReadFile(Path("m.json"))).contains("gyro"));
+}
+
+// The gyro's matrices (json-matrix and yaml): g = S omega + b + G W is the
+// gyro's readings model in deg/s, and S_inverse its inverse.
+TEST_F(ExportTest, GyroMatrixFormIsTheGyroReadingsModel) {
+  Simulate(
+      "seed: 7\n"
+      "profile: {amplitude_deg: [360, 90], period_s: [30, 12], duration_s: 5, rate_hz: 50}\n" +
+      std::string(kGyroScenario));
+  const std::string truth = Path("sim/truth.json");
+  for (const std::string format : {"json-matrix", "yaml"}) {
+    const auto r = RunTriadcal(
+        "export " + truth + " --format " + format + " -o " + Path("matrix." + format), Err());
+    ASSERT_EQ(r.status, 0) << r.err;
+  }
+  const std::string yaml = ReadFile(Path("matrix.yaml"));
+  for (const char* key : {"gyro:", "S_inverse:", "b_dps:", "G_dps_per_g:"}) {
+    EXPECT_NE(yaml.find(key), std::string::npos) << key;
+  }
+  const nlohmann::json m = nlohmann::json::parse(ReadFile(Path("matrix.json-matrix")));
+  ASSERT_TRUE(m.contains("gyro"));
+  const nlohmann::json& gm = m["gyro"];
+  const Calibration cal = LoadCalibration(truth);
+  const ModelConfig cfg = MakeModelConfig(RunDescription(), cal.layout);
+  auto matrix = [&](const char* key) {
+    Eigen::Matrix3d a;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) a(r, c) = gm[key][r][c].get<double>();
+    }
+    return a;
+  };
+  const Eigen::Matrix3d S = matrix("S"), S_inverse = matrix("S_inverse"), G = matrix("G_dps_per_g");
+  const Eigen::Vector3d b(gm["b_dps"][0].get<double>(), gm["b_dps"][1].get<double>(),
+                          gm["b_dps"][2].get<double>());
+  EXPECT_LT((S * S_inverse - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_NEAR(b[2], 0.2, 1e-15);
+  EXPECT_NEAR(G(2, 2), 0.06, 1e-15);
+  for (const Eigen::Vector3d& w_dps :
+       {Eigen::Vector3d(30, -80, 5.2), Eigen::Vector3d(-100, 10, 200)}) {
+    const Eigen::Vector3d W(0.3, -0.8, 0.52);
+    const Eigen::Vector3d g_dps =
+        GyroReadings(cfg, cal.theta.data(), Eigen::Vector3d(w_dps * kDegToRad), W) / kDegToRad;
+    EXPECT_LT((S * w_dps + b + G * W - g_dps).cwiseAbs().maxCoeff(), 1e-12);
+    EXPECT_LT((S_inverse * (g_dps - b - G * W) - w_dps).cwiseAbs().maxCoeff(), 1e-12);
+  }
 }
 
 TEST_F(ExportTest, CMatchesApplyWithTheSensorStageEffects) {

@@ -1,6 +1,8 @@
 // `triadcal apply CALIBRATION.json RUN.yaml -o corrected.csv`: raw readings ->
 // calibrated specific force [g] in the triad frame, by the exact inverse of the
-// readings model (core/model/apply_calibration.h).
+// readings model (core/model/apply_calibration.h), and, when both the
+// calibration and the run have the gyro (SPEC section 10), gyro readings ->
+// angular rate [deg/s] in the triad frame.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -46,6 +48,21 @@ std::string NormWarning(const ApplyArgs& a, const std::vector<Eigen::Vector3d>& 
   return text;
 }
 
+// The warning line when only one of the calibration and the run has the gyro
+// (the accelerometer is corrected alone), "" otherwise.
+std::string GyroWarning(const ApplyArgs& a, const Calibration& cal, const LoadedRun& run) {
+  if (cal.layout.has_gyro() && !run.data.has_gyro()) {
+    return a.run_yaml + ": the calibration " + a.calibration_json +
+           " has the gyro (gyro.*), but the run has no gyro readings (gx gy gz, read with a "
+           "gyro block in run.yaml): accelerometer only";
+  }
+  if (!cal.layout.has_gyro() && run.data.has_gyro()) {
+    return a.run_yaml + ": gx gy gz not corrected: the calibration " + a.calibration_json +
+           " has no gyro parameters (gyro.*): accelerometer only";
+  }
+  return "";
+}
+
 int RunApply(const ApplyArgs& a) {
   const bool to_stdout = IsStdout(a.out_csv);
   if (!to_stdout) CheckOutputPath(a.out_csv);
@@ -55,8 +72,13 @@ int RunApply(const ApplyArgs& a) {
   CheckCalibrationForRun(cal, run.description);
   if (!to_stdout) CheckOverwrite(a.out_csv);
   const std::vector<Eigen::Vector3d> W = ApplyCalibration(cal, run.description, run.data);
-  const std::string warning = NormWarning(a, W);
-  if (!warning.empty()) std::fprintf(stderr, "triadcal: warning: %s\n", OneLine(warning).c_str());
+  const bool gyro = cal.layout.has_gyro() && run.data.has_gyro();
+  const std::vector<Eigen::Vector3d> omega_rad_s =
+      gyro ? ApplyGyroCalibration(cal, run.description, run.data, W)
+           : std::vector<Eigen::Vector3d>();
+  for (const std::string& warning : {GyroWarning(a, cal, run), NormWarning(a, W)}) {
+    if (!warning.empty()) std::fprintf(stderr, "triadcal: warning: %s\n", OneLine(warning).c_str());
+  }
   const bool angles = !(SourceOf(run.description, "lambda1").constant &&
                         SourceOf(run.description, "lambda2").constant);
   const bool labels = run.data.has_label();
@@ -69,13 +91,22 @@ int RunApply(const ApplyArgs& a) {
   out += "# W = specific force in the triad frame [g], an axis pointing up reads +1 g at rest:\n";
   out += "# the exact inverse of the readings model (paper eq. 1); t [s]";
   out += angles ? ", lambda1 lambda2 [deg] as recorded\n" : "\n";
+  if (gyro) {
+    out +=
+        "# omega = angular rate in the triad frame [deg/s] (Earth's rate included): the exact\n"
+        "# inverse of the gyro's readings model (SPEC section 10) with W of the same sample\n";
+  }
   out += "t,Wx,Wy,Wz";
+  if (gyro) out += ",omega_x,omega_y,omega_z";
   if (angles) out += ",lambda1,lambda2";
   if (labels) out += ",label";
   out += "\n";
   for (std::size_t k = 0; k < run.data.size(); ++k) {
     out += FormatDouble(run.data.t_s[k]);
     for (int i = 0; i < 3; ++i) out += "," + FormatDouble(W[k][i]);
+    if (gyro) {
+      for (int i = 0; i < 3; ++i) out += "," + FormatDouble(omega_rad_s[k][i] / kDegToRad);
+    }
     if (angles) {
       for (int i = 0; i < 2; ++i) out += "," + FormatDouble(run.data.lambda_rad[i][k] / kDegToRad);
     }
@@ -84,9 +115,9 @@ int RunApply(const ApplyArgs& a) {
   }
   WriteOutput(a.out_csv, out);
   if (to_stdout) return 0;  // stdout holds the CSV
-  std::printf("apply: %zu samples, %d parameters from %s (%s)\nwrote %s\n", run.data.size(),
+  std::printf("apply: %zu samples, %d parameters from %s (%s)%s\nwrote %s\n", run.data.size(),
               cal.layout.size(), a.calibration_json.c_str(), cal.section.c_str(),
-              a.out_csv.c_str());
+              gyro ? "; accelerometer and gyro" : "", a.out_csv.c_str());
   return 0;
 }
 
@@ -96,14 +127,17 @@ Command AddApplyCommand(CLI::App& app) {
   auto a = std::make_shared<ApplyArgs>();
   Command c;
   c.app = app.add_subcommand(
-      "apply", "Raw readings -> calibrated specific force [g] with the parameters of an OUT file");
+      "apply",
+      "Raw readings -> calibrated specific force [g] (and gyro readings -> angular rate "
+      "[deg/s]) with the parameters of an OUT file");
   c.app->add_option("calibration", a->calibration_json,
                     "OUT of fit, static, diagnose, filter (its rts section) or compare (batch), or a truth.json")
       ->required();
   c.app->add_option("run", a->run_yaml, "run description (run.yaml) of the readings")->required();
   c.app
       ->add_option("-o,--output", a->out_csv,
-                   "output CSV: t, Wx, Wy, Wz [g] (+ angles); - for stdout")
+                   "output CSV: t, Wx, Wy, Wz [g] (+ omega_x, omega_y, omega_z [deg/s] with "
+                   "the gyro, + angles); - for stdout")
       ->required();
   c.run = [a] { return RunApply(*a); };
   return c;

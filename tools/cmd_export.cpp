@@ -1,6 +1,6 @@
 // `triadcal export CAL.json --format c|yaml|json-matrix -o OUT`: a calibration
-// for firmware (C99 code applying it) or other tools (the plain matrix form),
-// see tools/report/calibration_export.h.
+// for firmware (C99 code applying it, the gyro too when it has one) or other
+// tools (the plain matrix form), see tools/report/calibration_export.h.
 #include <yaml-cpp/yaml.h>
 
 #include <cctype>
@@ -118,7 +118,9 @@ int RunExport(const ExportArgs& a) {
                                  out.stem().string());
     WriteFileAtomically(h_path.string(), code.header);
     WriteFileAtomically(c_path.string(), code.source);
-    std::printf("export: %s_apply() in %s and %s\n", name.c_str(), h_path.c_str(), c_path.c_str());
+    std::printf("export: %s_apply()%s in %s and %s\n", name.c_str(),
+                cal.layout.has_gyro() ? (" and " + name + "_apply_gyro()").c_str() : "",
+                h_path.c_str(), c_path.c_str());
     return 0;
   }
   if (to_stdout) return 0;  // stdout holds the export

@@ -109,6 +109,11 @@ void RefuseUnknownKeys(const ParametersFile& file) {
     }
   }
   if (key.empty()) return;
+  if (key.rfind("gyro.", 0) == 0) {
+    throw InputError(file.At() + Excerpt(key) +
+                     ": unknown gyro parameter (the gyro's are gyro.Kx ... gyro.Gzz, SPEC "
+                     "section 10 and docs/file-formats.md)");
+  }
   std::string effects;
   for (const EffectSpec& e : EffectCatalogue()) effects += (effects.empty() ? "" : ", ") + e.name;
   const std::size_t dot = key.find('.');
@@ -194,6 +199,24 @@ void CheckCalibrationPlausible(const ParametersFile& file, const Calibration& ca
                   Num(C::kMaxNonlinearity_per_g) + " /g (a nonlinearity of 1000 % at 1 g)");
     }
   }
+  if (!layout.has_gyro()) return;
+  // The gyro (SPEC section 10): a scale factor may be negative (an axis
+  // reversed against the accelerometer's, as run.yaml's gyro.scale) but not 0;
+  // the angles within the accelerometer's bound.
+  const int g = layout.gyro_offset();
+  for (int i = 0; i < 3; ++i) {
+    if (value(g + kGKx + i) == 0.0) {
+      fail(g + kGKx + i, "0: a gyro scale factor must not be 0 (readings per deg/s; nominal 1)");
+    }
+  }
+  for (int i = g + kGAlphaX; i <= g + kGGammaZ; ++i) {
+    const double a = value(i);
+    if (std::abs(a) > C::kMaxAngle_arcmin) {
+      fail(i, Num(a) + " " + layout.info(i).unit + " is beyond the bound " +
+                  Num(C::kMaxAngle_arcmin) +
+                  " arcmin (30 deg: no triad's axes are that far off; arcsec given as arcmin?)");
+    }
+  }
 }
 
 Calibration CalibrationFrom(const ParametersFile& file, const std::string& path) {
@@ -213,13 +236,26 @@ Calibration CalibrationFrom(const ParametersFile& file, const std::string& path)
       }
     }
   }
-  cal.layout = ParameterLayout(effects);
+  // The gyro block when any gyro parameter is given (then all 21 are needed).
+  const std::string gyro_given = [&] {
+    for (const ParameterInfo& info : GyroParameterInfo()) {
+      const auto it = file.entries.find(info.name);
+      if (it != file.entries.end()) return it->second.key;
+    }
+    return std::string();
+  }();
+  cal.layout = ParameterLayout(effects, /*gyro=*/!gyro_given.empty());
   cal.theta = Eigen::VectorXd::Zero(cal.layout.size());
   std::string unit_from;  // the entry that set cal.readings_unit
   for (int i = 0; i < cal.layout.size(); ++i) {
     const ParameterInfo& info = cal.layout.info(i);
     const auto it = file.entries.find(info.name);
     if (it == file.entries.end()) {
+      if (cal.layout.is_gyro(i)) {
+        throw InputError(file.At() + info.name + ": missing (" + gyro_given +
+                         " is given: a calibration with the gyro needs its 21 parameters "
+                         "gyro.Kx..gyro.Gzz, SPEC section 10)");
+      }
       if (i <= kKzz || info.effect) {
         throw InputError(file.At() + info.name +
                          ": missing (a calibration needs the 21 sensor parameters Kx..Kzz of "
@@ -265,6 +301,24 @@ void CheckCalibrationForRun(const Calibration& cal, const RunDescription& run) {
                        ": triad.scale_mV_per_g; bound: a factor " +
                        Num(CalibrationBounds::kMaxScaleRatio) +
                        "): V/g given as mV/g, or the calibration of another sensor?");
+    }
+  }
+  if (!cal.layout.has_gyro() || !run.gyro) return;
+  // The gyro's scale against the run's nominal gyro.scale (both in readings
+  // per deg/s once the run's columns are converted): a factor 57.3 is a
+  // calibration in rad/s applied to deg/s or the reverse.
+  for (int i = 0; i < 3; ++i) {
+    const int index = cal.layout.gyro_offset() + kGKx + i;
+    const double k = std::abs(cal.theta[index]), nominal = std::abs(run.gyro->scale[i]);
+    const double ratio = std::max(k / nominal, nominal / k);
+    if (ratio > CalibrationBounds::kMaxScaleRatio) {
+      throw InputError(at + cal.layout.info(index).name + ": " + Num(cal.theta[index]) + " is " +
+                       Num(ratio) + " times " + (k < nominal ? "below" : "above") +
+                       " the run's nominal gyro scale " + Num(run.gyro->scale[i]) + " (" +
+                       run.yaml_path + ": gyro.scale; bound: a factor " +
+                       Num(CalibrationBounds::kMaxScaleRatio) +
+                       "): a gyro calibrated in rad/s applied to deg/s, or the calibration of "
+                       "another sensor?");
     }
   }
 }

@@ -49,12 +49,13 @@ double EntryValue(const json& entry, const std::string& where, const std::string
   return x;
 }
 
-// Every parameter the files may name: the base ones and every effect's.
+// Every parameter the files may name: the base ones, every effect's and the
+// gyro's (SPEC section 10).
 const ParameterLayout& EveryParameter() {
   static const ParameterLayout every = [] {
     std::vector<Effect> all;
     for (const EffectSpec& e : EffectCatalogue()) all.push_back(e.id);
-    return ParameterLayout(all);
+    return ParameterLayout(all, /*gyro=*/true);
   }();
   return every;
 }

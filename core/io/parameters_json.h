@@ -8,7 +8,9 @@
 // (checked when given), or a plain number in that unit. Effect parameters are
 // keyed "effect.name" or, as truth.json writes them, "effect.name_unit"
 // ("angle_latency.tau_ms"); both are read under the layout name
-// ("angle_latency.tau"). Names of no catalogue parameter are ignored.
+// ("angle_latency.tau"). The gyro's parameters (SPEC section 10) are keyed by
+// their names, "gyro.Kx" ... "gyro.Gzz". Names of no parameter are listed in
+// unknown_keys.
 #pragma once
 
 #include <map>

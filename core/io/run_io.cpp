@@ -324,6 +324,20 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
     for (int i = 0; i < 3; ++i) {
       data.gyro_rad_s[i] = Scaled(g[run.axis_source[i]].values, run.axis_sign[i] * kDegToRad);
     }
+    // Readings held at the gyro's range: never fitted through (gyro_term.h
+    // leaves their intervals out).
+    std::vector<char> clipped(data.t_s.size(), 0);
+    std::size_t n_clipped = 0;
+    for (const ChannelValues& c : g) {
+      if (auto line = SaturationWarning(c, "deg/s")) Warn(warnings, *line);
+      n_clipped += MarkClipped(c, &clipped);
+    }
+    if (n_clipped > 0) {
+      data.gyro_clipped = std::move(clipped);
+      Warn(warnings, std::to_string(n_clipped) +
+                         " gyro samples at the range's limit: the gyro fit leaves out the "
+                         "intervals that hold them");
+    }
   }
   data.temp_C = std::move(temp.values);
   data.label = std::move(labels);

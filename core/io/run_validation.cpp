@@ -140,7 +140,7 @@ std::optional<std::string> GapWarning(const std::vector<double>& t_s) {
          " s, after t = " + Num(t_s[largest_at]) + " s";
 }
 
-std::optional<std::string> SaturationWarning(const ChannelValues& c) {
+std::optional<std::string> SaturationWarning(const ChannelValues& c, const std::string& unit) {
   const std::vector<double>& v = c.values;
   if (v.empty()) return std::nullopt;
   const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
@@ -152,11 +152,39 @@ std::optional<std::string> SaturationWarning(const ChannelValues& c) {
     if (held == 0 || static_cast<double>(held) < min_threshold) continue;
     if (!out.empty()) out += "; ";
     out += std::to_string(held) + " samples (" + Num(100.0 * held / v.size()) + "%) at its " +
-           word + " " + Num(extreme) + " mV in runs of 3 or more";
+           word + " " + Num(extreme) + " " + unit + " in runs of 3 or more";
     if (*hi == *lo) break;
   }
   if (out.empty()) return std::nullopt;
   return c.label + " may be saturated or clipped: " + out;
+}
+
+std::size_t MarkClipped(const ChannelValues& c, std::vector<char>* clipped) {
+  const std::vector<double>& v = c.values;
+  if (v.empty()) return 0;
+  const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+  if (*hi == *lo) return 0;
+  const double min_threshold = 0.001 * static_cast<double>(v.size());
+  std::size_t marked = 0;
+  for (const double extreme : {*hi, *lo}) {
+    const std::size_t held = HeldInRuns(v, extreme);
+    if (held == 0 || static_cast<double>(held) < min_threshold) continue;
+    std::size_t run = 0;
+    for (std::size_t k = 0; k <= v.size(); ++k) {
+      if (k < v.size() && v[k] == extreme) {
+        ++run;
+        continue;
+      }
+      if (run >= 3) {
+        for (std::size_t j = k - run; j < k; ++j) {
+          if (!(*clipped)[j]) ++marked;
+          (*clipped)[j] = 1;
+        }
+      }
+      run = 0;
+    }
+  }
+  return marked;
 }
 
 void UnwrapDegrees(std::vector<double>* deg) {

@@ -42,7 +42,12 @@ std::vector<std::size_t> FirstOfEqualTimes(const std::vector<double>& t_s);
 // Warnings (empty when there is nothing to say).
 std::optional<std::string> DuplicateWarning(std::size_t n_dropped);
 std::optional<std::string> GapWarning(const std::vector<double>& t_s);
-std::optional<std::string> SaturationWarning(const ChannelValues& c);
+std::optional<std::string> SaturationWarning(const ChannelValues& c,
+                                             const std::string& unit = "mV");
+// The samples of c held at its maximum or minimum in runs of 3 or more, where
+// SaturationWarning would name that extreme (a clipped reading); sets
+// (*clipped)[k] for each. Returns how many it set.
+std::size_t MarkClipped(const ChannelValues& c, std::vector<char>* clipped);
 
 // Removes the wrap-arounds of a [0, 360) or (-180, 180] recording: every jump
 // of more than 180 deg between consecutive samples is taken as a wrap.

@@ -13,6 +13,15 @@
 // run they are applied to (t of its samples, its first temp_C), as in the
 // estimators. Geometry and angle effects do not act on W at the sensing point
 // and are ignored (size_effect: W is the one at the x accelerometer's point).
+//
+// The gyro (SPEC section 10), when the calibration has it: its readings model
+// (gyro_model.h GyroReadings) inverted exactly, gyro_model.h
+// GyroRateFromReadings,
+//
+//   w = Mg^-1 diag(K)^-1 (G - W0 - G_ij W)
+//
+// with W the corrected specific force of the same sample (above): the angular
+// rate the gyro senses, in the triad frame (Earth's rate included).
 #pragma once
 
 #include <string>
@@ -55,5 +64,14 @@ struct Calibration {
 // the calibration has a temperature model and the run no temperature.
 std::vector<Eigen::Vector3d> ApplyCalibration(const Calibration& cal, const RunDescription& run,
                                               const RunData& data);
+
+// The angular rate [rad/s] in the triad frame of every sample of the run from
+// its gyro readings (RunData::gyro_rad_s) and W_g, the specific force [g] that
+// ApplyCalibration gives for the same samples. Throws InputError when the
+// calibration has no gyro block (cal.layout.has_gyro()), the run no gyro
+// readings, or W_g another number of samples.
+std::vector<Eigen::Vector3d> ApplyGyroCalibration(const Calibration& cal, const RunDescription& run,
+                                                  const RunData& data,
+                                                  const std::vector<Eigen::Vector3d>& W_g);
 
 }  // namespace triadcal

@@ -2,7 +2,9 @@
 // convention forward = readings model (paper eq. 1), apply = its exact
 // inverse, tested as a round trip W -> readings -> W in memory and through
 // the files (the OUT formats of fit, filter, static and truth.json); bad
-// calibration files with their one-line errors.
+// calibration files with their one-line errors; the gyro (SPEC section 10) as
+// a round trip rate -> readings -> rate with W from the accelerometer's
+// inverse, and a calibration file read with and without its gyro keys.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -18,8 +20,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/io/calibration_io.h"
 #include "core/model/bench_model.h"
 #include "core/model/errors.h"
+#include "core/model/gyro_model.h"
+#include "core/model/mounting.h"
 #include "tests/temp_dir_test.h"
 #include "core/io/file_util.h"
 #include "core/model/run_data.h"
@@ -130,6 +135,172 @@ TEST(ApplyRoundTrip, InverseOfTheReadingsModelInMemory) {
   const std::vector<Eigen::Vector3d> W = ApplyCalibration(cal, run, tr.data);
   ASSERT_EQ(W.size(), tr.W.size());
   EXPECT_LT(MaxError(W, tr.W), 1e-12);
+}
+
+// The gyro block of a calibration in file units: every parameter non-zero, a
+// reversed z gyro.
+NamedValues GyroValues() {
+  return {{"gyro.Kx", 1.004},     {"gyro.Ky", 0.997},     {"gyro.Kz", -1.002},
+          {"gyro.W0x", 0.31},     {"gyro.W0y", -0.52},    {"gyro.W0z", 0.2},
+          {"gyro.alpha_x", 12},   {"gyro.alpha_y", -8},   {"gyro.beta_x", 5},
+          {"gyro.beta_z", 15},    {"gyro.gamma_y", -20},  {"gyro.gamma_z", 7},
+          {"gyro.Gxx", 0.02},     {"gyro.Gxy", 0.05},     {"gyro.Gxz", -0.03},
+          {"gyro.Gyx", 0.01},     {"gyro.Gyy", -0.04},    {"gyro.Gyz", 0.02},
+          {"gyro.Gzx", -0.01},    {"gyro.Gzy", 0.03},     {"gyro.Gzz", 0.06}};
+}
+
+Calibration GyroCalibration() {
+  Calibration cal;
+  cal.layout = CalibrationLayout().WithGyro(true);
+  cal.theta = Eigen::VectorXd::Zero(cal.layout.size());
+  NamedValues v = CalibrationValues();
+  for (const auto& [name, value] : GyroValues()) v[name] = value;
+  SetFromFileUnits(cal.layout, v, &cal.theta);
+  return cal;
+}
+
+// Gyro readings of known rates (up to 300 deg/s) at the specific forces of
+// tr, added to tr.data; the rates [rad/s].
+std::vector<Eigen::Vector3d> AddGyroReadings(const Calibration& cal, Truth* tr) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-300.0 * kDegToRad, 300.0 * kDegToRad);
+  ModelConfig cfg;
+  cfg.layout = cal.layout;
+  std::vector<Eigen::Vector3d> rates;
+  for (std::size_t k = 0; k < tr->W.size(); ++k) {
+    const Eigen::Vector3d w(u(rng), u(rng), u(rng));
+    const Eigen::Vector3d g = GyroReadings(cfg, cal.theta.data(), w, tr->W[k]);
+    rates.push_back(w);
+    for (int i = 0; i < 3; ++i) tr->data.gyro_rad_s[i].push_back(g[i]);
+  }
+  return rates;
+}
+
+TEST(ApplyRoundTrip, GyroInverseWithTheCorrectedSpecificForce) {
+  const Calibration cal = GyroCalibration();
+  ASSERT_TRUE(cal.layout.has_gyro());
+  Truth tr = MakeTruth(cal.layout, cal.theta, 2000);
+  const std::vector<Eigen::Vector3d> rates = AddGyroReadings(cal, &tr);
+  RunDescription run;
+  const std::vector<Eigen::Vector3d> W = ApplyCalibration(cal, run, tr.data);
+  EXPECT_LT(MaxError(W, tr.W), 1e-12);  // the gyro block leaves the accelerometer alone
+  const std::vector<Eigen::Vector3d> omega = ApplyGyroCalibration(cal, run, tr.data, W);
+  ASSERT_EQ(omega.size(), rates.size());
+  EXPECT_LT(MaxError(omega, rates), 1e-12);  // rad/s
+  // W matters: with W = 0 the g-sensitivity (0.06 (deg/s)/g) is left in.
+  const std::vector<Eigen::Vector3d> no_W = ApplyGyroCalibration(
+      cal, run, tr.data, std::vector<Eigen::Vector3d>(W.size(), Eigen::Vector3d::Zero()));
+  EXPECT_GT(MaxError(no_W, rates), 1e-2 * kDegToRad);
+}
+
+// A calibration in the IMU's own axes (a joint fit's "axes": "imu") with the
+// gyro, applied to a run whose mounting turns the IMU: the rates come out in
+// the platform's axes, as the specific force does.
+TEST(ApplyRoundTrip, GyroInTheImuAxesThroughTheMounting) {
+  const Calibration imu = GyroCalibration();
+  RunDescription run;
+  const int source[3] = {1, 2, 0};
+  const double sign[3] = {-1.0, 1.0, -1.0};
+  Eigen::Matrix3d P = Eigen::Matrix3d::Zero();
+  for (int i = 0; i < 3; ++i) {
+    run.axis_source[i] = source[i];
+    run.axis_sign[i] = sign[i];
+    P(i, source[i]) = sign[i];
+  }
+  // The IMU's readings of known platform W and rates, then mounted as
+  // run_io does: platform reading i = sign_i * IMU reading source_i.
+  Truth tr = MakeTruth(imu.layout, imu.theta, 300);
+  std::vector<Eigen::Vector3d> W_p, w_p;
+  ModelConfig cfg;
+  cfg.layout = imu.layout;
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> u(-5.0, 5.0);
+  RunData mounted;
+  for (std::size_t k = 0; k < tr.W.size(); ++k) {
+    const Eigen::Vector3d Wp = tr.W[k], wp(u(rng), u(rng), u(rng));
+    const Eigen::Vector3d z =
+        P * Readings_mV(cfg, imu.theta.data(), Eigen::Vector3d(P.transpose() * Wp),
+                        SampleContext{tr.data.t_s[k], 0.0});
+    const Eigen::Vector3d g =
+        P * GyroReadings(cfg, imu.theta.data(), Eigen::Vector3d(P.transpose() * wp),
+                         Eigen::Vector3d(P.transpose() * Wp));
+    mounted.t_s.push_back(tr.data.t_s[k]);
+    for (int i = 0; i < 3; ++i) {
+      mounted.w_mV[i].push_back(z[i]);
+      mounted.gyro_rad_s[i].push_back(g[i]);
+    }
+    W_p.push_back(Wp);
+    w_p.push_back(wp);
+  }
+  Calibration cal = imu;
+  cal.imu_axes = true;
+  const std::vector<Eigen::Vector3d> W = ApplyCalibration(cal, run, mounted);
+  EXPECT_LT(MaxError(W, W_p), 1e-12);
+  EXPECT_LT(MaxError(ApplyGyroCalibration(cal, run, mounted, W), w_p), 1e-12);
+  // Without the mounting map the rates would be wrong.
+  cal.imu_axes = false;
+  EXPECT_GT(MaxError(ApplyGyroCalibration(cal, run, mounted, W), w_p), 1e-3);
+}
+
+TEST(ApplyRoundTrip, GyroNeedsTheGyroInBoth) {
+  Calibration cal = GyroCalibration();
+  cal.path = "cal.json";
+  Truth tr = MakeTruth(cal.layout, cal.theta, 5);
+  RunDescription run;
+  run.yaml_path = "run.yaml";
+  try {
+    ApplyGyroCalibration(cal, run, tr.data, tr.W);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "run.yaml: no gyro readings (gx gy gz, read with a gyro block)");
+  }
+  AddGyroReadings(cal, &tr);
+  Calibration plain;
+  plain.path = "plain.json";
+  plain.layout = CalibrationLayout();
+  plain.theta = CalibrationTheta();
+  try {
+    ApplyGyroCalibration(plain, run, tr.data, tr.W);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(),
+                 "plain.json: the calibration has no gyro parameters (gyro.Kx..gyro.Gzz)");
+  }
+}
+
+// The OUT of a fit with the gyro: the layout has the gyro block and its values
+// (SI inside); without the gyro keys, the layout is the one it always was.
+TEST(CalibrationFile, ReadWithAndWithoutTheGyro) {
+  const Calibration expected = GyroCalibration();
+  nlohmann::json p;
+  for (int i = 0; i < expected.layout.size(); ++i) {
+    const ParameterInfo& info = expected.layout.info(i);
+    const double v = expected.theta[i] / info.si_per_unit;
+    p[info.name] = {{"value", v}, {"sigma", 0.1}, {"unit", info.unit}};
+  }
+  const nlohmann::json root = {{"command", "fit"}, {"parameters", p}};
+  const Calibration with_gyro = CalibrationFromJson(root, "fit.json");
+  ASSERT_TRUE(with_gyro.layout.has_gyro());
+  EXPECT_EQ(with_gyro.layout.size(), expected.layout.size());
+  const int g = with_gyro.layout.gyro_offset();
+  EXPECT_EQ(with_gyro.layout.info(g).name, "gyro.Kx");
+  for (int i = 0; i < expected.layout.size(); ++i) {  // (effects in the catalogue's order)
+    const std::string& name = expected.layout.info(i).name;
+    const int j = with_gyro.layout.IndexOf(name);
+    ASSERT_GE(j, 0) << name;
+    EXPECT_NEAR(with_gyro.theta[j], expected.theta[i], 1e-15 * std::abs(expected.theta[i])) << name;
+  }
+  EXPECT_DOUBLE_EQ(with_gyro.theta[g + kGW0x], 0.31 * kDegToRad);
+  EXPECT_DOUBLE_EQ(with_gyro.theta[g + kGBetaZ], 15 * kArcminToRad);
+  EXPECT_DOUBLE_EQ(with_gyro.theta[g + kGGzz], 0.06 * kDegToRad);
+  EXPECT_EQ(with_gyro.readings_unit, "mV");
+
+  nlohmann::json plain = root;
+  for (const auto& [name, value] : GyroValues()) plain["parameters"].erase(name);
+  const Calibration without = CalibrationFromJson(plain, "fit.json");
+  EXPECT_FALSE(without.layout.has_gyro());
+  EXPECT_EQ(without.layout.size(), CalibrationLayout().size());
+  EXPECT_EQ(without.theta, with_gyro.theta.head(without.layout.size()));
 }
 
 std::string ParametersJsonText(const std::string& wrap) {

@@ -84,12 +84,28 @@ Eigen::MatrixXd MountingMap(const RunDescription& run, const ParameterLayout& la
     const int o = layout.offset(e);
     T.block<3, 3>(o, o) = P;
   }
+  if (layout.has_gyro()) {
+    // The gyro shares the IMU's axes (SPEC section 10): its readings and its
+    // input rate turn as the accelerometer's, so K, W0 and Mg map as theirs,
+    // and the g-sensitivity, linear in both, as G_p = P G P^T.
+    const int g = layout.gyro_offset();
+    T.block<3, 3>(g + kGKx, g + kGKx) = Pabs;
+    T.block<3, 3>(g + kGW0x, g + kGW0x) = P;
+    T.block<6, 6>(g + kGAlphaX, g + kGAlphaX) = T.block<6, 6>(kAlphaX, kAlphaX);
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) {
+        const M3 Gp = P.col(r) * P.col(c).transpose();
+        for (int i = 0; i < 9; ++i) T(g + kGGxx + i, g + kGGxx + 3 * r + c) = Gp(i / 3, i % 3);
+      }
+    }
+  }
   return T;
 }
 
 bool IsTriadParameter(const ParameterLayout& layout, int i) {
   if (i < kDpsi) return true;
   if (i < kNumBaseParams) return false;
+  if (layout.is_gyro(i)) return true;
   return layout.info(i).effect && GetEffectSpec(*layout.info(i).effect).stage == EffectStage::kSensor;
 }
 

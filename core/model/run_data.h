@@ -20,6 +20,9 @@ struct RunData {
   // gyro readings gx, gy, gz converted to rad/s (platform frame, like w_mV),
   // empty when the run has no gyro triad (SPEC section 10)
   std::vector<double> gyro_rad_s[3];
+  // per sample: 1 where a gyro channel is held at its range's limit (clipped),
+  // empty when none is
+  std::vector<char> gyro_clipped;
   std::vector<double> temp_C;           // empty when not in the file
   std::vector<std::string> label;       // per-sample position label (columns.label), or empty
 

@@ -102,3 +102,84 @@ def test_bad_input_raises_the_command_line_message(tmp_path):
     with pytest.raises(triadcal.InputError) as e:
         triadcal.fit({"bench": {}})
     assert str(e.value) == "run: data: missing: the data file"
+
+
+# A run with a gyro triad (SPEC section 10): every gyro parameter non-zero.
+GYRO_SCENARIO = """\
+seed: 5
+profile: {amplitude_deg: [360, 90], period_s: [30, 12], duration_s: 40, rate_hz: 50}
+truth: {Kx: 171.5, Ky: 175.8, Kz: 174.8, W0x: 1504.2, W0y: 1504.2, W0z: 1504.3,
+        dpsi: -33, dlambda2: -33, dx2: -7,
+        gyro.Kx: 1.004, gyro.Ky: 0.997, gyro.Kz: 1.002, gyro.W0x: 0.31, gyro.W0y: -0.52,
+        gyro.W0z: 0.2, gyro.beta_z: 15, gyro.gamma_y: -20, gyro.Gxy: 0.05, gyro.Gzz: 0.06}
+noise: {accel_mV: 2.0, angle_arcsec: 15, gyro_dps: 0.05}
+run:
+  bench: {lever_arm_mm: [138, 20, 20], angle_noise_arcsec: 15}
+  triad: {scale_mV_per_g: [174, 174, 174], bias_mV: [1500, 1500, 1500], noise_mV: 2.0}
+  gyro: {scale: [1, 1, 1], bias_dps: [0, 0, 0], noise_dps: 0.05}
+  constraints:
+    - {expr: "dpsi - dlambda2", value_arcmin: 0, sigma_arcsec: 30}
+"""
+
+GYRO_NAMES = ["gyro." + n for n in [
+    "Kx", "Ky", "Kz", "W0x", "W0y", "W0z", "alpha_x", "alpha_y", "beta_x", "beta_z",
+    "gamma_y", "gamma_z", "Gxx", "Gxy", "Gxz", "Gyx", "Gyy", "Gyz", "Gzx", "Gzy", "Gzz"]]
+
+
+@pytest.fixture(scope="module")
+def gyro_example(tmp_path_factory):
+    """A simulated run with a gyro, fitted by the command line."""
+    out = tmp_path_factory.mktemp("gyro")
+    (out / "scenario.yaml").write_text(GYRO_SCENARIO)
+    run_cli("simulate", str(out / "scenario.yaml"), "-o", str(out / "sim"))
+    run_cli("fit", str(out / "sim" / "run.yaml"), "-o", str(out / "fit.json"))
+    return out
+
+
+def test_fit_carries_the_gyro(gyro_example):
+    cli = json.load(open(gyro_example / "fit.json"))
+    py = triadcal.fit(str(gyro_example / "sim" / "run.yaml"))
+    assert set(py["parameters"]) == set(cli["parameters"])
+    assert set(GYRO_NAMES) <= set(py["parameters"])
+    for name in GYRO_NAMES:
+        p, q = cli["parameters"][name], py["parameters"][name]
+        assert abs(q["value"] - p["value"]) <= 1e-6 * p["sigma"], name
+        assert q["unit"] == p["unit"]
+    assert py["parameters"]["gyro.W0x"]["unit"] == "deg/s"
+
+
+def test_apply_gyro_matches_the_command_line(gyro_example, tmp_path):
+    run_yaml = str(gyro_example / "sim" / "run.yaml")
+    fit = str(gyro_example / "fit.json")
+    run_cli("apply", fit, run_yaml, "-o", str(tmp_path / "w.csv"))
+    lines = [line for line in open(tmp_path / "w.csv") if not line.startswith("#")]
+    header = lines[0].strip().split(",")
+    assert header[:7] == ["t", "Wx", "Wy", "Wz", "omega_x", "omega_y", "omega_z"]
+    cli = np.loadtxt(lines[1:], delimiter=",", usecols=(1, 2, 3, 4, 5, 6))
+    run = triadcal.load_run(run_yaml)
+    assert run["gyro_dps"].shape == run["readings_mV"].shape
+    sim = triadcal.simulate(str(gyro_example / "scenario.yaml"))
+    np.testing.assert_allclose(sim["gyro_dps"], run["gyro_dps"], rtol=1e-15, atol=0)
+    W = triadcal.apply(fit, run["readings_mV"])
+    omega = triadcal.apply_gyro(fit, run["gyro_dps"], W)
+    assert np.abs(W - cli[:, :3]).max() <= 1e-12
+    assert np.abs(omega - cli[:, 3:]).max() <= 1e-9
+    np.testing.assert_array_equal(
+        omega, triadcal.apply_gyro(json.load(open(fit)), run["gyro_dps"], W))
+    # The correction matters: the raw readings differ by the biases (0.3 deg/s).
+    assert np.abs(omega - run["gyro_dps"]).max() > 0.2
+
+
+def test_apply_gyro_bad_input(gyro_example, example):
+    fit = str(gyro_example / "fit.json")
+    g = np.zeros((4, 3))
+    with pytest.raises(triadcal.InputError) as e:
+        triadcal.apply_gyro(str(example / "fit.json"), g, g)
+    assert str(e.value) == (str(example / "fit.json") +
+                            ": the calibration has no gyro parameters (gyro.Kx..gyro.Gzz)")
+    with pytest.raises(triadcal.InputError) as e:
+        triadcal.apply_gyro(fit, np.zeros((4, 2)), g)
+    assert str(e.value) == "gyro_dps: expected an array of shape (N, 3)"
+    with pytest.raises(triadcal.InputError) as e:
+        triadcal.apply_gyro(fit, g, np.zeros((3, 3)))
+    assert str(e.value) == "W_g: expected the 4 samples of gyro_dps, got 3"

@@ -190,6 +190,19 @@ NoiseEstimate CheckNoise(const RunReduction& red, const Eigen::Vector3d& declare
 
 }  // namespace
 
+double HoldPriority(const ParameterLayout& layout, int index) {
+  if (layout.is_gyro(index)) {
+    // As the accelerometer's: a common rotation of both triads about a bench
+    // axis is resolved by the bench zero (held), the sensors' angles relative to it.
+    const int j = index - layout.gyro_offset();
+    if (j >= kGW0x && j <= kGW0z) return 5.0;
+    if (j <= kGKz) return 4.0;
+    if (j <= kGGammaZ) return 3.0;
+    return 2.0;  // g-sensitivity
+  }
+  return HoldPriority(index);
+}
+
 double HoldPriority(int index) {
   if (index >= kW0x && index <= kW0z) return 5.0;  // zero offsets
   if (index <= kKz) return 4.0;                     // scale factors
@@ -310,7 +323,7 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
     for (const Direction& dir : nulls) d.unsupported.push_back(dir.named);
     Eigen::VectorXd min_info = Eigen::VectorXd::Constant(n, o.min_information);
     Eigen::VectorXd priority(n);
-    for (int i = 0; i < n; ++i) priority[i] = HoldPriority(i);
+    for (int i = 0; i < n; ++i) priority[i] = HoldPriority(layout, i);
     for (int i : user_free) min_info[i] = 0.0;  // kept first whatever their information
     for (int i : user_hold) min_info[i] = std::numeric_limits<double>::infinity();
     Eigen::VectorXd left;
@@ -508,9 +521,17 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
     res.gyro.noise_declared_rad_s = run.gyro ? run.gyro->noise_rad_s : p.gyro_noise_rad_s;
     res.gyro.degrees_of_freedom = g.degrees_of_freedom;
     res.gyro.neg_log_likelihood = g.neg_log_l;
+    const GyroPass& gp = pt.gyro_passes[0];
     Eigen::Vector3d ss = Eigen::Vector3d::Zero();
-    for (const Eigen::Vector3d& r : pt.gyro_passes[0].r) ss += r.cwiseAbs2();
-    res.gyro.residual_rms_rad = (ss / std::max<std::size_t>(1, pt.gyro_passes[0].r.size())).cwiseSqrt();
+    std::size_t used = 0;
+    for (std::size_t k = 0; k < gp.r.size(); ++k) {
+      if (!gp.valid[k]) continue;
+      ss += gp.r[k].cwiseAbs2();
+      ++used;
+    }
+    res.gyro.residual_rms_rad = (ss / std::max<std::size_t>(1, used)).cwiseSqrt();
+    res.gyro.intervals = static_cast<int>(gp.r.size());
+    res.gyro.intervals_clipped = static_cast<int>(gp.r.size() - used);
     res.gyro.whitened_rms = std::sqrt(2.0 * g.cost / std::max(1, g.degrees_of_freedom));
   }
   res.estimate.theta = pt.phi;

@@ -132,6 +132,9 @@ constexpr double kMinSeparableShare = 1.0 - 0.99 * 0.99;
 // a bench tilt): zero offsets 5, scale factors 4, misalignments and lever arm
 // 3, nonlinearity and cross-coupling 2, bench zeros and effects 1.
 double HoldPriority(int index);
+// The same for any parameter of the layout (the gyro block's like the
+// accelerometer's: offsets 5, scales 4, angles 3, g-sensitivity 2).
+double HoldPriority(const ParameterLayout& layout, int index);
 
 struct BatchOptions {
   double epoch_s = kDefaultEpoch_s;
@@ -270,6 +273,8 @@ struct BatchResult {
     double whitened_rms = 0.0;
     int degrees_of_freedom = 0;
     double neg_log_likelihood = 0.0;
+    int intervals = 0;          // of kGyroEpoch_s
+    int intervals_clipped = 0;  // left out: a gyro sample at the range's limit
   } gyro;
 };
 

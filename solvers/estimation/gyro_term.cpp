@@ -76,15 +76,36 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
   pass.theta = theta;
   pass.with_jacobian = with_jacobian;
   pass.angle_var = p.sigma_angle * p.sigma_angle;
+  for (int i = 0; i < 3; ++i) {
+    pass.K[i] = g[kGKx + i];
+    pass.K_ref[i] = p.prior.mean[go + kGKx + i];
+  }
+  if (with_jacobian) pass.JK_info.resize(E - 1);
+  // The bench's angle rates for the information's K columns, by central
+  // differences over about +-0.05 s.
+  const double dt_mean = (d.t_s.back() - d.t_s.front()) / std::max<std::size_t>(1, d.size() - 1);
+  const std::size_t half = std::max<std::size_t>(1, static_cast<std::size_t>(0.05 / dt_mean));
+  auto angle_rate = [&](int axis, std::size_t k) {
+    const std::size_t a = k >= half ? k - half : 0, b = std::min(d.size() - 1, k + half);
+    return (d.lambda_rad[axis][b] - d.lambda_rad[axis][a]) / (d.t_s[b] - d.t_s[a]);
+  };
+  const Mat3d Mg = GyroMisalignmentMatrix(g);
   pass.r.resize(E - 1);
+  pass.valid.assign(E - 1, 1);
   pass.weight.resize(E - 1);
   pass.cross.resize(E - 1);
   if (with_jacobian) pass.J.resize(E - 1);
 
   ParallelFor(E - 1, threads, [&](std::size_t e) {
     const std::size_t k0 = epochs[e], k1 = epochs[e + 1];
+    if (!d.gyro_clipped.empty()) {
+      for (std::size_t k = k0; k <= k1; ++k) {
+        if (d.gyro_clipped[k]) pass.valid[e] = 0;
+      }
+    }
     Vec3d r = Vec3d::Zero();
     Eigen::Matrix<double, 3, kLocal> Jl = Eigen::Matrix<double, 3, kLocal>::Zero();
+    Mat3d JK = Mat3d::Zero();
     std::array<Mat3d, 3> wgt;
     for (Mat3d& m : wgt) m.setZero();
     for (std::size_t k = k0; k <= k1; ++k) {
@@ -118,6 +139,11 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
         Jl.col(kGAlphaX + a) -= PM.col(en.row) * (en.sign * w_dps[en.col]);
       }
       Jl.col(kLocalDlambda2) += w * P * Vec3d::UnitX().cross(rate);
+      const double l1_rate = angle_rate(0, k), l2_rate = angle_rate(1, k);
+      Vec3d w_bench = P.transpose() * Vec3d(0.0, l1_rate, 0.0);
+      w_bench.x() += l2_rate;
+      const Vec3d m_bench = Mg * w_bench;
+      for (int i = 0; i < 3; ++i) JK.col(i) -= PM.col(i) * (m_bench[i] / g[kGKx + i]);
     }
     r -= Vec3d(d.lambda_rad[1][k1] - d.lambda_rad[1][k0], d.lambda_rad[0][k1] - d.lambda_rad[0][k0],
                0.0);
@@ -139,6 +165,7 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
       J.middleCols(go, kNumGyroParams) = Jl.leftCols(kNumGyroParams);
       J.col(kDlambda2) = Jl.col(kLocalDlambda2);
       pass.J[e] = std::move(J);
+      pass.JK_info[e] = JK;
     }
   });
   return pass;
@@ -149,45 +176,88 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
   const std::size_t K = pass.r.size();
   const int n = static_cast<int>(pass.theta.size());
   const bool jac = theta_part && pass.with_jacobian;
-  const Vec3d var = noise_rad_s.cwiseProduct(noise_rad_s);
+  // Channel i's noise in the residual's units: sigma_i / K_i (above).
+  const Vec3d var = noise_rad_s.cwiseQuotient(pass.K).cwiseAbs2();
+  const Vec3d var_ref = noise_rad_s.cwiseQuotient(pass.K_ref).cwiseAbs2();
+  const bool same_ref = (pass.K - pass.K_ref).cwiseAbs().maxCoeff() == 0.0;
   Mat3d R3 = Mat3d::Zero();
   R3(0, 0) = R3(1, 1) = pass.angle_var;
   GyroReduction out;
   out.noise_rad_s = noise_rad_s;
   out.rho = rho;
-  out.degrees_of_freedom = static_cast<int>(3 * K);
   out.whitened.resize(K);
   // The columns with a derivative (others are zero): every run's Jacobian
   // has the same pattern, taken from the first interval.
   std::vector<int> cols;
   if (jac) {
     for (int c = 0; c < n; ++c) {
-      if (pass.J[0].col(c).squaredNorm() > 0.0) cols.push_back(c);
+      for (std::size_t k = 0; k < std::min<std::size_t>(K, 50); ++k) {
+        if (pass.J[k].col(c).squaredNorm() > 0.0) {
+          cols.push_back(c);
+          break;
+        }
+      }
     }
     out.gradient = Eigen::VectorXd::Zero(n);
     out.information = Eigen::MatrixXd::Zero(n, n);
   }
   const int m = static_cast<int>(cols.size());
+  const int go = pass.theta.size() - kNumGyroParams;  // the gyro block is last
+  std::vector<int> k_slot(3, -1);  // where K_x..K_z sit among cols
+  for (int q = 0; q < m; ++q) {
+    if (cols[q] >= go + kGKx && cols[q] <= go + kGKz) k_slot[cols[q] - go - kGKx] = q;
+  }
   Eigen::MatrixXd Jnu_prev(3, m), Jnu(3, m), Jk(3, m);
+  Eigen::MatrixXd Inu_prev(3, m), Inu(3, m), Ik(3, m);  // the information's form
+  Mat3d Sref_prev, Cref_prev;
+  double log_det_ref = 0.0;
   Eigen::VectorXd grad = Eigen::VectorXd::Zero(m);
   Eigen::MatrixXd info = Eigen::MatrixXd::Zero(m, m);
   Mat3d S_prev, C_prev;
   Vec3d nu_prev;
+  bool chained = false;  // the previous interval is used and shares this one's first epoch
+  int used = 0;
   for (std::size_t k = 0; k < K; ++k) {
+    if (!pass.valid[k]) {
+      chained = false;
+      out.whitened[k].setZero();
+      if (jac) out.scores.push_back(Eigen::VectorXd::Zero(n));
+      continue;
+    }
+    ++used;
     Mat3d C = 2.0 * R3;
     for (int i = 0; i < 3; ++i) C += var[i] * pass.weight[k][i];
     Vec3d nu = pass.r[k];
     if (jac) {
       for (int q = 0; q < m; ++q) Jk.col(q) = pass.J[k].col(cols[q]);
+      Ik = Jk;
+      for (int i = 0; i < 3; ++i) {
+        if (k_slot[i] >= 0) Ik.col(k_slot[i]) = pass.JK_info[k].col(i);
+      }
     }
     Mat3d S = C;
-    if (k > 0) {
+    if (chained) {
       const Mat3d Gk = S_prev.llt().solve(C_prev).transpose();  // C_prev^T S_prev^-1
       S -= Gk * C_prev;
       nu -= Gk * nu_prev;
-      if (jac) Jnu = Jk - Gk * Jnu_prev;
+      if (jac) {
+        Jnu = Jk - Gk * Jnu_prev;
+        Inu = Ik - Gk * Inu_prev;
+      }
     } else if (jac) {
       Jnu = Jk;
+      Inu = Ik;
+    }
+    if (!same_ref) {
+      // The log-determinant at the reference scale factors.
+      Mat3d Cr = 2.0 * R3;
+      for (int i = 0; i < 3; ++i) Cr += var_ref[i] * pass.weight[k][i];
+      Mat3d Sr = Cr;
+      if (chained) Sr -= Cref_prev.transpose() * Sref_prev.llt().solve(Cref_prev);
+      log_det_ref += 0.5 * std::log(Sr.determinant());
+      Cref_prev = -R3;
+      for (int i = 0; i < 3; ++i) Cref_prev += var_ref[i] * pass.cross[k][i];
+      Sref_prev = Sr;
     }
     const Eigen::LLT<Mat3d> llt(S);
     const Mat3d L = llt.matrixL();
@@ -202,15 +272,20 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
       for (int q = 0; q < m; ++q) full[cols[q]] = sc[q];
       out.scores.push_back(std::move(full));
       grad += sc;
-      info.noalias() += Jz.transpose() * Jz;
+      const Eigen::MatrixXd Iz = L.triangularView<Eigen::Lower>().solve(Inu);
+      info.noalias() += Iz.transpose() * Iz;
       Jnu_prev = Jnu;
+      Inu_prev = Inu;
     }
     // The covariance of this residual with the next one.
     C_prev = -R3;
     for (int i = 0; i < 3; ++i) C_prev += var[i] * pass.cross[k][i];
     S_prev = S;
     nu_prev = nu;
+    chained = true;
   }
+  out.degrees_of_freedom = 3 * used;
+  if (!same_ref) out.log_det = log_det_ref;
   out.neg_log_l = out.cost + rho * out.log_det;
   if (jac) {
     for (int a = 0; a < m; ++a) {
@@ -223,7 +298,9 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
 
 GyroReduction ReduceGyroAtBestNoise(const GyroPass& pass, const Eigen::Vector3d& start,
                                     int fitted_parameters, bool theta_part) {
-  const double dof = 3.0 * static_cast<double>(pass.r.size());
+  double dof = 0.0;
+  for (char v : pass.valid) dof += v ? 3.0 : 0.0;
+  dof = std::max(dof, 1.0);
   const double rho = std::max(0.1, 1.0 - fitted_parameters / dof);
   // -log L in s = log sigma, by Newton's method on its central differences
   // (each a reduction without the Jacobian, O(E); 19 per step): quadratic
@@ -269,7 +346,20 @@ GyroReduction ReduceGyroAtBestNoise(const GyroPass& pass, const Eigen::Vector3d&
     s += step;
     if (-g.dot(step) < 1e-12) break;
   }
-  return ReduceGyro(pass, s.array().exp(), rho, theta_part);
+  GyroReduction out = ReduceGyro(pass, s.array().exp(), rho, theta_part);
+  if (theta_part && out.gradient.size() > 0) {
+    // The weight's derivative: d cost / d K_i = q_i / K_i, q_i = -d cost / d log sigma_i.
+    const int go = static_cast<int>(pass.theta.size()) - kNumGyroParams;
+    for (int i = 0; i < 3; ++i) {
+      Eigen::Vector3d a = s, b = s;
+      a[i] += h;
+      b[i] -= h;
+      const double q = -(ReduceGyro(pass, a.array().exp(), rho, false).cost -
+                         ReduceGyro(pass, b.array().exp(), rho, false).cost) / (2.0 * h);
+      out.gradient[go + kGKx + i] += q / pass.K[i];
+    }
+  }
+  return out;
 }
 
 }  // namespace triadcal

@@ -28,14 +28,22 @@
 //   S_e = C_ee - G_e C_{e-1,e},  nu_e = r_e - G_e nu_{e-1}
 //   -log L = 0.5 sum nu^T S^-1 nu + rho 0.5 sum log det S_e
 //
-// Noise. Each channel's noise is a parameter of the same likelihood, in
-// input-rate units (rad/s of rate; the readings' noise is K_i times it), so
-// the covariance does not depend on theta and the gyro's scale factors need
-// no whitening derivative. It is held at its maximum (restricted share rho =
-// 1 - fitted / (3 (E - 1)), as the accelerometer's) at every theta: the
-// minimiser works on the likelihood profiled over it. The angle noise is the
-// run's declared one. The rotation in the noise's weights uses the recorded
-// inner angle (dlambda2 turns it by arcminutes: no effect on the weights).
+// Noise. Each channel's reading noise sigma_i is a parameter of the same
+// likelihood, held at its (restricted) maximum at every theta (Newton on -log L
+// in log sigma; rho = 1 - fitted / (3 (E - 1)), as the accelerometer's): the
+// minimiser works on the likelihood profiled over it. In the residual, which
+// is in input-rate units, channel i's noise is sigma_i / K_i: the weight
+// follows the scale factor, so that inflating K_i cannot shrink the whitened
+// residual (a channel that never sees a rate would otherwise be silenced by
+// K_i -> infinity); the log-determinant is taken at the reference scale
+// factors (the readings' noise does not depend on theta), as the
+// accelerometer's (run_evaluation.h). The gradient carries the weight's
+// derivative, q_i / K_i (q_i = -d cost / d log sigma_i); the Gauss-Newton
+// information takes K_i's column in the readings' form, -P Mg^-1 e_i (Mg w)_i
+// / K_i with w from the angles (differenced over +-0.05 s), which the weight's
+// derivative makes of the inverse model's -P Mg^-1 e_i y_i / K_i^2. The angle
+// noise is the run's declared one. The rotation in the noise's weights uses
+// the recorded inner angle (dlambda2 turns it by arcminutes).
 //
 // Jacobian (written out; GyroRateFromReadings is linear in the readings):
 // by the gyro's 21 parameters and dlambda2. The specific force W of the
@@ -44,6 +52,10 @@
 // accelerometer's parameters carry G_ij W / K_acc, about 1e-4 of what the
 // accelerometers themselves give those parameters. Earth's rate enters with
 // its value only (7e-5 rad/s times angles of arcminutes).
+//
+// Saturation: an interval holding a gyro sample at the range's limit
+// (RunData::gyro_clipped, found by the reader) is left out; the intervals on
+// either side of a gap share no epoch and are independent.
 //
 // Left out (docs/method.md): the angle-stage effects (latency, encoder
 // harmonic, angle scale) act on the accelerometer's residuals only; the
@@ -72,6 +84,14 @@ struct GyroPass {
   // interval (the shared sample, cross).
   std::vector<std::array<Eigen::Matrix3d, 3>> weight, cross;
   double angle_var = 0.0;           // [rad^2] of each recorded angle
+  Eigen::Vector3d K = Eigen::Vector3d::Ones();      // the gyro's scale factors at theta
+  Eigen::Vector3d K_ref = Eigen::Vector3d::Ones();  // ... at the reference (prior means)
+  // Per interval (with the Jacobian): the information's columns of K_x..K_z
+  // in the readings' form (above), 3 x 3.
+  std::vector<Eigen::Matrix3d> JK_info;
+  // Per interval: false when it holds a clipped gyro sample (RunData::
+  // gyro_clipped): left out, never fitted through.
+  std::vector<char> valid;
   bool with_jacobian = false;
 };
 
@@ -83,17 +103,19 @@ struct GyroReduction {
   double log_det = 0.0;    // 0.5 sum log det S_e
   double neg_log_l = 0.0;  // cost + rho log_det: what the minimiser sees
   double rho = 1.0;
-  Eigen::Vector3d noise_rad_s = Eigen::Vector3d::Zero();  // each channel, input-rate units
+  Eigen::Vector3d noise_rad_s = Eigen::Vector3d::Zero();  // each channel's reading noise
   Eigen::VectorXd gradient;     // n (with the pass's Jacobian)
   Eigen::MatrixXd information;  // n x n
-  int degrees_of_freedom = 0;   // 3 (E - 1)
+  int degrees_of_freedom = 0;   // 3 per interval used
   std::vector<Eigen::Vector3d> whitened;  // nu_e whitened by chol(S_e): unit white under the model
   // Per interval (with the Jacobian): its score, the gradient of what it adds
   // to the cost given the intervals before it (n), for the HAC covariance.
   std::vector<Eigen::VectorXd> scores;
 };
 
-// At a given noise [rad/s per channel].
+// At a given reading noise [rad/s per channel]: cost, log-determinant, and
+// with theta_part the gradient (without the weight's derivative, which
+// ReduceGyroAtBestNoise adds) and the information.
 GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_s,
                          double rho, bool theta_part);
 

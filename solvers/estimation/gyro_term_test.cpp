@@ -106,6 +106,34 @@ TEST(GyroTerm, JacobianMatchesCentralDifferences) {
   }
 }
 
+// The gradient of -log L profiled over the noise (the weights follow the
+// scale factors: the gradient carries their derivative) against central
+// differences of the profile.
+TEST(GyroTerm, ProfiledGradientMatchesCentralDifferences) {
+  const GyroRun g = MakeGyroRun(50.0, 20.0, 0.05, 4);
+  const RunProblem p = BuildRunProblem(g.s.run, g.data, g.layout, 0.5, {});
+  const int go = g.layout.gyro_offset();
+  Eigen::VectorXd th = g.truth;
+  th[go + kGKx] *= 1.002;  // away from the optimum
+  th[go + kGW0z] += 2e-4;
+  const Eigen::Vector3d start = Eigen::Vector3d::Constant(0.05 * kDegToRad);
+  const GyroReduction at = ReduceGyroAtBestNoise(EvaluateGyroPass(p, th, true, 1), start, 21, true);
+  for (int j : {kGKx, kGKy, kGKz, kGW0x, kGW0z, kGBetaZ, kGGxy}) {
+    SCOPED_TRACE(g.layout.info(go + j).name);
+    const int c = go + j;
+    const double h = 1e-6 * std::max(1.0, std::abs(th[c]));
+    Eigen::VectorXd tp = th, tm = th;
+    tp[c] += h;
+    tm[c] -= h;
+    const double fp = ReduceGyroAtBestNoise(EvaluateGyroPass(p, tp, false, 1), start, 21, false).neg_log_l;
+    const double fm = ReduceGyroAtBestNoise(EvaluateGyroPass(p, tm, false, 1), start, 21, false).neg_log_l;
+    const double num = (fp - fm) / (2.0 * h);
+    // Agreement to 1e-4 of a gradient of one sigma's offset (sqrt of the information).
+    EXPECT_NEAR(at.gradient[c], num, 1e-4 * (std::abs(num) + std::sqrt(at.information(c, c))))
+        << g.layout.info(c).name << " analytic " << at.gradient[c] << " numeric " << num;
+  }
+}
+
 // The profiled noise is the maximum of the restricted likelihood: a step of
 // 1 % either way in any channel does not lower -log L; and it is within 4 sd
 // of the truth, the sd from the curvature of -log L in log sigma there (the

@@ -43,6 +43,9 @@ RunData SelectSamples(const RunData& d, const std::vector<std::size_t>& idx) {
   }
   for (int i = 0; i < 3; ++i) out.w_mV[i] = pick(d.w_mV[i]);
   for (int i = 0; i < 3; ++i) out.gyro_rad_s[i] = pick(d.gyro_rad_s[i]);
+  if (!d.gyro_clipped.empty()) {
+    for (std::size_t k : idx) out.gyro_clipped.push_back(d.gyro_clipped[k]);
+  }
   out.temp_C = pick(d.temp_C);
   return out;
 }
@@ -51,7 +54,14 @@ RunData Decimate(const RunData& d, std::size_t m) {
   if (m <= 1) return d;
   std::vector<std::size_t> idx;
   for (std::size_t k = 0; k < d.size(); k += m) idx.push_back(k);
-  return SelectSamples(d, idx);
+  RunData out = SelectSamples(d, idx);
+  // A kept sample stands for those up to the next one: clipped if one of them is.
+  for (std::size_t j = 0; j < out.gyro_clipped.size(); ++j) {
+    for (std::size_t k = idx[j]; k < std::min(d.size(), idx[j] + m); ++k) {
+      if (d.gyro_clipped[k]) out.gyro_clipped[j] = 1;
+    }
+  }
+  return out;
 }
 
 std::vector<ConstraintRow> ResolveConstraints(const RunDescription& run,

@@ -13,6 +13,8 @@
 
 #include "core/model/bench_model.h"
 #include "core/model/errors.h"
+#include "core/model/gyro_model.h"
+#include "core/model/mounting.h"
 #include "solvers/multirun/joint_layout.h"
 #include "solvers/multirun/joint_solver.h"
 #include "tests/sim_fixtures.h"
@@ -59,6 +61,40 @@ TEST(MountingMap, ReadingsOfTheMappedParametersAreTheRemappedReadings) {
       const Eigen::Vector3d up = Readings_mV(cfg, platform.data(), W, ctx);
       const Eigen::Vector3d ui = Readings_mV(cfg, imu.data(), Eigen::Vector3d(P.transpose() * W), ctx);
       EXPECT_LT((up - P * ui).cwiseAbs().maxCoeff(), 1e-9) << "mounting " << m;
+    }
+  }
+}
+
+// The gyro shares the IMU's axes (SPEC section 10): the gyro readings of the
+// mapped parameters are the IMU's gyro readings of the rate and specific force
+// in its own axes, remapped.
+TEST(MountingMap, GyroReadingsOfTheMappedParametersAreTheRemappedReadings) {
+  const ParameterLayout layout({Effect::kThermalDrift}, /*gyro=*/true);
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> gauss;
+  const int sources[3][3] = {{1, 0, 2}, {2, 1, 0}, {1, 2, 0}};
+  const double signs[3][3] = {{1, 1, -1}, {-1, 1, 1}, {-1, -1, 1}};
+  const int g = layout.gyro_offset();
+  for (int m = 0; m < 3; ++m) {
+    RunDescription run;
+    SetMounting(&run, sources[m], signs[m]);
+    const ModelConfig cfg = MakeModelConfig(run, layout);
+    Eigen::Matrix3d P = Eigen::Matrix3d::Zero();
+    for (int i = 0; i < 3; ++i) P(i, sources[m][i]) = signs[m][i];
+    Eigen::VectorXd imu = Eigen::VectorXd::Zero(layout.size());
+    for (int i = 0; i < layout.size(); ++i) imu[i] = 1e-2 * gauss(rng);
+    for (int i = 0; i < 3; ++i) {
+      imu[kKx + i] = 170.0 + i;
+      imu[g + kGKx + i] = (i == 1 ? -1.0 : 1.0) + 0.01 * i;
+    }
+    const Eigen::VectorXd platform = MountingMap(run, layout) * imu;
+    for (int k = 0; k < 5; ++k) {
+      const Eigen::Vector3d W(gauss(rng), gauss(rng), gauss(rng));
+      const Eigen::Vector3d w(gauss(rng), gauss(rng), gauss(rng));
+      const Eigen::Vector3d gp = GyroReadings(cfg, platform.data(), w, W);
+      const Eigen::Vector3d gi = GyroReadings(cfg, imu.data(), Eigen::Vector3d(P.transpose() * w),
+                                              Eigen::Vector3d(P.transpose() * W));
+      EXPECT_LT((gp - P * gi).cwiseAbs().maxCoeff(), 1e-12) << "mounting " << m;
     }
   }
 }

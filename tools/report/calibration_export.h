@@ -7,6 +7,8 @@
 //                including the sensor-stage effects (thermal_drift,
 //                thermal_drift_temp, scale_asymmetry, cross_quadratic). Geometry and angle
 //                effects do not act on W and are left out, as in `apply`.
+//                With the gyro (SPEC section 10) a second function applies
+//                it: gyro readings [deg/s] and W [g] -> angular rate [deg/s].
 //   yaml, json   the plain matrix form (MatrixForm below).
 //
 // Every sensor-stage effect of the catalogue that `apply` inverts is either
@@ -56,7 +58,13 @@ std::string ExportRefusal(const Calibration& cal);
 //   N = diag(K) Kij / g0^2             nonlinearity [mV per (m/s^2)^2]
 //   b = W0                             bias [mV]
 //
-// plus S^-1 (the linear inverse) and the sensor-stage effects' parameters.
+// plus S^-1 (the linear inverse) and the sensor-stage effects' parameters;
+// with the gyro, "gyro":
+//
+//   g = S_g w + b_g + G W              g readings, w rate [deg/s], W [g]
+//   S_g = diag(K_g) Mg                 [1]; S_inverse = Mg^-1 diag(K_g)^-1,
+//   b_g = W0_g [deg/s], G [(deg/s)/g]  the correction w = S_g^-1 (g - b_g - G W)
+//
 // Throws InputError when `cal` has an effect the exported forms do not carry.
 nlohmann::ordered_json MatrixForm(const Calibration& cal);
 

@@ -288,6 +288,8 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
                    {"residual", "attitude increments between epochs: gyro integrated "
                                 "against the angle sensors (outer-axis frame)"},
                    {"whitened_rms", r.gyro.whitened_rms},
+                   {"intervals", r.gyro.intervals},
+                   {"intervals_left_out_clipped", r.gyro.intervals_clipped},
                    {"degrees_of_freedom", r.gyro.degrees_of_freedom}};
   }
   out["final_cost"] = r.final_cost;
