@@ -7,12 +7,14 @@
 #include <cstdio>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <sstream>
 
 #include "core/io/column_mapping.h"
 #include "core/model/errors.h"
 #include "core/model/units.h"
+#include "solvers/static/static_gyro.h"
 #include "solvers/static/static_method.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
@@ -137,6 +139,86 @@ nlohmann::json StaticJson(const StaticArgs& a, const StaticResult& r, std::size_
   return out;
 }
 
+// The gyro part (static_gyro.h): its 21 parameters beside the accelerometer's,
+// and what they come from.
+void AddGyroJson(const StaticGyroResult& g, nlohmann::json* out) {
+  const std::vector<ParameterInfo>& info = GyroParameterInfo();
+  nlohmann::json& params = (*out)["parameters"];
+  for (int i = 0; i < kNumGyroParams; ++i) {
+    const double f = info[i].si_per_unit;
+    nlohmann::json p;
+    p["value"] = g.theta[i] / f;
+    if (std::isfinite(g.sigma[i])) {
+      p["sigma"] = g.sigma[i] / f;
+    } else {
+      p["sigma"] = nullptr;
+      p["sigma_noise"] = g.sigma_noise[i] / f;
+    }
+    p["unit"] = info[i].unit;
+    p["estimable"] = true;
+    params[info[i].name] = p;
+  }
+  nlohmann::json j;
+  j["method"] =
+      "Ferraris et al. 1995: W0 and G from the still positions (least squares on the "
+      "accelerometer's specific force), diag(K) Mg from the corrected readings integrated over "
+      "the three turns";
+  j["sigma"] = {{"source", g.sigma_source},
+                {"scale", g.sigma_scale},
+                {"chi2", g.chi2},
+                {"dof", g.dof},
+                {"rule",
+                 "W0, G: declared noise x max(1, sqrt(chi2/dof)) of the positions; K and the "
+                 "angles: exactly determined by the three turns, no sigma from the data "
+                 "(sigma_noise: white noise and the W0, G uncertainty only, not the turn's "
+                 "angle error)"}};
+  nlohmann::json pos = nlohmann::json::array();
+  for (const StaticGyroPosition& p : g.positions) {
+    pos.push_back({{"name", p.name},
+                   {"samples", p.samples},
+                   {"mean_dps", Vec(p.mean_rad_s / kDegToRad)},
+                   {"W_g", Vec(p.W_g)},
+                   {"residual_dps", Vec(p.residual_rad_s / kDegToRad)}});
+  }
+  j["positions"] = pos;
+  nlohmann::json turns = nlohmann::json::array();
+  for (const StaticGyroTurnResult& t : g.turns) {
+    turns.push_back({{"label", t.label},
+                     {"samples", t.samples},
+                     {"duration_s", t.duration_s},
+                     {"sense", t.sense},
+                     {"integral_deg", Vec(t.integral_rad / kDegToRad)},
+                     {"mean_W_g", Vec(t.mean_W_g)}});
+  }
+  j["turns"] = turns;
+  (*out)["gyro_static"] = j;
+}
+
+void PrintGyroReport(const StaticGyroResult& g) {
+  std::printf("gyro: %zu positions, %zu turns; W0, G sigma: %s (chi2/dof = %.3g on %.0f dof)\n",
+              g.positions.size(), g.turns.size(), g.sigma_source.c_str(),
+              g.dof >= 1.0 ? g.chi2 / g.dof : 0.0, g.dof);
+  std::printf("%-13s %14s %11s %11s  %s\n", "parameter", "value", "sigma", "sigma_noise", "unit");
+  const std::vector<ParameterInfo>& info = GyroParameterInfo();
+  for (int i = 0; i < kNumGyroParams; ++i) {
+    const double f = info[i].si_per_unit;
+    const std::string unit = info[i].unit;
+    if (std::isfinite(g.sigma[i])) {
+      const ValueText v = FormatWithSigma(g.theta[i] / f, g.sigma[i] / f);
+      std::printf("%-13s %14s %11s %11s  %s\n", info[i].name.c_str(), v.value.c_str(),
+                  v.sigma.c_str(), "-", unit.c_str());
+    } else {
+      std::printf("%-13s %14.6g %11s %11.3g  %s (three turns: no residual)\n", info[i].name.c_str(),
+                  g.theta[i] / f, "-", g.sigma_noise[i] / f, unit.c_str());
+    }
+  }
+  for (const StaticGyroTurnResult& t : g.turns) {
+    std::printf("turn %-6s %5zu samples %6.2f s, sense %+d, integral %9.1f %9.1f %9.1f deg\n",
+                t.label.c_str(), t.samples, t.duration_s, t.sense, t.integral_rad[0] / kDegToRad,
+                t.integral_rad[1] / kDegToRad, t.integral_rad[2] / kDegToRad);
+  }
+}
+
 void PrintReport(const LoadedRun& run, const StaticResult& r) {
   const bool rates = r.still.test == StillTest::kAngleRates;
   std::printf("static: %zu samples, reference: %s", run.data.size(), ReferenceName(r.reference));
@@ -245,13 +327,23 @@ int RunStatic(const StaticArgs& a) {
   const StaticResult r = WithFlags(StaticFlags(), [&] {
     return SolveStatic(run.description, run.data, Reference(a, run), opt);
   });
-  const nlohmann::json out = StaticJson(a, r, run.data.size());
+  nlohmann::json out = StaticJson(a, r, run.data.size());
+  std::optional<StaticGyroResult> gyro;
+  if (run.description.gyro && run.data.has_gyro()) {
+    try {
+      gyro = SolveStaticGyro(run.description, run.data, r, StaticGyroOptions());
+      AddGyroJson(*gyro, &out);
+    } catch (const InputError& e) {
+      std::fprintf(stderr, "triadcal: warning: the gyro is not calibrated: %s\n", e.what());
+    }
+  }
   for (const std::string& w : ImplausibleResultWarnings(out["parameters"], a.out_json)) {
     std::fprintf(stderr, "triadcal: warning: %s\n", OneLine(w).c_str());
   }
   WriteJson(out, a.out_json);
   WriteReportIfAsked(a.report_html, out, a.out_json);
   PrintReport(run, r);
+  if (gyro) PrintGyroReport(*gyro);
   std::printf("wrote %s\n", a.out_json.c_str());
   return 0;
 }

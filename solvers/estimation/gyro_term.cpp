@@ -4,7 +4,10 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <stdexcept>
+
+#include <ceres/jet.h>
 
 #include "core/model/gyro_model.h"
 #include "solvers/estimation/parallel.h"
@@ -28,10 +31,57 @@ struct AngleEntry {
 constexpr AngleEntry kAngleEntries[6] = {{1, 0, 1.0},  {0, 1, -1.0}, {2, 0, -1.0},
                                          {0, 2, 1.0},  {2, 1, 1.0},  {1, 2, -1.0}};
 
-Mat3d Skew(const Vec3d& v) {
-  Mat3d s;
-  s << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
-  return s;
+// The angle stage's parameters (latency, encoder harmonic, angle scale: at
+// most 1 + 4 + 2) as Jets.
+constexpr int kAngleJet = 8;
+using AngleJet = ceres::Jet<double, kAngleJet>;
+
+// The accelerometer's sensor-stage parameters (the readings model: W of the
+// g-sensitivity depends on them), as Jets.
+constexpr int kSensorJet = 40;
+using SensorJet = ceres::Jet<double, kSensorJet>;
+
+std::vector<int> SensorStageIndices(const ParameterLayout& layout) {
+  std::vector<int> idx;
+  for (int i = kKx; i <= kKzz; ++i) idx.push_back(i);
+  for (Effect e : layout.effects()) {
+    const EffectSpec& s = GetEffectSpec(e);
+    if (s.stage != EffectStage::kSensor) continue;
+    for (std::size_t q = 0; q < s.params.size(); ++q) idx.push_back(layout.offset(e) + q);
+  }
+  return idx;
+}
+
+std::vector<int> AngleStageIndices(const ParameterLayout& layout) {
+  std::vector<int> idx;
+  for (Effect e : layout.effects()) {
+    const EffectSpec& s = GetEffectSpec(e);
+    if (s.stage != EffectStage::kAngle) continue;
+    for (std::size_t q = 0; q < s.params.size(); ++q) idx.push_back(layout.offset(e) + q);
+  }
+  return idx;
+}
+
+// The bench angles at sample k (angle stage undone) and their derivatives by
+// the angle stage's parameters idx: angle[axis] and d angle[axis] / d theta_idx.
+struct BenchAngleSample {
+  double angle[2];
+  Eigen::Matrix<double, 2, kAngleJet> d = Eigen::Matrix<double, 2, kAngleJet>::Zero();
+};
+
+BenchAngleSample BenchAnglesAt(const ModelConfig& cfg, const std::vector<AngleJet>& th,
+                               const std::vector<int>& idx, const BenchAngles<double>& rec) {
+  BenchAngleSample out;
+  if (idx.empty()) {
+    for (int a = 0; a < 2; ++a) out.angle[a] = rec.axis[a].angle;
+    return out;
+  }
+  const BenchAngles<AngleJet> b = BenchAnglesFromRecorded<AngleJet>(cfg, th.data(), rec);
+  for (int a = 0; a < 2; ++a) {
+    out.angle[a] = b.axis[a].angle.a;
+    out.d.row(a) = b.axis[a].angle.v.transpose();
+  }
+  return out;
 }
 
 // The trapezoid weight of sample k in the interval k0..k1 [s].
@@ -90,6 +140,27 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
     return (d.lambda_rad[axis][b] - d.lambda_rad[axis][a]) / (d.t_s[b] - d.t_s[a]);
   };
   const Mat3d Mg = GyroMisalignmentMatrix(g);
+  // The angle stage (shared with the accelerometer's residuals: a latency of
+  // the angles is one time offset between the angles and both triads).
+  const std::vector<int> angle_idx = AngleStageIndices(cfg.layout);
+  if (angle_idx.size() > kAngleJet) throw std::logic_error("EvaluateGyroPass: angle stage too large");
+  const int na = static_cast<int>(angle_idx.size());
+  std::vector<AngleJet> th_jet(n);
+  for (int i = 0; i < n; ++i) th_jet[i] = AngleJet(th[i]);
+  for (int q = 0; q < na; ++q) th_jet[angle_idx[q]].v[q] = 1.0;
+  // W's derivatives by the accelerometer's sensor-stage parameters.
+  const std::vector<int> sensor_idx = SensorStageIndices(cfg.layout);
+  const int ns = static_cast<int>(sensor_idx.size());
+  if (ns > kSensorJet) throw std::logic_error("EvaluateGyroPass: sensor stage too large");
+  std::vector<SensorJet> th_sensor;
+  if (with_jacobian) {
+    th_sensor.resize(n);
+    for (int i = 0; i < n; ++i) th_sensor[i] = SensorJet(th[i]);
+    for (int q = 0; q < ns; ++q) th_sensor[sensor_idx[q]].v[q] = 1.0;
+  }
+  auto bench_at = [&](std::size_t k) {
+    return BenchAnglesAt(cfg, th_jet, angle_idx, p.series.recorded[k]);
+  };
   pass.r.resize(E - 1);
   pass.valid.assign(E - 1, 1);
   pass.weight.resize(E - 1);
@@ -106,13 +177,26 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
     Vec3d r = Vec3d::Zero();
     Eigen::Matrix<double, 3, kLocal> Jl = Eigen::Matrix<double, 3, kLocal>::Zero();
     Mat3d JK = Mat3d::Zero();
+    Eigen::Matrix<double, 3, kAngleJet> Ja = Eigen::Matrix<double, 3, kAngleJet>::Zero();
+    Eigen::Matrix<double, 3, kSensorJet> Js = Eigen::Matrix<double, 3, kSensorJet>::Zero();
     std::array<Mat3d, 3> wgt;
     for (Mat3d& m : wgt) m.setZero();
     for (std::size_t k = k0; k <= k1; ++k) {
       const double w = TrapezoidWeight(d, k0, k1, k);
       const SampleContext ctx{d.t_s[k], d.has_temp() ? d.temp_C[k] : 0.0};
-      // The specific force at O from the accelerometers, at theta (taken as data).
-      const Vec3d W = SpecificForceFromReadings_g<double>(cfg, th, d.readings_mV(k), ctx);
+      // The specific force at O from the accelerometers, at theta.
+      Vec3d W;
+      Eigen::Matrix<double, 3, kSensorJet> dW;
+      if (with_jacobian) {
+        const Vec3<SensorJet> Wj = SpecificForceFromReadings_g<SensorJet>(
+            cfg, th_sensor.data(), d.readings_mV(k).cast<SensorJet>(), ctx);
+        for (int i = 0; i < 3; ++i) {
+          W[i] = Wj[i].a;
+          dW.row(i) = Wj[i].v.transpose();
+        }
+      } else {
+        W = SpecificForceFromReadings_g<double>(cfg, th, d.readings_mV(k), ctx);
+      }
       const Vec3d y = d.gyro(k) - Vec3d(g[kGW0x], g[kGW0y], g[kGW0z]) - Gs * W;
       Vec3d rate = A * y;
       if (earth) {
@@ -121,13 +205,15 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
         const Mat3d C_L2 = Rz<double>(th[kDpsi]) * Ry<double>(l1) * Rx<double>(l2);
         rate -= C_L2.transpose() * cfg.earth_rate_L;
       }
-      const Mat3d P = Rx<double>(d.lambda_rad[1][k] + th[kDlambda2]);
+      const BenchAngleSample b = bench_at(k);
+      const Mat3d P = Rx<double>(b.angle[1] + th[kDlambda2]);
       r += w * (P * rate);
       const Mat3d Pn = NoiseRotation(d, k);
       for (int i = 0; i < 3; ++i) wgt[i] += (w * w) * Pn.col(i) * Pn.col(i).transpose();
       if (!with_jacobian) continue;
       const Mat3d PA = w * P * A;
       const Mat3d PM = w * P * Mg_inv;
+      Js.noalias() -= (PA * Gs) * dW;
       for (int i = 0; i < 3; ++i) {
         Jl.col(kGW0x + i) -= PA.col(i);
         Jl.col(kGKx + i) -= PA.col(i) * (y[i] / g[kGKx + i]);
@@ -138,15 +224,21 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
         const AngleEntry& en = kAngleEntries[a];
         Jl.col(kGAlphaX + a) -= PM.col(en.row) * (en.sign * w_dps[en.col]);
       }
-      Jl.col(kLocalDlambda2) += w * P * Vec3d::UnitX().cross(rate);
+      const Vec3d turn = w * P * Vec3d::UnitX().cross(rate);  // d / d(inner angle)
+      Jl.col(kLocalDlambda2) += turn;
+      if (na > 0) Ja += turn * b.d.row(1);
       const double l1_rate = angle_rate(0, k), l2_rate = angle_rate(1, k);
       Vec3d w_bench = P.transpose() * Vec3d(0.0, l1_rate, 0.0);
       w_bench.x() += l2_rate;
       const Vec3d m_bench = Mg * w_bench;
       for (int i = 0; i < 3; ++i) JK.col(i) -= PM.col(i) * (m_bench[i] / g[kGKx + i]);
     }
-    r -= Vec3d(d.lambda_rad[1][k1] - d.lambda_rad[1][k0], d.lambda_rad[0][k1] - d.lambda_rad[0][k0],
-               0.0);
+    const BenchAngleSample b0 = bench_at(k0), b1 = bench_at(k1);
+    r -= Vec3d(b1.angle[1] - b0.angle[1], b1.angle[0] - b0.angle[0], 0.0);
+    if (with_jacobian && na > 0) {
+      Ja.row(0) -= b1.d.row(1) - b0.d.row(1);
+      Ja.row(1) -= b1.d.row(0) - b0.d.row(0);
+    }
     pass.r[e] = r;
     pass.weight[e] = wgt;
     // The sample at epoch e+1 ends this interval and starts the next.
@@ -164,6 +256,8 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
       Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, n);
       J.middleCols(go, kNumGyroParams) = Jl.leftCols(kNumGyroParams);
       J.col(kDlambda2) = Jl.col(kLocalDlambda2);
+      for (int q = 0; q < na; ++q) J.col(angle_idx[q]) = Ja.col(q);
+      for (int q = 0; q < ns; ++q) J.col(sensor_idx[q]) += Js.col(q);
       pass.J[e] = std::move(J);
       pass.JK_info[e] = JK;
     }
@@ -191,7 +285,7 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
   std::vector<int> cols;
   if (jac) {
     for (int c = 0; c < n; ++c) {
-      for (std::size_t k = 0; k < std::min<std::size_t>(K, 50); ++k) {
+      for (std::size_t k = 0; k < K; ++k) {
         if (pass.J[k].col(c).squaredNorm() > 0.0) {
           cols.push_back(c);
           break;

@@ -46,20 +46,20 @@
 // the recorded inner angle (dlambda2 turns it by arcminutes).
 //
 // Jacobian (written out; GyroRateFromReadings is linear in the readings):
-// by the gyro's 21 parameters and dlambda2. The specific force W of the
-// g-sensitivity is the accelerometers' at the current theta (readings model
-// inverted, bench_model.h), taken as data: its derivatives by the
-// accelerometer's parameters carry G_ij W / K_acc, about 1e-4 of what the
-// accelerometers themselves give those parameters. Earth's rate enters with
-// its value only (7e-5 rad/s times angles of arcminutes).
+// by the gyro's 21 parameters, dlambda2, the angle stage's parameters and,
+// through the specific force W of the g-sensitivity (the accelerometer's
+// readings model inverted at theta), the accelerometer's sensor-stage
+// parameters (Jets through SpecificForceFromReadings_g). Earth's rate enters
+// with its value only (7e-5 rad/s times angles of arcminutes).
 //
 // Saturation: an interval holding a gyro sample at the range's limit
 // (RunData::gyro_clipped, found by the reader) is left out; the intervals on
 // either side of a gap share no epoch and are independent.
 //
-// Left out (docs/method.md): the angle-stage effects (latency, encoder
-// harmonic, angle scale) act on the accelerometer's residuals only; the
-// gyro's residual uses the recorded angles.
+// The angle stage (latency, encoder harmonic, angle scale) is undone at every
+// sample as for the accelerometer's residuals (bench_model.h
+// BenchAnglesFromRecorded), with its derivatives: angle_latency is then the one
+// time offset between the angle sensors and both triads.
 #pragma once
 
 #include <array>

@@ -28,9 +28,19 @@ struct GyroRun {
   RunData data;
 };
 
-GyroRun MakeGyroRun(double rate_hz, double duration_s, double noise_dps, std::uint64_t seed) {
+GyroRun MakeGyroRun(double rate_hz, double duration_s, double noise_dps, std::uint64_t seed,
+                    const std::vector<Effect>& effects = {}, const NamedValues& effect_truth = {}) {
   GyroRun g;
   g.s = PaperScenario(rate_hz, duration_s, 2.0, 15.0, seed);
+  if (!effects.empty()) {
+    // Effects in the data (the accelerometer's through the simulator, the
+    // gyro's input rate is the bench's own).
+    g.s.truth_layout = ParameterLayout(effects);
+    Eigen::VectorXd t = Eigen::VectorXd::Zero(g.s.truth_layout.size());
+    t.head(kNumBaseParams) = g.s.truth;
+    g.s.truth = t;
+    SetFromFileUnits(g.s.truth_layout, effect_truth, &g.s.truth);
+  }
   std::mt19937_64 rng(seed * 7919 + 17);
   std::normal_distribution<double> n01;
   // The pseudo-measurement dpsi - dlambda2 = 0 +- 30'' is a measurement: its
@@ -39,9 +49,9 @@ GyroRun MakeGyroRun(double rate_hz, double duration_s, double noise_dps, std::ui
   // an over-statement: RMS z 0.82 over 200 seeds).
   g.s.truth[kDlambda2] = g.s.truth[kDpsi] + 30.0 * kArcsecToRad * n01(rng);
   g.data = Simulate(g.s);
-  g.layout = ParameterLayout({}, true);
+  g.layout = ParameterLayout(effects, true);
   g.truth = Eigen::VectorXd::Zero(g.layout.size());
-  g.truth.head(kNumBaseParams) = g.s.truth;
+  g.truth.head(g.s.truth.size()) = g.s.truth;
   const int go = g.layout.gyro_offset();
   for (int i = 0; i < 3; ++i) g.truth[go + kGKx + i] = 1.0;
   SetFromFileUnits(g.layout,
@@ -78,7 +88,8 @@ TEST(GyroTerm, ModelInvertsExactly) {
   EXPECT_LT((GyroRateFromReadings<double>(cfg, th.data(), G, W) - w).norm(), 1e-14);
 }
 
-// d r / d theta of every interval against central differences of r.
+// d r / d theta of every interval against central differences of r (the
+// gyro's parameters, dlambda2, and the accelerometer's through W).
 TEST(GyroTerm, JacobianMatchesCentralDifferences) {
   const GyroRun g = MakeGyroRun(50.0, 10.0, 0.05, 1);
   const RunProblem p = BuildRunProblem(g.s.run, g.data, g.layout, 0.5, {});
@@ -87,7 +98,9 @@ TEST(GyroTerm, JacobianMatchesCentralDifferences) {
   th[kDlambda2] += 1e-3;
   const GyroPass pass = EvaluateGyroPass(p, th, true, 1);
   const int go = g.layout.gyro_offset();
-  std::vector<int> cols = {kDlambda2};
+  // The accelerometer's readings-model parameters reach the gyro through W
+  // of the g-sensitivity.
+  std::vector<int> cols = {kDlambda2, kKx, kW0y, kAlphaX, kGammaZ, kKxy};
   for (int j = 0; j < kNumGyroParams; ++j) cols.push_back(go + j);
   for (int c : cols) {
     const double h = 1e-6 * std::max(1.0, std::abs(th[c]));
@@ -103,6 +116,24 @@ TEST(GyroTerm, JacobianMatchesCentralDifferences) {
       scale = std::max(scale, num.cwiseAbs().maxCoeff());
     }
     EXPECT_LE(worst, 1e-6 * scale + 1e-12) << g.layout.info(c).name;
+  }
+}
+
+// The information's scale-factor columns (the readings' form, with the
+// bench's rate from the angles) agree with the residual's own at the truth,
+// where the readings hold the rate and little else.
+TEST(GyroTerm, ScaleColumnsOfTheInformationAreTheResidualsAtTheTruth) {
+  const GyroRun g = MakeGyroRun(50.0, 20.0, 0.05, 6);
+  const RunProblem p = BuildRunProblem(g.s.run, g.data, g.layout, 0.5, {});
+  const GyroPass pass = EvaluateGyroPass(p, g.truth, true, 1);
+  const int go = g.layout.gyro_offset();
+  for (int i = 0; i < 3; ++i) {
+    double diff = 0.0, norm = 0.0;
+    for (std::size_t e = 0; e < pass.r.size(); ++e) {
+      diff += (pass.JK_info[e].col(i) - pass.J[e].col(go + kGKx + i)).squaredNorm();
+      norm += pass.J[e].col(go + kGKx + i).squaredNorm();
+    }
+    EXPECT_LT(std::sqrt(diff / norm), 0.02) << "K" << i;
   }
 }
 
@@ -227,6 +258,39 @@ TEST(GyroTerm, FitRecoversTheGyroWithinItsSigma) {
           << name << " seed " << seed << " value " << r.estimate.theta[i] << " truth "
           << g.truth[i] << " sigma " << sigma;
     }
+  }
+}
+
+// The angles lag the bench by 8 ms (angle_latency, in the data of both
+// triads): declared, it is one time offset between the angles and both
+// triads, estimated with the gyro's parameters; each within 4 sigma.
+TEST(GyroTerm, SharedTimeOffsetIsEstimated) {
+  const GyroRun g = MakeGyroRun(50.0, 90.0, 0.05, 21, {Effect::kAngleLatency},
+                                {{"angle_latency.tau", 8.0}});
+  const RunProblem p = BuildRunProblem(g.s.run, g.data, g.layout, 0.5, {});
+  // The residual's Jacobian by tau against central differences.
+  const int tau = g.layout.offset(Effect::kAngleLatency);
+  const GyroPass pass = EvaluateGyroPass(p, g.truth, true, 1);
+  Eigen::VectorXd tp = g.truth, tm = g.truth;
+  const double h = 1e-6;
+  tp[tau] += h;
+  tm[tau] -= h;
+  const GyroPass a = EvaluateGyroPass(p, tp, false, 1), b = EvaluateGyroPass(p, tm, false, 1);
+  double worst = 0.0, scale = 0.0;
+  for (std::size_t e = 0; e < pass.r.size(); ++e) {
+    const Eigen::Vector3d num = (a.r[e] - b.r[e]) / (2.0 * h);
+    worst = std::max(worst, (num - pass.J[e].col(tau)).cwiseAbs().maxCoeff());
+    scale = std::max(scale, num.cwiseAbs().maxCoeff());
+  }
+  EXPECT_LE(worst, 1e-5 * scale);
+  const BatchResult r = SolveBatch(g.s.run, g.data, g.layout, BatchOptions{});
+  ASSERT_TRUE(r.converged) << r.termination;
+  for (int i = 0; i < g.layout.size(); ++i) {
+    const std::string& name = g.layout.info(i).name;
+    if (!g.layout.is_gyro(i) && i != tau) continue;
+    ASSERT_TRUE(IsEstimated(r, name)) << name;
+    const double z = (r.estimate.theta[i] - g.truth[i]) / std::sqrt(r.estimate.cov(i, i));
+    EXPECT_LT(std::abs(z), 4.0) << name << " value " << r.estimate.theta[i] << " truth " << g.truth[i];
   }
 }
 
