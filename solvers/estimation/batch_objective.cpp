@@ -79,7 +79,7 @@ void BatchObjective::Reweight(Point* pt, const std::vector<Eigen::Vector3d>& noi
 void BatchObjective::ReweightGyro(Point* pt, const Point& other) const {
   for (int r = 0; r < runs(); ++r) {
     if (!HasGyroPart(*pt, r) || !HasGyroPart(other, r)) continue;
-    pt->gyro[r] = ReduceGyro(pt->gyro_passes[r], other.gyro[r].noise_rad_s, pt->gyro[r].rho, true);
+    pt->gyro[r] = ReduceGyroAtNoise(pt->gyro_passes[r], other.gyro[r].noise_rad_s, pt->gyro[r].rho);
   }
   Assemble(pt);
 }

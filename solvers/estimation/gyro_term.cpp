@@ -92,9 +92,28 @@ double TrapezoidWeight(const RunData& d, std::size_t k0, std::size_t k1, std::si
   return w;
 }
 
-// Channel i's noise direction at sample k, outer-axis frame: Rx(l2) e_i.
-Mat3d NoiseRotation(const RunData& d, std::size_t k) {
-  return Rx<double>(d.lambda_rad[1][k]);
+// Moments w^2 {1, c, s, c^2, s^2, cs} of the noise's rotation at sample k.
+void AddMoments(const RunData& d, std::size_t k, double w2, std::array<double, 6>* m) {
+  const double c = std::cos(d.lambda_rad[1][k]), s = std::sin(d.lambda_rad[1][k]);
+  (*m)[0] += w2;
+  (*m)[1] += w2 * c;
+  (*m)[2] += w2 * s;
+  (*m)[3] += w2 * c * c;
+  (*m)[4] += w2 * s * s;
+  (*m)[5] += w2 * c * s;
+}
+
+// sum w^2 (P u)(P u)^T, P = Rx(l2), from the moments.
+Mat3d WeightOf(const std::array<double, 6>& m, const Vec3d& u) {
+  const double x = u.x(), a = u.y(), b = u.z();
+  Mat3d W;
+  W(0, 0) = x * x * m[0];
+  W(0, 1) = W(1, 0) = x * (a * m[1] - b * m[2]);
+  W(0, 2) = W(2, 0) = x * (a * m[2] + b * m[1]);
+  W(1, 1) = a * a * m[3] - 2.0 * a * b * m[5] + b * b * m[4];
+  W(2, 2) = a * a * m[4] + 2.0 * a * b * m[5] + b * b * m[3];
+  W(1, 2) = W(2, 1) = a * a * m[5] + a * b * (m[3] - m[4]) - b * b * m[5];
+  return W;
 }
 
 }  // namespace
@@ -130,7 +149,7 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
     pass.K[i] = g[kGKx + i];
     pass.K_ref[i] = p.prior.mean[go + kGKx + i];
   }
-  if (with_jacobian) pass.JK_info.resize(E - 1);
+  if (with_jacobian) pass.J_info.resize(E - 1);
   // The bench's angle rates for the information's K columns, by central
   // differences over about +-0.05 s.
   const double dt_mean = (d.t_s.back() - d.t_s.front()) / std::max<std::size_t>(1, d.size() - 1);
@@ -140,6 +159,8 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
     return (d.lambda_rad[axis][b] - d.lambda_rad[axis][a]) / (d.t_s[b] - d.t_s[a]);
   };
   const Mat3d Mg = GyroMisalignmentMatrix(g);
+  pass.Mg_inv = Mg_inv;
+  pass.Mg_inv_ref = GyroMisalignmentMatrix(p.prior.mean.data() + go).inverse();
   // The angle stage (shared with the accelerometer's residuals: a latency of
   // the angles is one time offset between the angles and both triads).
   const std::vector<int> angle_idx = AngleStageIndices(cfg.layout);
@@ -163,8 +184,8 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
   };
   pass.r.resize(E - 1);
   pass.valid.assign(E - 1, 1);
-  pass.weight.resize(E - 1);
-  pass.cross.resize(E - 1);
+  pass.moments.assign(E - 1, {0, 0, 0, 0, 0, 0});
+  pass.cross_moments.assign(E - 1, {0, 0, 0, 0, 0, 0});
   if (with_jacobian) pass.J.resize(E - 1);
 
   ParallelFor(E - 1, threads, [&](std::size_t e) {
@@ -176,11 +197,10 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
     }
     Vec3d r = Vec3d::Zero();
     Eigen::Matrix<double, 3, kLocal> Jl = Eigen::Matrix<double, 3, kLocal>::Zero();
-    Mat3d JK = Mat3d::Zero();
+    Eigen::Matrix<double, 3, 9> JI = Eigen::Matrix<double, 3, 9>::Zero();
     Eigen::Matrix<double, 3, kAngleJet> Ja = Eigen::Matrix<double, 3, kAngleJet>::Zero();
     Eigen::Matrix<double, 3, kSensorJet> Js = Eigen::Matrix<double, 3, kSensorJet>::Zero();
-    std::array<Mat3d, 3> wgt;
-    for (Mat3d& m : wgt) m.setZero();
+    std::array<double, 6> mom = {0, 0, 0, 0, 0, 0};
     for (std::size_t k = k0; k <= k1; ++k) {
       const double w = TrapezoidWeight(d, k0, k1, k);
       const SampleContext ctx{d.t_s[k], d.has_temp() ? d.temp_C[k] : 0.0};
@@ -208,8 +228,7 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
       const BenchAngleSample b = bench_at(k);
       const Mat3d P = Rx<double>(b.angle[1] + th[kDlambda2]);
       r += w * (P * rate);
-      const Mat3d Pn = NoiseRotation(d, k);
-      for (int i = 0; i < 3; ++i) wgt[i] += (w * w) * Pn.col(i) * Pn.col(i).transpose();
+      AddMoments(d, k, w * w, &mom);
       if (!with_jacobian) continue;
       const Mat3d PA = w * P * A;
       const Mat3d PM = w * P * Mg_inv;
@@ -231,7 +250,11 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
       Vec3d w_bench = P.transpose() * Vec3d(0.0, l1_rate, 0.0);
       w_bench.x() += l2_rate;
       const Vec3d m_bench = Mg * w_bench;
-      for (int i = 0; i < 3; ++i) JK.col(i) -= PM.col(i) * (m_bench[i] / g[kGKx + i]);
+      for (int i = 0; i < 3; ++i) JI.col(i) -= PM.col(i) * (m_bench[i] / g[kGKx + i]);
+      for (int a = 0; a < 6; ++a) {
+        const AngleEntry& en = kAngleEntries[a];
+        JI.col(3 + a) -= PM.col(en.row) * (en.sign * w_bench[en.col]);
+      }
     }
     const BenchAngleSample b0 = bench_at(k0), b1 = bench_at(k1);
     r -= Vec3d(b1.angle[1] - b0.angle[1], b1.angle[0] - b0.angle[0], 0.0);
@@ -240,17 +263,12 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
       Ja.row(1) -= b1.d.row(0) - b0.d.row(0);
     }
     pass.r[e] = r;
-    pass.weight[e] = wgt;
+    pass.moments[e] = mom;
     // The sample at epoch e+1 ends this interval and starts the next.
     if (e + 2 < E) {
       const double w_last = TrapezoidWeight(d, k0, k1, k1);
       const double w_first = TrapezoidWeight(d, k1, epochs[e + 2], k1);
-      const Mat3d Pn = NoiseRotation(d, k1);
-      for (int i = 0; i < 3; ++i) {
-        pass.cross[e][i] = (w_last * w_first) * Pn.col(i) * Pn.col(i).transpose();
-      }
-    } else {
-      for (Mat3d& m : pass.cross[e]) m.setZero();
+      AddMoments(d, k1, w_last * w_first, &pass.cross_moments[e]);
     }
     if (with_jacobian) {
       Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, n);
@@ -259,21 +277,29 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
       for (int q = 0; q < na; ++q) J.col(angle_idx[q]) = Ja.col(q);
       for (int q = 0; q < ns; ++q) J.col(sensor_idx[q]) += Js.col(q);
       pass.J[e] = std::move(J);
-      pass.JK_info[e] = JK;
+      pass.J_info[e] = JI;
     }
   });
   return pass;
 }
 
 GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_s, double rho,
-                         bool theta_part) {
+                         bool theta_part, bool with_scores, const Eigen::Matrix3d* mg_inv) {
+  const Mat3d& Mi = mg_inv ? *mg_inv : pass.Mg_inv;
   const std::size_t K = pass.r.size();
   const int n = static_cast<int>(pass.theta.size());
   const bool jac = theta_part && pass.with_jacobian;
   // Channel i's noise in the residual's units: sigma_i / K_i (above).
   const Vec3d var = noise_rad_s.cwiseQuotient(pass.K).cwiseAbs2();
   const Vec3d var_ref = noise_rad_s.cwiseQuotient(pass.K_ref).cwiseAbs2();
-  const bool same_ref = (pass.K - pass.K_ref).cwiseAbs().maxCoeff() == 0.0;
+  const bool same_ref = (pass.K - pass.K_ref).cwiseAbs().maxCoeff() == 0.0 &&
+                        (Mi - pass.Mg_inv_ref).cwiseAbs().maxCoeff() == 0.0;
+  // Channel i's noise direction before the rotation: u_i = Mg^-1 e_i.
+  auto channels = [&](const std::array<double, 6>& m, const Vec3d& v, const Mat3d& U) {
+    Mat3d W = Mat3d::Zero();
+    for (int i = 0; i < 3; ++i) W += v[i] * WeightOf(m, U.col(i));
+    return W;
+  };
   Mat3d R3 = Mat3d::Zero();
   R3(0, 0) = R3(1, 1) = pass.angle_var;
   GyroReduction out;
@@ -297,9 +323,12 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
   }
   const int m = static_cast<int>(cols.size());
   const int go = pass.theta.size() - kNumGyroParams;  // the gyro block is last
-  std::vector<int> k_slot(3, -1);  // where K_x..K_z sit among cols
+  // Where K_x..K_z and the six angles sit among cols.
+  std::vector<int> k_slot(9, -1);
   for (int q = 0; q < m; ++q) {
-    if (cols[q] >= go + kGKx && cols[q] <= go + kGKz) k_slot[cols[q] - go - kGKx] = q;
+    const int j = cols[q] - go;
+    if (j >= kGKx && j <= kGKz) k_slot[j - kGKx] = q;
+    if (j >= kGAlphaX && j <= kGGammaZ) k_slot[3 + j - kGAlphaX] = q;
   }
   Eigen::MatrixXd Jnu_prev(3, m), Jnu(3, m), Jk(3, m);
   Eigen::MatrixXd Inu_prev(3, m), Inu(3, m), Ik(3, m);  // the information's form
@@ -315,18 +344,17 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
     if (!pass.valid[k]) {
       chained = false;
       out.whitened[k].setZero();
-      if (jac) out.scores.push_back(Eigen::VectorXd::Zero(n));
+      if (jac && with_scores) out.scores.push_back(Eigen::VectorXd::Zero(n));
       continue;
     }
     ++used;
-    Mat3d C = 2.0 * R3;
-    for (int i = 0; i < 3; ++i) C += var[i] * pass.weight[k][i];
+    const Mat3d C = 2.0 * R3 + channels(pass.moments[k], var, Mi);
     Vec3d nu = pass.r[k];
     if (jac) {
       for (int q = 0; q < m; ++q) Jk.col(q) = pass.J[k].col(cols[q]);
       Ik = Jk;
-      for (int i = 0; i < 3; ++i) {
-        if (k_slot[i] >= 0) Ik.col(k_slot[i]) = pass.JK_info[k].col(i);
+      for (int i = 0; i < 9; ++i) {
+        if (k_slot[i] >= 0) Ik.col(k_slot[i]) = pass.J_info[k].col(i);
       }
     }
     Mat3d S = C;
@@ -344,13 +372,11 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
     }
     if (!same_ref) {
       // The log-determinant at the reference scale factors.
-      Mat3d Cr = 2.0 * R3;
-      for (int i = 0; i < 3; ++i) Cr += var_ref[i] * pass.weight[k][i];
+      const Mat3d Cr = 2.0 * R3 + channels(pass.moments[k], var_ref, pass.Mg_inv_ref);
       Mat3d Sr = Cr;
       if (chained) Sr -= Cref_prev.transpose() * Sref_prev.llt().solve(Cref_prev);
       log_det_ref += 0.5 * std::log(Sr.determinant());
-      Cref_prev = -R3;
-      for (int i = 0; i < 3; ++i) Cref_prev += var_ref[i] * pass.cross[k][i];
+      Cref_prev = -R3 + channels(pass.cross_moments[k], var_ref, pass.Mg_inv_ref);
       Sref_prev = Sr;
     }
     const Eigen::LLT<Mat3d> llt(S);
@@ -362,9 +388,11 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
     if (jac) {
       const Eigen::MatrixXd Jz = L.triangularView<Eigen::Lower>().solve(Jnu);
       const Eigen::VectorXd sc = Jz.transpose() * z;
-      Eigen::VectorXd full = Eigen::VectorXd::Zero(n);
-      for (int q = 0; q < m; ++q) full[cols[q]] = sc[q];
-      out.scores.push_back(std::move(full));
+      if (with_scores) {
+        Eigen::VectorXd full = Eigen::VectorXd::Zero(n);
+        for (int q = 0; q < m; ++q) full[cols[q]] = sc[q];
+        out.scores.push_back(std::move(full));
+      }
       grad += sc;
       const Eigen::MatrixXd Iz = L.triangularView<Eigen::Lower>().solve(Inu);
       info.noalias() += Iz.transpose() * Iz;
@@ -372,8 +400,7 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
       Inu_prev = Inu;
     }
     // The covariance of this residual with the next one.
-    C_prev = -R3;
-    for (int i = 0; i < 3; ++i) C_prev += var[i] * pass.cross[k][i];
+    C_prev = -R3 + channels(pass.cross_moments[k], var, Mi);
     S_prev = S;
     nu_prev = nu;
     chained = true;
@@ -440,18 +467,38 @@ GyroReduction ReduceGyroAtBestNoise(const GyroPass& pass, const Eigen::Vector3d&
     s += step;
     if (-g.dot(step) < 1e-12) break;
   }
-  GyroReduction out = ReduceGyro(pass, s.array().exp(), rho, theta_part);
-  if (theta_part && out.gradient.size() > 0) {
-    // The weight's derivative: d cost / d K_i = q_i / K_i, q_i = -d cost / d log sigma_i.
-    const int go = static_cast<int>(pass.theta.size()) - kNumGyroParams;
-    for (int i = 0; i < 3; ++i) {
-      Eigen::Vector3d a = s, b = s;
-      a[i] += h;
-      b[i] -= h;
-      const double q = -(ReduceGyro(pass, a.array().exp(), rho, false).cost -
-                         ReduceGyro(pass, b.array().exp(), rho, false).cost) / (2.0 * h);
-      out.gradient[go + kGKx + i] += q / pass.K[i];
-    }
+  if (!theta_part) return ReduceGyro(pass, s.array().exp(), rho, false);
+  return ReduceGyroAtNoise(pass, s.array().exp(), rho);
+}
+
+GyroReduction ReduceGyroAtNoise(const GyroPass& pass, const Eigen::Vector3d& noise_rad_s,
+                                double rho) {
+  GyroReduction out = ReduceGyro(pass, noise_rad_s, rho, true);
+  if (out.gradient.size() == 0) return out;
+  const int go = static_cast<int>(pass.theta.size()) - kNumGyroParams;
+  const Eigen::Vector3d s = noise_rad_s.array().log();
+  const double h = 1e-3;
+  // The weights' derivatives. By K_i: d cost / d K_i = q_i / K_i,
+  // q_i = -d cost / d log sigma_i.
+  for (int i = 0; i < 3; ++i) {
+    Eigen::Vector3d a = s, b = s;
+    a[i] += h;
+    b[i] -= h;
+    const double q = -(ReduceGyro(pass, a.array().exp(), rho, false).cost -
+                       ReduceGyro(pass, b.array().exp(), rho, false).cost) / (2.0 * h);
+    out.gradient[go + kGKx + i] += q / pass.K[i];
+  }
+  // By the angles: the cost with the weights' Mg^-1 moved, the residual kept.
+  for (int a = 0; a < 6; ++a) {
+    const double ha = 1e-6;
+    Eigen::VectorXd tp = pass.theta, tm = pass.theta;
+    tp[go + kGAlphaX + a] += ha;
+    tm[go + kGAlphaX + a] -= ha;
+    const Eigen::Matrix3d Mp = GyroMisalignmentMatrix(tp.data() + go).inverse();
+    const Eigen::Matrix3d Mm = GyroMisalignmentMatrix(tm.data() + go).inverse();
+    out.gradient[go + kGAlphaX + a] +=
+        (ReduceGyro(pass, noise_rad_s, rho, false, false, &Mp).cost -
+         ReduceGyro(pass, noise_rad_s, rho, false, false, &Mm).cost) / (2.0 * ha);
   }
   return out;
 }

@@ -32,18 +32,22 @@
 // likelihood, held at its (restricted) maximum at every theta (Newton on -log L
 // in log sigma; rho = 1 - fitted / (3 (E - 1)), as the accelerometer's): the
 // minimiser works on the likelihood profiled over it. In the residual, which
-// is in input-rate units, channel i's noise is sigma_i / K_i: the weight
-// follows the scale factor, so that inflating K_i cannot shrink the whitened
-// residual (a channel that never sees a rate would otherwise be silenced by
-// K_i -> infinity); the log-determinant is taken at the reference scale
-// factors (the readings' noise does not depend on theta), as the
-// accelerometer's (run_evaluation.h). The gradient carries the weight's
-// derivative, q_i / K_i (q_i = -d cost / d log sigma_i); the Gauss-Newton
-// information takes K_i's column in the readings' form, -P Mg^-1 e_i (Mg w)_i
-// / K_i with w from the angles (differenced over +-0.05 s), which the weight's
-// derivative makes of the inverse model's -P Mg^-1 e_i y_i / K_i^2. The angle
-// noise is the run's declared one. The rotation in the noise's weights uses
-// the recorded inner angle (dlambda2 turns it by arcminutes).
+// is in input-rate units, channel i's noise is sigma_i / K_i along P Mg^-1
+// e_i: the weights follow the scale factors and the misalignment, so that
+// inflating K_i cannot shrink the whitened residual (a channel that never
+// sees a rate would otherwise be silenced by K_i -> infinity), and a quiet
+// channel is not charged with a loud one's noise (a misalignment of 46'
+// carries 1.4 % of the shaft channel's into another). The log-determinant is
+// taken at the reference values (the readings' noise does not depend on
+// theta), as the accelerometer's (run_evaluation.h). The gradient carries the
+// weights' derivatives: by K_i, q_i / K_i (q_i = -d cost / d log sigma_i); by
+// the angles, central differences of the cost in the weights alone. The
+// Gauss-Newton information takes K_i's and the angles' columns in the
+// readings' form, -P Mg^-1 dM (Mg w) with w the bench's rate from the angles
+// (differenced over +-0.05 s), which the weights' derivatives make of the
+// inverse model's columns (those carry the readings' noise). The angle noise
+// is the run's declared one. The rotation in the noise's weights uses the
+// recorded inner angle (dlambda2 turns it by arcminutes).
 //
 // Jacobian (written out; GyroRateFromReadings is linear in the readings):
 // by the gyro's 21 parameters, dlambda2, the angle stage's parameters and,
@@ -79,16 +83,20 @@ struct GyroPass {
   Eigen::VectorXd theta;
   std::vector<Eigen::Vector3d> r;   // E - 1 increment residuals [rad]
   std::vector<Eigen::MatrixXd> J;   // E - 1 of 3 x n, dr/dtheta (with the Jacobian)
-  // Per interval and channel i: the residual's covariance per unit variance
-  // of channel i's rate noise, on the interval (weight) and with the next
-  // interval (the shared sample, cross).
-  std::vector<std::array<Eigen::Matrix3d, 3>> weight, cross;
+  // Per interval: the moments of the noise's rotation, sums over its samples
+  // of w^2 {1, c, s, c^2, s^2, cs} (c, s of the recorded inner angle), and
+  // the same of the sample it shares with the next interval (w_last w_first):
+  // channel i's covariance per unit variance is W(u_i) = sum w^2 (P u_i)(P
+  // u_i)^T with u_i = Mg^-1 e_i (WeightOf), at any Mg.
+  std::vector<std::array<double, 6>> moments, cross_moments;
+  Eigen::Matrix3d Mg_inv = Eigen::Matrix3d::Identity();      // at theta
+  Eigen::Matrix3d Mg_inv_ref = Eigen::Matrix3d::Identity();  // at the reference
   double angle_var = 0.0;           // [rad^2] of each recorded angle
   Eigen::Vector3d K = Eigen::Vector3d::Ones();      // the gyro's scale factors at theta
   Eigen::Vector3d K_ref = Eigen::Vector3d::Ones();  // ... at the reference (prior means)
   // Per interval (with the Jacobian): the information's columns of K_x..K_z
-  // in the readings' form (above), 3 x 3.
-  std::vector<Eigen::Matrix3d> JK_info;
+  // and of the six angles in the readings' form (above), 3 x 9.
+  std::vector<Eigen::Matrix<double, 3, 9>> J_info;
   // Per interval: false when it holds a clipped gyro sample (RunData::
   // gyro_clipped): left out, never fitted through.
   std::vector<char> valid;
@@ -116,11 +124,19 @@ struct GyroReduction {
 // At a given reading noise [rad/s per channel]: cost, log-determinant, and
 // with theta_part the gradient (without the weight's derivative, which
 // ReduceGyroAtBestNoise adds) and the information.
+// mg_inv: the weights' Mg^-1 (default the pass's, at theta); without
+// with_scores no per-interval scores.
 GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_s,
-                         double rho, bool theta_part);
+                         double rho, bool theta_part, bool with_scores = true,
+                         const Eigen::Matrix3d* mg_inv = nullptr);
+
+// At a given noise, with the theta part and the weights' derivatives in the
+// gradient (what a change of the gradient at fixed noise is measured with).
+GyroReduction ReduceGyroAtNoise(const GyroPass& pass, const Eigen::Vector3d& noise_rad_s,
+                                double rho);
 
 // The noise at the maximum of the restricted likelihood (from `start`),
-// reduced there.
+// reduced there (ReduceGyroAtNoise with theta_part).
 GyroReduction ReduceGyroAtBestNoise(const GyroPass& pass, const Eigen::Vector3d& start,
                                     int fitted_parameters, bool theta_part);
 

@@ -119,21 +119,22 @@ TEST(GyroTerm, JacobianMatchesCentralDifferences) {
   }
 }
 
-// The information's scale-factor columns (the readings' form, with the
-// bench's rate from the angles) agree with the residual's own at the truth,
-// where the readings hold the rate and little else.
-TEST(GyroTerm, ScaleColumnsOfTheInformationAreTheResidualsAtTheTruth) {
+// The information's scale-factor and angle columns (the readings' form, with
+// the bench's rate from the angles) agree with the residual's own at the
+// truth, where the readings hold the rate and little else.
+TEST(GyroTerm, InformationColumnsAreTheResidualsAtTheTruth) {
   const GyroRun g = MakeGyroRun(50.0, 20.0, 0.05, 6);
   const RunProblem p = BuildRunProblem(g.s.run, g.data, g.layout, 0.5, {});
   const GyroPass pass = EvaluateGyroPass(p, g.truth, true, 1);
   const int go = g.layout.gyro_offset();
-  for (int i = 0; i < 3; ++i) {
+  for (int i = 0; i < 9; ++i) {
+    const int c = go + (i < 3 ? kGKx + i : kGAlphaX + i - 3);
     double diff = 0.0, norm = 0.0;
     for (std::size_t e = 0; e < pass.r.size(); ++e) {
-      diff += (pass.JK_info[e].col(i) - pass.J[e].col(go + kGKx + i)).squaredNorm();
-      norm += pass.J[e].col(go + kGKx + i).squaredNorm();
+      diff += (pass.J_info[e].col(i) - pass.J[e].col(c)).squaredNorm();
+      norm += pass.J[e].col(c).squaredNorm();
     }
-    EXPECT_LT(std::sqrt(diff / norm), 0.02) << "K" << i;
+    EXPECT_LT(std::sqrt(diff / norm), 0.02) << g.layout.info(c).name;
   }
 }
 
@@ -147,9 +148,10 @@ TEST(GyroTerm, ProfiledGradientMatchesCentralDifferences) {
   Eigen::VectorXd th = g.truth;
   th[go + kGKx] *= 1.002;  // away from the optimum
   th[go + kGW0z] += 2e-4;
+  th[go + kGAlphaY] += 3e-4;
   const Eigen::Vector3d start = Eigen::Vector3d::Constant(0.05 * kDegToRad);
   const GyroReduction at = ReduceGyroAtBestNoise(EvaluateGyroPass(p, th, true, 1), start, 21, true);
-  for (int j : {kGKx, kGKy, kGKz, kGW0x, kGW0z, kGBetaZ, kGGxy}) {
+  for (int j : {kGKx, kGKy, kGKz, kGW0x, kGW0z, kGAlphaY, kGBetaZ, kGGammaZ, kGGxy}) {
     SCOPED_TRACE(g.layout.info(go + j).name);
     const int c = go + j;
     const double h = 1e-6 * std::max(1.0, std::abs(th[c]));
@@ -162,6 +164,33 @@ TEST(GyroTerm, ProfiledGradientMatchesCentralDifferences) {
     // Agreement to 1e-4 of a gradient of one sigma's offset (sqrt of the information).
     EXPECT_NEAR(at.gradient[c], num, 1e-4 * (std::abs(num) + std::sqrt(at.information(c, c))))
         << g.layout.info(c).name << " analytic " << at.gradient[c] << " numeric " << num;
+  }
+}
+
+// At a fixed noise (what the minimiser measures its curvature with) the
+// gradient carries the weights' derivatives too: against central differences
+// of -log L at that noise.
+TEST(GyroTerm, GradientAtFixedNoiseMatchesCentralDifferences) {
+  const GyroRun g = MakeGyroRun(50.0, 20.0, 0.05, 4);
+  const RunProblem p = BuildRunProblem(g.s.run, g.data, g.layout, 0.5, {});
+  const int go = g.layout.gyro_offset();
+  Eigen::VectorXd th = g.truth;
+  th[go + kGKx] *= 1.002;
+  th[go + kGAlphaY] += 3e-4;
+  const Eigen::Vector3d noise(0.04 * kDegToRad, 0.06 * kDegToRad, 0.05 * kDegToRad);
+  const double rho = 0.97;
+  const GyroReduction at = ReduceGyroAtNoise(EvaluateGyroPass(p, th, true, 1), noise, rho);
+  for (int j : {kGKx, kGKy, kGW0z, kGAlphaY, kGBetaZ, kGGammaZ, kGGxy}) {
+    const int c = go + j;
+    SCOPED_TRACE(g.layout.info(c).name);
+    const double h = 1e-6 * std::max(1.0, std::abs(th[c]));
+    Eigen::VectorXd tp = th, tm = th;
+    tp[c] += h;
+    tm[c] -= h;
+    const double fp = ReduceGyro(EvaluateGyroPass(p, tp, false, 1), noise, rho, false).neg_log_l;
+    const double fm = ReduceGyro(EvaluateGyroPass(p, tm, false, 1), noise, rho, false).neg_log_l;
+    const double num = (fp - fm) / (2.0 * h);
+    EXPECT_NEAR(at.gradient[c], num, 1e-4 * (std::abs(num) + std::sqrt(at.information(c, c))));
   }
 }
 
