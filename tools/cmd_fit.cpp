@@ -76,6 +76,20 @@ int RunFit(FitArgs a) {
               r.residuals.process_rms[0], r.residuals.process_rms[1], r.residuals.process_rms[2],
               r.residuals.process_rms[3], r.residuals.process_rms[4], r.residuals.process_rms[5],
               r.residuals.process_whitened_rms);
+  if (f.json.contains("gyro")) {
+    // The gyro triad's part, from the OUT (its units there).
+    const nlohmann::json& g = f.json["gyro"];
+    const auto& n = g["noise"]["estimated_dps"];
+    const auto& res = g["residual_rms_arcsec"];
+    std::printf("gyro: reading noise %.3g %.3g %.3g deg/s (estimated); increment residual RMS "
+                "inner %.3g, outer %.3g, normal %.3g arcsec per %.2g s; whitened %.3f; %d "
+                "intervals left out (clipped)\n",
+                n[0].get<double>(), n[1].get<double>(), n[2].get<double>(),
+                res["inner"].get<double>(), res["outer"].get<double>(),
+                res["normal"].get<double>(), g["interval_s"].get<double>(),
+                g["whitened_rms"].get<double>(),
+                g["intervals_left_out_clipped"].get<int>());
+  }
   std::printf("time: init %.2f s, solve %.2f s, covariance %.2f s\n", r.init_seconds,
               r.solve_seconds, r.covariance_seconds);
   std::printf("wrote %s\n", a.out_json.c_str());

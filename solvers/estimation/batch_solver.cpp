@@ -531,6 +531,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
     }
     res.gyro.residual_rms_rad = (ss / std::max<std::size_t>(1, used)).cwiseSqrt();
     res.gyro.intervals = static_cast<int>(gp.r.size());
+    res.gyro.interval_s = std::min(opt.epoch_s, kGyroEpoch_s);
     res.gyro.intervals_clipped = static_cast<int>(gp.r.size() - used);
     res.gyro.whitened_rms = std::sqrt(2.0 * g.cost / std::max(1, g.degrees_of_freedom));
   }

@@ -273,7 +273,8 @@ struct BatchResult {
     double whitened_rms = 0.0;
     int degrees_of_freedom = 0;
     double neg_log_likelihood = 0.0;
-    int intervals = 0;          // of kGyroEpoch_s
+    int intervals = 0;          // of interval_s
+    double interval_s = 0.0;    // min(epoch, kGyroEpoch_s)
     int intervals_clipped = 0;  // left out: a gyro sample at the range's limit
   } gyro;
 };

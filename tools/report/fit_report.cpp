@@ -289,6 +289,7 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
                                 "against the angle sensors (outer-axis frame)"},
                    {"whitened_rms", r.gyro.whitened_rms},
                    {"intervals", r.gyro.intervals},
+                   {"interval_s", r.gyro.interval_s},
                    {"intervals_left_out_clipped", r.gyro.intervals_clipped},
                    {"degrees_of_freedom", r.gyro.degrees_of_freedom}};
   }
