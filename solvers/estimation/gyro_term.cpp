@@ -306,8 +306,8 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
   out.noise_rad_s = noise_rad_s;
   out.rho = rho;
   out.whitened.resize(K);
-  // The columns with a derivative (others are zero): every run's Jacobian
-  // has the same pattern, taken from the first interval.
+  // The columns with a derivative in some interval (the others are zero
+  // throughout: the reduction works on these alone).
   std::vector<int> cols;
   if (jac) {
     for (int c = 0; c < n; ++c) {
