@@ -31,17 +31,6 @@ std::array<J, kMaxParams> SeededTheta(const double* th, int n, const std::vector
   return t;
 }
 
-// The parameter indices of the layout's angle-stage effects.
-std::vector<int> AngleStageParams(const ParameterLayout& layout) {
-  std::vector<int> idx;
-  for (Effect e : layout.effects()) {
-    const EffectSpec& s = GetEffectSpec(e);
-    if (s.stage != EffectStage::kAngle) continue;
-    for (std::size_t q = 0; q < s.params.size(); ++q) idx.push_back(layout.offset(e) + q);
-  }
-  return idx;
-}
-
 // [v x]
 Mat3<double> Cross(const Vec3<double>& v) {
   Mat3<double> m;
@@ -104,7 +93,7 @@ double ReadingWithoutOffset(const ParameterLayout& layout, const double* th, int
 }  // namespace
 
 bool B1HasAnalyticJacobian(const ParameterLayout& layout) {
-  if (layout.size() > kMaxParams || AngleStageParams(layout).size() > kJetParams) return false;
+  if (layout.size() > kMaxParams || layout.StageParams(EffectStage::kAngle).size() > kJetParams) return false;
   for (Effect e : layout.effects()) {
     if (!GetEffectSpec(e).b1_analytic_jacobian) return false;
   }
@@ -125,7 +114,7 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
   // angle-stage parameters (Jets over those alone).
   BenchAngles<double> b = rec;
   const std::vector<int> angle_params =
-      layout.has_stage(EffectStage::kAngle) ? AngleStageParams(layout) : std::vector<int>();
+      layout.has_stage(EffectStage::kAngle) ? layout.StageParams(EffectStage::kAngle) : std::vector<int>();
   Eigen::Matrix<double, 6, kJetParams> db = Eigen::Matrix<double, 6, kJetParams>::Zero();
   if (!angle_params.empty()) {
     const std::array<SmallJet, kMaxParams> t = SeededTheta<SmallJet>(th, n, angle_params);

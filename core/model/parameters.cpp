@@ -87,6 +87,16 @@ ParameterLayout::ParameterLayout(const std::vector<Effect>& effects, bool gyro) 
   for (int i = 0; i < size(); ++i) index_[info_[i].name] = i;
 }
 
+std::vector<int> ParameterLayout::StageParams(EffectStage stage) const {
+  std::vector<int> idx;
+  for (Effect e : effects_) {
+    const EffectSpec& s = GetEffectSpec(e);
+    if (s.stage != stage) continue;
+    for (std::size_t q = 0; q < s.params.size(); ++q) idx.push_back(offset(e) + static_cast<int>(q));
+  }
+  return idx;
+}
+
 int ParameterLayout::IndexOf(const std::string& name) const {
   auto it = index_.find(name);
   return it == index_.end() ? -1 : it->second;

@@ -91,6 +91,8 @@ class ParameterLayout {
   // True when some effect of this stage is on (bench_model.h skips a stage
   // without effects).
   bool has_stage(EffectStage s) const { return has_stage_[static_cast<int>(s)]; }
+  // The theta indices of the parameters of the effects of stage s, in layout order.
+  std::vector<int> StageParams(EffectStage s) const;
   // The zero-offset terms (EffectSpec::zero_offset_signal) of the effects on:
   // theta[offset + i] multiplies the signal in W0_i, i = 0..2.
   struct ZeroOffsetTerm {

@@ -41,24 +41,11 @@ using AngleJet = ceres::Jet<double, kAngleJet>;
 constexpr int kSensorJet = 40;
 using SensorJet = ceres::Jet<double, kSensorJet>;
 
+// The readings model's parameters: the base sensor block and the sensor-stage effects'.
 std::vector<int> SensorStageIndices(const ParameterLayout& layout) {
   std::vector<int> idx;
   for (int i = kKx; i <= kKzz; ++i) idx.push_back(i);
-  for (Effect e : layout.effects()) {
-    const EffectSpec& s = GetEffectSpec(e);
-    if (s.stage != EffectStage::kSensor) continue;
-    for (std::size_t q = 0; q < s.params.size(); ++q) idx.push_back(layout.offset(e) + q);
-  }
-  return idx;
-}
-
-std::vector<int> AngleStageIndices(const ParameterLayout& layout) {
-  std::vector<int> idx;
-  for (Effect e : layout.effects()) {
-    const EffectSpec& s = GetEffectSpec(e);
-    if (s.stage != EffectStage::kAngle) continue;
-    for (std::size_t q = 0; q < s.params.size(); ++q) idx.push_back(layout.offset(e) + q);
-  }
+  for (int i : layout.StageParams(EffectStage::kSensor)) idx.push_back(i);
   return idx;
 }
 
@@ -163,7 +150,7 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
   pass.Mg_inv_ref = GyroMisalignmentMatrix(p.prior.mean.data() + go).inverse();
   // The angle stage (shared with the accelerometer's residuals: a latency of
   // the angles is one time offset between the angles and both triads).
-  const std::vector<int> angle_idx = AngleStageIndices(cfg.layout);
+  const std::vector<int> angle_idx = cfg.layout.StageParams(EffectStage::kAngle);
   if (angle_idx.size() > kAngleJet) throw std::logic_error("EvaluateGyroPass: angle stage too large");
   const int na = static_cast<int>(angle_idx.size());
   std::vector<AngleJet> th_jet(n);
