@@ -28,6 +28,7 @@
 #include "core/model/errors.h"
 #include "core/model/units.h"
 #include "core/simulation/simulator.h"
+#include "core/version/version.h"
 #include "solvers/estimation/batch_solver.h"
 #include "tools/report/estimate_json.h"
 #include "tools/report/fit_report.h"
@@ -271,7 +272,7 @@ py::dict LoadRun(const py::object& run_arg) {
 PYBIND11_MODULE(triadcal, m) {
   using namespace pybind11::literals;
   m.doc() = "triadcal: calibrate a MEMS accelerometer triad from a two-axis bench run";
-  m.attr("__version__") = "0.1.0";
+  m.attr("__version__") = triadcal::ToolVersion();  // project()'s, core/version/version.h
   static py::exception<triadcal::InputError> input_error(m, "InputError", PyExc_ValueError);
   py::register_exception_translator([](std::exception_ptr p) {
     try {
