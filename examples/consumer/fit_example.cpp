@@ -6,11 +6,11 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 
-#include "core/io/run_description_io.h"
-#include "core/io/run_io.h"
-#include "core/model/errors.h"
-#include "core/model/parameters.h"
-#include "solvers/estimation/batch_solver.h"
+#include <triadcal/core/io/run_description_io.h>
+#include <triadcal/core/io/run_io.h>
+#include <triadcal/core/model/errors.h>
+#include <triadcal/core/model/parameters.h>
+#include <triadcal/solvers/estimation/batch_solver.h>
 
 int main(int argc, char** argv) {
   if (argc != 2) {
