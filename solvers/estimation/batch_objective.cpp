@@ -25,7 +25,7 @@ BatchObjective::BatchObjective(std::vector<LinkedRun> runs, Eigen::MatrixXd A, E
     }
   }
   for (int r = 0; r < this->runs(); ++r) {
-    weights_.push_back(EvaluatePass(*runs_[r].problem, ThetaOf(r, weights_phi), false, threads_));
+    weights_.push_back(WeightsPass(*runs_[r].problem, ThetaOf(r, weights_phi), threads_));
     has_gyro_.push_back(RunHasGyro(*runs_[r].problem));
     gyro_noise_hint_.push_back(runs_[r].problem->gyro_noise_rad_s);
   }
@@ -70,8 +70,8 @@ void BatchObjective::Reweight(Point* pt, const std::vector<Eigen::Vector3d>& noi
                               bool theta_part) const {
   pt->reductions.clear();
   for (int r = 0; r < runs(); ++r) {
-    pt->reductions.push_back(Reduce(*runs_[r].problem, pt->passes[r], noise[r], threads_,
-                                    &weights_[r], theta_part));
+    pt->reductions.push_back(Reduce(*runs_[r].problem, pt->passes[r], weights_[r], noise[r],
+                                    threads_, theta_part));
   }
   Assemble(pt);
 }

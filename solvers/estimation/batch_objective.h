@@ -81,6 +81,9 @@ class BatchObjective {
   // at its own maximum): what a change of the gradient at fixed noise needs.
   void ReweightGyro(Point* pt, const Point& other) const;
 
+  // Run r's reference pass of the noise weights (run_evaluation.h).
+  const RunPass& weights(int r) const { return weights_[r]; }
+
  private:
   void Assemble(Point* pt) const;
 

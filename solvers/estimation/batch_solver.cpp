@@ -120,8 +120,11 @@ Estimate Initialise(const RunDescription& run, const RunData& data, const Parame
 }
 
 // Residuals at the solution, raw and whitened, and their summaries.
-void CollectResiduals(const RunProblem& p, const RunData& data, const RunPass& pass,
-                      const RunReduction& red, int fitted, BatchResult* res) {
+// weights: the reference pass whose noise weights whiten the residuals in the
+// cost (run_evaluation.h), so that the whitened residuals are the cost's.
+void CollectResiduals(const RunProblem& p, const RunData& data, const RunPass& weights,
+                      const Eigen::VectorXd& theta, const RunReduction& red, int fitted,
+                      BatchResult* res) {
   const std::size_t E = p.epochs.size();
   res->epoch_t.resize(E);
   res->epoch_samples = p.epochs;
@@ -134,7 +137,7 @@ void CollectResiduals(const RunProblem& p, const RunData& data, const RunPass& p
   for (std::size_t e = 0; e < E; ++e) {
     res->epoch_t[e] = data.t_s[p.epochs[e]];
     mss += red.measurement_residual[e].cwiseAbs2();
-    res->measurement_whitened[e] = pass.LR[e] * red.measurement_residual[e];
+    res->measurement_whitened[e] = weights.LR[e] * red.measurement_residual[e];
     mw += res->measurement_whitened[e].squaredNorm();
     if (e > 0) pss += red.process_residual[e].cwiseAbs2();
   }
@@ -143,7 +146,7 @@ void CollectResiduals(const RunProblem& p, const RunData& data, const RunPass& p
   q.noise_mV = red.noise_mV;
   const StateSpaceModel model(q);
   const std::vector<Vec6> raw(red.process_residual.begin() + 1, red.process_residual.end());
-  const std::vector<Vec6> white = model.WhitenProcessSequence(pass.process, raw, pass.theta);
+  const std::vector<Vec6> white = model.WhitenProcessSequence(weights.process, raw, theta);
   for (std::size_t e = 1; e < E; ++e) {
     res->process_whitened[e] = white[e - 1];
     pw += white[e - 1].squaredNorm();
@@ -558,7 +561,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
     return SolveBatch(run, data, layout, o);
   }
   res.solve_seconds = Seconds(t_solve);
-  CollectResiduals(p, data, pass, red, fitted, &res);
+  CollectResiduals(p, data, objective.weights(0), pass.theta, red, fitted, &res);
   res.noise_check = CheckNoise(red, res.noise_declared_mV, fitted, res.process_whitened);
 
   // 4. The covariance at the minimum.
