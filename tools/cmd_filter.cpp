@@ -19,6 +19,7 @@
 #include "tools/commands.h"
 #include "tools/provenance.h"
 #include "tools/report/estimate_json.h"
+#include "tools/report/fit_report.h"
 #include "tools/report/result_plausibility.h"
 #include "tools/report/value_format.h"
 
@@ -109,6 +110,15 @@ int RunFilter(const FilterArgs& a) {
   }
   const FilterResult r = RunFilterSmoother(run.description, run.data, layout, opt);
   EndProgress();
+  if (!r.ekf.theta.allFinite() || !r.rts.theta.allFinite()) {
+    // No number to write: a diverged filter's estimate is not a result.
+    std::fprintf(stderr,
+                 "triadcal: error: %s: the filter diverged (its estimate is not finite): the "
+                 "readings are far from the nominal model (check triad.bias_mV, "
+                 "triad.scale_mV_per_g and the readings' unit)\n",
+                 a.run_yaml.c_str());
+    return kExitNotConverged;
+  }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
