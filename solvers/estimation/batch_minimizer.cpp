@@ -136,8 +136,7 @@ void BatchMinimizer::MaximiseNoise(BatchObjective::Point* pt,
     if (largest < kNoiseTolerance) break;
     bool lowered = false;
     for (int halving = 0; halving < 20 && !lowered; ++halving) {
-      BatchObjective::Point trial = *pt;
-      objective_.Reweight(&trial, trial_noise, false);
+      BatchObjective::Point trial = objective_.AtNoise(*pt, trial_noise, false);
       const double ft = Objective(trial);
       if (std::isfinite(ft) && ft <= f) {
         *pt = std::move(trial);
@@ -221,8 +220,7 @@ void BatchMinimizer::MeasureCurvature(const BatchObjective::Point& trial,
   // d^T B d + y y^T / y^T d, S = B+ - H at the new point. A misfit's
   // residual curvature made Gauss-Newton converge linearly (real fast roll
   // run: 13 steps with the noise held, 5 with S).
-  BatchObjective::Point at = current_;
-  objective_.Reweight(&at, trial_noise, true);
+  BatchObjective::Point at = objective_.AtNoise(current_, trial_noise, true);
   objective_.ReweightGyro(&at, trial);
   Eigen::VectorXd g0, g1;
   Eigen::MatrixXd H0, H1;

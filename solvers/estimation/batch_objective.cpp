@@ -50,16 +50,18 @@ BatchObjective::Point BatchObjective::Evaluate(const Eigen::VectorXd& phi,
   pt.phi = phi;
   pt.passes.reserve(runs_.size());
   for (int r = 0; r < runs(); ++r) {
-    pt.passes.push_back(EvaluatePass(*runs_[r].problem, ThetaOf(r, phi), with_jacobian, threads_));
+    pt.passes.push_back(std::make_shared<const RunPass>(
+        EvaluatePass(*runs_[r].problem, ThetaOf(r, phi), with_jacobian, threads_)));
   }
   pt.gyro_passes.resize(runs_.size());
   pt.gyro.resize(runs_.size());
   for (int r = 0; r < runs(); ++r) {
     if (!has_gyro_[r]) continue;
     const RunProblem& p = *runs_[r].problem;
-    pt.gyro_passes[r] = EvaluateGyroPass(p, ThetaOf(r, phi), with_jacobian, threads_);
+    pt.gyro_passes[r] = std::make_shared<const GyroPass>(
+        EvaluateGyroPass(p, ThetaOf(r, phi), with_jacobian, threads_));
     const int fitted = p.cfg.layout.has_gyro() ? kNumGyroParams : 0;
-    pt.gyro[r] = ReduceGyroAtBestNoise(pt.gyro_passes[r], gyro_noise_hint_[r], fitted, true);
+    pt.gyro[r] = ReduceGyroAtBestNoise(*pt.gyro_passes[r], gyro_noise_hint_[r], fitted, true);
     if (pt.gyro[r].noise_rad_s.allFinite()) gyro_noise_hint_[r] = pt.gyro[r].noise_rad_s;
   }
   Reweight(&pt, noise);
@@ -70,16 +72,28 @@ void BatchObjective::Reweight(Point* pt, const std::vector<Eigen::Vector3d>& noi
                               bool theta_part) const {
   pt->reductions.clear();
   for (int r = 0; r < runs(); ++r) {
-    pt->reductions.push_back(Reduce(*runs_[r].problem, pt->passes[r], weights_[r], noise[r],
+    pt->reductions.push_back(Reduce(*runs_[r].problem, *pt->passes[r], weights_[r], noise[r],
                                     threads_, theta_part));
   }
   Assemble(pt);
 }
 
+BatchObjective::Point BatchObjective::AtNoise(const Point& pt,
+                                              const std::vector<Eigen::Vector3d>& noise,
+                                              bool theta_part) const {
+  Point at;
+  at.phi = pt.phi;
+  at.passes = pt.passes;
+  at.gyro_passes = pt.gyro_passes;
+  at.gyro = pt.gyro;
+  Reweight(&at, noise, theta_part);
+  return at;
+}
+
 void BatchObjective::ReweightGyro(Point* pt, const Point& other) const {
   for (int r = 0; r < runs(); ++r) {
     if (!HasGyroPart(*pt, r) || !HasGyroPart(other, r)) continue;
-    pt->gyro[r] = ReduceGyroAtNoise(pt->gyro_passes[r], other.gyro[r].noise_rad_s, pt->gyro[r].rho);
+    pt->gyro[r] = ReduceGyroAtNoise(*pt->gyro_passes[r], other.gyro[r].noise_rad_s, pt->gyro[r].rho);
   }
   Assemble(pt);
 }

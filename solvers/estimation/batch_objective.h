@@ -17,6 +17,7 @@
 // new noise needs only the reductions again (Reweight).
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
@@ -43,11 +44,13 @@ class BatchObjective {
 
   struct Point {
     Eigen::VectorXd phi;
-    std::vector<RunPass> passes;            // per run
+    // Per run; a pass never changes once evaluated, and the same point at
+    // other noises (AtNoise) shares it.
+    std::vector<std::shared_ptr<const RunPass>> passes;
     std::vector<RunReduction> reductions;   // per run, at its noise
-    // Per run with a gyro triad (gyro_term.h; empty entries for the others):
+    // Per run with a gyro triad (gyro_term.h; null entries for the others):
     // its pass, and its reduction at its noise's maximum there.
-    std::vector<GyroPass> gyro_passes;
+    std::vector<std::shared_ptr<const GyroPass>> gyro_passes;
     std::vector<GyroReduction> gyro;
     double cost = 0.0;                      // 0.5 chi^2: data, priors, constraints, + gyro_cost
     double data_cost = 0.0;                 // the runs' accelerometer part
@@ -76,6 +79,10 @@ class BatchObjective {
   // The same point at other noises (no pass over the samples); without
   // theta_part, only the costs and the noises' parts (no gradient).
   void Reweight(Point* pt, const std::vector<Eigen::Vector3d>& noise,
+                bool theta_part = true) const;
+  // pt at other noises as a new point (its passes shared, its reductions
+  // formed anew: pt's are not copied).
+  Point AtNoise(const Point& pt, const std::vector<Eigen::Vector3d>& noise,
                 bool theta_part = true) const;
   // The same point with each gyro's part at the gyro noise of `other` (not
   // at its own maximum): what a change of the gradient at fixed noise needs.

@@ -503,7 +503,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   BatchMinimizer minimizer(objective, est, mo);
   MinimizerSummary summary;
   BatchObjective::Point pt = minimizer.Minimize(theta0, {noise0}, &summary);
-  const RunPass& pass = pt.passes[0];
+  const RunPass& pass = *pt.passes[0];
   const RunReduction& red = pt.reductions[0];
   const int fitted = static_cast<int>(est.size());
   res.converged = summary.converged;
@@ -513,8 +513,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   say(summary.termination);
   res.final_cost = pt.cost - pt.gyro_cost;
   if (opt.cost_at_noise.minCoeff() > 0.0) {
-    BatchObjective::Point at = pt;
-    objective.Reweight(&at, {opt.cost_at_noise}, false);
+    const BatchObjective::Point at = objective.AtNoise(pt, {opt.cost_at_noise}, false);
     res.cost_at_noise = at.cost - at.gyro_cost;
   }
   if (objective.HasGyroPart(pt, 0)) {
@@ -524,7 +523,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
     res.gyro.noise_declared_rad_s = run.gyro ? run.gyro->noise_rad_s : p.gyro_noise_rad_s;
     res.gyro.degrees_of_freedom = g.degrees_of_freedom;
     res.gyro.neg_log_likelihood = g.neg_log_l;
-    const GyroPass& gp = pt.gyro_passes[0];
+    const GyroPass& gp = *pt.gyro_passes[0];
     Eigen::Vector3d ss = Eigen::Vector3d::Zero();
     std::size_t used = 0;
     for (std::size_t k = 0; k < gp.r.size(); ++k) {
