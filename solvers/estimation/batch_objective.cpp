@@ -45,7 +45,7 @@ Eigen::MatrixXd BatchObjective::MapOf(int r) const {
 
 BatchObjective::Point BatchObjective::Evaluate(const Eigen::VectorXd& phi,
                                                const std::vector<Eigen::Vector3d>& noise,
-                                               bool with_jacobian) const {
+                                               bool with_jacobian, ThetaPart theta_part) const {
   Point pt;
   pt.phi = phi;
   pt.passes.reserve(runs_.size());
@@ -64,12 +64,12 @@ BatchObjective::Point BatchObjective::Evaluate(const Eigen::VectorXd& phi,
     pt.gyro[r] = ReduceGyroAtBestNoise(*pt.gyro_passes[r], gyro_noise_hint_[r], fitted, true);
     if (pt.gyro[r].noise_rad_s.allFinite()) gyro_noise_hint_[r] = pt.gyro[r].noise_rad_s;
   }
-  Reweight(&pt, noise);
+  Reweight(&pt, noise, theta_part);
   return pt;
 }
 
 void BatchObjective::Reweight(Point* pt, const std::vector<Eigen::Vector3d>& noise,
-                              bool theta_part) const {
+                              ThetaPart theta_part) const {
   pt->reductions.clear();
   for (int r = 0; r < runs(); ++r) {
     pt->reductions.push_back(Reduce(*runs_[r].problem, *pt->passes[r], weights_[r], noise[r],
@@ -80,7 +80,7 @@ void BatchObjective::Reweight(Point* pt, const std::vector<Eigen::Vector3d>& noi
 
 BatchObjective::Point BatchObjective::AtNoise(const Point& pt,
                                               const std::vector<Eigen::Vector3d>& noise,
-                                              bool theta_part) const {
+                                              ThetaPart theta_part) const {
   Point at;
   at.phi = pt.phi;
   at.passes = pt.passes;
@@ -114,26 +114,28 @@ void BatchObjective::Assemble(Point* pt) const {
     pt->data_information.resize(0, 0);
     return;
   }
+  const bool with_information = pt->reductions[0].information.size() > 0;
   pt->gradient = A_.transpose() * res;
-  pt->data_information = Eigen::MatrixXd::Zero(m_, m_);
+  pt->data_information = Eigen::MatrixXd::Zero(with_information ? m_ : 0, with_information ? m_ : 0);
   for (int r = 0; r < runs(); ++r) {
     const RunReduction& red = pt->reductions[r];
     Eigen::VectorXd g = red.gradient;
     Eigen::MatrixXd I = red.information;
     if (HasGyroPart(*pt, r) && pt->gyro[r].gradient.size() > 0) {
       g += pt->gyro[r].gradient;
-      I += pt->gyro[r].information;
+      if (with_information) I += pt->gyro[r].information;
     }
     if (runs_[r].map.size() == 0) {
       pt->gradient += g;
-      pt->data_information += I;
+      if (with_information) pt->data_information += I;
     } else {
       const Eigen::MatrixXd& T = runs_[r].map;
       pt->gradient.noalias() += T.transpose() * g;
-      pt->data_information.noalias() += T.transpose() * I * T;
+      if (with_information) pt->data_information.noalias() += T.transpose() * I * T;
     }
   }
-  pt->information = pt->data_information + A_.transpose() * A_;
+  pt->information = with_information ? Eigen::MatrixXd(pt->data_information + A_.transpose() * A_)
+                                     : Eigen::MatrixXd();
 }
 
 }  // namespace triadcal

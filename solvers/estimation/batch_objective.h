@@ -74,16 +74,21 @@ class BatchObjective {
   Eigen::MatrixXd MapOf(int r) const;
 
   // One pass over every run's samples at phi, each reduced at noise[r].
+  // theta_part: what the reductions form (run_evaluation.h); the pass keeps
+  // its Jacobian whatever it is, for a caller that moves the noise first and
+  // reduces in full there (BatchMinimizer::MaximiseNoise).
   Point Evaluate(const Eigen::VectorXd& phi, const std::vector<Eigen::Vector3d>& noise,
-                 bool with_jacobian) const;
-  // The same point at other noises (no pass over the samples); without
-  // theta_part, only the costs and the noises' parts (no gradient).
+                 bool with_jacobian,
+                 ThetaPart theta_part = ThetaPart::kGradientAndInformation) const;
+  // The same point at other noises (no pass over the samples), its
+  // reductions forming theta_part (without the information, pt has none;
+  // without the gradient, neither).
   void Reweight(Point* pt, const std::vector<Eigen::Vector3d>& noise,
-                bool theta_part = true) const;
+                ThetaPart theta_part = ThetaPart::kGradientAndInformation) const;
   // pt at other noises as a new point (its passes shared, its reductions
   // formed anew: pt's are not copied).
   Point AtNoise(const Point& pt, const std::vector<Eigen::Vector3d>& noise,
-                bool theta_part = true) const;
+                ThetaPart theta_part = ThetaPart::kGradientAndInformation) const;
   // The same point with each gyro's part at the gyro noise of `other` (not
   // at its own maximum): what a change of the gradient at fixed noise needs.
   void ReweightGyro(Point* pt, const Point& other) const;

@@ -513,7 +513,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   say(summary.termination);
   res.final_cost = pt.cost - pt.gyro_cost;
   if (opt.cost_at_noise.minCoeff() > 0.0) {
-    const BatchObjective::Point at = objective.AtNoise(pt, {opt.cost_at_noise}, false);
+    const BatchObjective::Point at = objective.AtNoise(pt, {opt.cost_at_noise}, ThetaPart::kNone);
     res.cost_at_noise = at.cost - at.gyro_cost;
   }
   if (objective.HasGyroPart(pt, 0)) {

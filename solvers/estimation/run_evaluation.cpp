@@ -66,7 +66,7 @@ RunPass WeightsPass(const RunProblem& p, const Eigen::VectorXd& theta_ref, int t
 }
 
 RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& weights,
-                    const Eigen::Vector3d& noise_mV, int threads, bool theta_part) {
+                    const Eigen::Vector3d& noise_mV, int threads, ThetaPart theta_part) {
   if (!weights.with_noise) throw std::logic_error("Reduce: the weights' pass has no noise weights");
   const RunPass& wp = weights;
   const std::size_t E = pass.measurement.size();
@@ -166,7 +166,7 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
     out.channel_cross_trace += c.tt;
     out.log_det += c.log_det;
   }
-  if (!pass.with_jacobian || !theta_part) return out;
+  if (!pass.with_jacobian || theta_part == ThetaPart::kNone) return out;
 
   // 3. The theta part at the optimal states: the whitened Jacobians (the
   // process whitening's derivative by K_i acts on the residual there), the
@@ -194,7 +194,9 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
       pb[e].C.col(kKx + i) += dL * r;
     }
   });
-  out.information = ThetaInformationBySchur(pb, mb, Eigen::MatrixXd::Zero(0, n));
+  if (theta_part == ThetaPart::kGradientAndInformation) {
+    out.information = ThetaInformationBySchur(pb, mb, Eigen::MatrixXd::Zero(0, n));
+  }
   out.gradient = Eigen::VectorXd::Zero(n);
   for (std::size_t e = 0; e < E; ++e) {
     out.gradient.noalias() += mb[e].N.transpose() * mb[e].r0;

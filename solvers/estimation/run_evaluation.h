@@ -116,13 +116,17 @@ struct RunReduction {
   std::vector<MeasurementBlock> measurement_blocks;
 };
 
+// What a reduction forms beyond the cost, the states and the noise's part
+// (all a noise estimate needs): the gradient in theta, and the information.
+enum class ThetaPart { kNone, kGradient, kGradientAndInformation };
+
 // weights: the WeightsPass whose noise weights' shape (each channel's
 // sensitive axes in L, the angle noise through B2) whitens the residuals
 // (above). The scale factors' part of the process weight is always pass's
-// theta. Without theta_part only the cost, the states and the noise's part
-// are formed (what a noise estimate needs; no gradient, no information).
+// theta. The theta part needs the pass's Jacobian.
 RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& weights,
-                    const Eigen::Vector3d& noise_mV, int threads, bool theta_part = true);
+                    const Eigen::Vector3d& noise_mV, int threads,
+                    ThetaPart theta_part = ThetaPart::kGradientAndInformation);
 
 // The reading noise that maximises the (restricted) likelihood at the
 // reduction's theta, one step of the variance-component iteration from the
