@@ -174,14 +174,16 @@ int RunObservability(ObservabilityArgs a) {
     data = Simulate(s);
     run = s.run;
     SetReadingsUnitName(ReadingsUnit(run));  // the layout's units, named for the readings
-    layout = ParameterLayout(ParseEffectList(a.effects));
+    // The gyro's parameters with a gyro block, as `fit` estimates them.
+    layout = ParameterLayout(ParseEffectList(a.effects), run.gyro.has_value() && data.has_gyro());
     theta = TruthInLayout(s, layout);
     source = "scenario (simulated without noise)";
     at = "truth";
   } else {
     LoadedRun loaded = LoadRunOrThrow(a.input);  // sets the readings unit
     data = std::move(loaded.data);
-    layout = ParameterLayout(ParseEffectList(a.effects));
+    layout = ParameterLayout(ParseEffectList(a.effects),
+                             loaded.description.gyro.has_value() && data.has_gyro());
     // noise_mV: auto: the readings' own noise, as `fit` starts from (not the
     // default 2 mV, which gave a CRB 36 times below the fit's sigma).
     noise_auto = loaded.description.noise_auto;

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "solvers/estimation/gyro_term.h"
 #include "solvers/estimation/run_evaluation.h"
 #include "solvers/estimation/parallel.h"
 
@@ -72,7 +73,12 @@ Eigen::MatrixXd DataInformation(const RunProblem& p, const Eigen::VectorXd& thet
   // The noise weights' shape at the nominal values, as the fit's (run_evaluation.h).
   const RunPass weights = WeightsPass(p, p.prior.mean, threads);
   const RunPass pass = EvaluatePass(p, theta, true, threads);
-  return Symmetric(Reduce(p, pass, weights, p.noise_mV, threads).information);
+  Eigen::MatrixXd info = Reduce(p, pass, weights, p.noise_mV, threads).information;
+  if (RunHasGyro(p)) {  // the gyro's increments at its noise (gyro_term.h)
+    info += ReduceGyroAtNoise(EvaluateGyroPass(p, theta, true, threads), p.gyro_noise_rad_s, 1.0)
+                .information;
+  }
+  return Symmetric(info);
 }
 
 void ClassifyDirections(const ParameterLayout& layout, const Eigen::MatrixXd& information,
