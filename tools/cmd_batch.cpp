@@ -17,7 +17,6 @@
 #include <map>
 #include <memory>
 #include <mutex>
-#include <set>
 #include <nlohmann/json.hpp>
 
 #include "core/io/column_mapping.h"
@@ -48,10 +47,9 @@ struct BatchArgs {
   FitSettings fit;
 };
 
-// What a rank hands to rank 0 for one manifest run.
-// `own_unit`: name the output units for this run's readings (process-wide:
-// only when the runs are fitted one at a time, see RunBatch).
-nlohmann::json FitUnit(const BatchArgs& a, const ManifestEntry& e, int item, bool own_unit) {
+// What a rank hands to rank 0 for one manifest run (its layout names the
+// units for its own readings).
+nlohmann::json FitUnit(const BatchArgs& a, const ManifestEntry& e, int item) {
   const auto t0 = std::chrono::steady_clock::now();
   nlohmann::json j = {{"item", item},
                       {"status", "fitted"},
@@ -61,7 +59,6 @@ nlohmann::json FitUnit(const BatchArgs& a, const ManifestEntry& e, int item, boo
   try {
     LoadedRun run;
     run.description = LoadRunDescription(e.run_path);
-    if (own_unit) SetReadingsUnitName(ReadingsUnit(run.description));
     RunWarnings warnings;
     run.data = LoadRunData(run.description, &warnings);
     j["warnings"] = warnings.lines;
@@ -174,29 +171,15 @@ int RunBatch(const BatchArgs& a) {
   std::error_code ec;
   fs::create_directories(a.out_dir, ec);
   CheckOutputPath((fs::path(a.out_dir) / "summary.json").string());
-  int threads = a.threads > 0 ? a.threads : std::max(1, DefaultThreads() / MpiLocalSize());
+  const int threads = a.threads > 0 ? a.threads : std::max(1, DefaultThreads() / MpiLocalSize());
   const ItemRange range = ShardRange(static_cast<int>(entries.size()), shard);
   const std::vector<int> mine = RankItems(range, MpiRank(), MpiSize());
-  // The units of the outputs are named for the readings (mV/g, counts/g,
-  // mg/g) by one process-wide name: set once when every run reads the same
-  // unit; runs in several units are fitted one at a time, each naming its own
-  // (a run that cannot be read fails in FitUnit, as before).
-  std::set<std::string> readings_units;
-  for (int item : mine) {
-    try {
-      readings_units.insert(ReadingsUnit(LoadRunDescription(entries[item].run_path)));
-    } catch (const std::exception&) {
-    }
-  }
-  const bool own_unit = readings_units.size() > 1;
-  if (readings_units.size() == 1) SetReadingsUnitName(*readings_units.begin());
-  if (own_unit) threads = 1;
 
   std::vector<nlohmann::json> jobs(mine.size());
   std::mutex mutex;
   int done = 0;
   ParallelFor(mine.size(), threads, [&](std::size_t k) {
-    jobs[k] = FitUnit(a, entries[mine[k]], mine[k], own_unit);
+    jobs[k] = FitUnit(a, entries[mine[k]], mine[k]);
     std::lock_guard<std::mutex> lock(mutex);
     ++done;
     if (MpiRoot()) {

@@ -7,6 +7,7 @@
 #include <memory>
 #include <set>
 
+#include "core/io/column_mapping.h"
 #include "core/model/errors.h"
 #include "solvers/estimation/batch_solver.h"
 #include "tools/report/estimate_json.h"
@@ -35,7 +36,8 @@ int RunCompare(const CompareArgs& a) {
   CheckOutputPath(a.out_json);
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
   CheckOverwrite(a.out_json);  // before the long work
-  const ParameterLayout layout(ParseEffectList(a.effects, run.data));
+  const ParameterLayout layout(ParseEffectList(a.effects, run.data), /*gyro=*/false,
+                               ReadingsUnit(run.description));
 
   // One decision of what the run determines, for both estimators: the filter
   // holds what fit holds or considers (at nominal).

@@ -8,6 +8,7 @@
 #include <set>
 #include <sstream>
 
+#include "core/io/column_mapping.h"
 #include "core/io/file_util.h"
 #include "core/model/errors.h"
 #include "core/model/units.h"
@@ -80,7 +81,8 @@ int RunFilter(const FilterArgs& a) {
   CheckHoldFree(a.hold, a.free, ParameterLayout(ParseEffectList(a.effects)));
   const LoadedRun run = LoadRunOrThrow(a.run_yaml);
   CheckOverwrite(a.out_json);  // before the long work
-  const ParameterLayout layout(ParseEffectList(a.effects, run.data));
+  const ParameterLayout layout(ParseEffectList(a.effects, run.data), /*gyro=*/false,
+                               ReadingsUnit(run.description));
   FilterOptions opt;
   opt.epoch_s = a.epoch_s;
   opt.derivatives.half_window_s = a.rate_window_s;

@@ -173,15 +173,15 @@ int RunObservability(ObservabilityArgs a) {
     RecordInput("scenario", a.input);
     data = Simulate(s);
     run = s.run;
-    SetReadingsUnitName(ReadingsUnit(run));  // the layout's units, named for the readings
-    layout = ParameterLayout(ParseEffectList(a.effects));
+    // The layout's units, named for the readings.
+    layout = ParameterLayout(ParseEffectList(a.effects), false, ReadingsUnit(run));
     theta = TruthInLayout(s, layout);
     source = "scenario (simulated without noise)";
     at = "truth";
   } else {
-    LoadedRun loaded = LoadRunOrThrow(a.input);  // sets the readings unit
+    LoadedRun loaded = LoadRunOrThrow(a.input);
     data = std::move(loaded.data);
-    layout = ParameterLayout(ParseEffectList(a.effects));
+    layout = ParameterLayout(ParseEffectList(a.effects), false, ReadingsUnit(loaded.description));
     // noise_mV: auto: the readings' own noise, as `fit` starts from (not the
     // default 2 mV, which gave a CRB 36 times below the fit's sigma).
     noise_auto = loaded.description.noise_auto;

@@ -27,7 +27,6 @@ namespace triadcal {
 LoadedRun LoadRunOrThrow(const std::string& run_yaml) {
   LoadedRun r;
   r.description = LoadRunDescription(run_yaml);
-  SetReadingsUnitName(ReadingsUnit(r.description));  // output units named for what was read
   RecordInput("run", run_yaml);
   RecordSensor(r.description.sensor_serial, r.description.sensor_model);
   RunWarnings warnings;

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 
+#include "core/io/column_mapping.h"
 #include "core/io/file_util.h"
 #include "core/model/angle_derivatives.h"
 #include "core/model/errors.h"
@@ -36,7 +37,7 @@ std::string NoiseWarning(const std::string& run_yaml, const LoadedRun& run, cons
   const Eigen::Vector3d& d = r.noise_declared_mV;
   const Eigen::Vector3d& e = r.noise_check.estimated_mV;
   const Eigen::Vector3d& sd = r.noise_check.sd_mV;
-  const std::string unit = ReadingsUnitName();
+  const std::string unit = ReadingsUnit(run.description);
   char w[600];
   std::snprintf(w, sizeof(w),
                 "%s: triad.noise_mV: declared %.3g %.3g %.3g %s, the residuals hold %.3g %.3g "
@@ -89,7 +90,8 @@ FitOutcome FitRun(const FitSettings& a, const std::string& run_yaml, const Loade
   CheckFitSettings(a);
   FitOutcome f;
   f.layout = ParameterLayout(ParseEffectList(a.effects, run.data),
-                             run.description.gyro.has_value() && run.data.has_gyro());
+                             run.description.gyro.has_value() && run.data.has_gyro(),
+                             ReadingsUnit(run.description));
   BatchOptions opt = MakeBatchOptions(a);
   opt.progress = progress;
   opt.fraction = fraction;

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <numeric>
 
+#include "core/io/column_mapping.h"
 #include "core/io/file_util.h"
 #include "core/model/errors.h"
 #include "tools/command_util.h"
@@ -127,7 +128,11 @@ JointInput LoadJointInput(const std::vector<std::string>& inputs, const std::str
   // The effects must suit every run's data.
   std::vector<Effect> list;
   for (const JointRun& r : in.runs) list = ParseEffectList(effects, r.data);
-  in.layout = std::make_unique<JointLayout>(in.runs, ParameterLayout(list), JointSpecOf(in.file),
+  // The units follow the first run's readings.
+  const std::string unit =
+      in.runs.empty() ? std::string(kDefaultReadingsUnit) : ReadingsUnit(in.runs.front().run);
+  in.layout = std::make_unique<JointLayout>(in.runs, ParameterLayout(list, false, unit),
+                                            JointSpecOf(in.file),
                                             in.file.path.empty() ? "command line" : in.file.path);
   return in;
 }

@@ -7,6 +7,7 @@
 #include <set>
 #include <sstream>
 
+#include "core/io/column_mapping.h"
 #include "solvers/estimation/observability.h"
 #include "solvers/statistics/statistics.h"
 
@@ -208,7 +209,9 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
   double round_begin = 0.15, round_end = 0.15 + 0.6 * 0.8;
   say("fitting the declared model");
   BatchOptions first = fit_opt;
-  res.before_layout = ParameterLayout();
+  // Units named for the readings (mV/g, counts/g, mg/g): every layout below
+  // is made from this one.
+  res.before_layout = ParameterLayout({}, /*gyro=*/false, ReadingsUnit(run));
   res.before = SolveBatch(run, data, res.before_layout, first);
   res.before_residuals = AnalyzeResiduals(run, data, res.before_layout, res.before);
   // Every refit keeps what the declared model's fit decided (held and
@@ -279,7 +282,7 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
         span_end = span_begin + 0.5 * (round_end - span_begin);
       }
       ++refit_count;
-      const ParameterLayout aug(WithEffect(current, e));
+      const ParameterLayout aug = res.before_layout.WithEffects(WithEffect(current, e));
       // Started at the Gauss-Newton step from the current fit (effect_information.h).
       Eigen::VectorXd start = Embed(layout, fit.estimate.theta, aug);
       for (std::size_t j = 0; j < info.base_names.size(); ++j) {
@@ -563,7 +566,7 @@ DiagnosisResult Diagnose(const RunDescription& declared_run, const RunData& data
     const Effect chosen = sorted[pick].effect;
     res.selected.push_back(chosen);
     current.push_back(chosen);
-    const ParameterLayout next(current);
+    const ParameterLayout next = res.before_layout.WithEffects(current);
     // The selected candidate's refit (with its covariance) is the new fit.
     const Eigen::Vector3d round_noise = fit.noise_used_mV;
     fit = std::move(refits[order[pick]]);

@@ -68,7 +68,7 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
   v << "; chi2/dof " << std::round(1000 * r.chi2_per_dof) / 1000 << " (1 expected)";
   const Eigen::Vector3d& nd = r.noise_declared_mV;
   const Eigen::Vector3d& nu = r.noise_used_mV;
-  const std::string unit = ReadingsUnitName();
+  const std::string& unit = layout.readings_unit();
   char noise[320];
   if (r.noise_source == "estimated") {
     std::snprintf(noise, sizeof(noise),
@@ -257,7 +257,7 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
   out["noise"] = {{"declared_mV", r.noise_auto ? nlohmann::json(nullptr)
                                                 : nlohmann::json(vec(r.noise_declared_mV))},
                   {"auto", r.noise_auto},
-                  {"unit", ReadingsUnitName()},
+                  {"unit", layout.readings_unit()},
                   {"start_mV", vec(r.noise_start_mV)},
                   {"estimated_mV", vec(r.noise_check.estimated_mV)},
                   {"estimated_sd_mV", vec(r.noise_check.sd_mV)},
