@@ -4,9 +4,9 @@
 
 #include "app/option_lists.h"
 #include "core/model/errors.h"
-#include "tools/report/estimate_json.h"
-#include "tools/report/fit_report.h"
-#include "tools/report/residual_plot_json.h"
+#include "app/estimate_json.h"
+#include "app/fit_report.h"
+#include "app/residual_plot_json.h"
 
 namespace triadcal {
 namespace {

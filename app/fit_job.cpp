@@ -6,7 +6,7 @@
 #include "core/io/column_mapping.h"
 #include "core/model/errors.h"
 #include "solvers/diagnosis/residual_analysis.h"
-#include "tools/report/residual_plot_json.h"
+#include "app/residual_plot_json.h"
 
 namespace triadcal {
 

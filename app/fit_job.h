@@ -8,13 +8,13 @@
 #include <string>
 #include <vector>
 
+#include "app/fit_report.h"
 #include "app/run_loading.h"
 #include "app/session.h"
 #include "core/model/angle_derivatives.h"
 #include "core/model/parameters.h"
 #include "solvers/estimation/batch_solver.h"
 #include "solvers/estimation/run_problem.h"
-#include "tools/report/fit_report.h"
 
 namespace triadcal {
 

@@ -9,7 +9,7 @@
 #include "app/run_loading.h"
 #include "core/io/column_mapping.h"
 #include "core/model/errors.h"
-#include "tools/report/fit_report.h"
+#include "app/fit_report.h"
 
 namespace triadcal {
 namespace {

@@ -9,14 +9,14 @@
 
 #include "core/model/errors.h"
 #include "solvers/estimation/batch_solver.h"
-#include "tools/report/estimate_json.h"
+#include "app/estimate_json.h"
 #include "solvers/estimation/kalman_smoother.h"
 #include "tools/command_util.h"
 #include "solvers/estimation/run_problem.h"
 #include "tools/commands.h"
 #include "app/output_guard.h"
 #include "core/io/column_mapping.h"
-#include "tools/report/fit_report.h"
+#include "app/fit_report.h"
 #include "tools/report/value_format.h"
 
 namespace triadcal {

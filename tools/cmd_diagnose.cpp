@@ -10,14 +10,14 @@
 #include "core/io/parameters_json.h"
 #include "core/simulation/simulator.h"
 #include "solvers/diagnosis/effect_discovery.h"
-#include "tools/report/estimate_json.h"
+#include "app/estimate_json.h"
 #include "tools/command_util.h"
 #include "solvers/estimation/run_problem.h"
 #include "tools/commands.h"
 #include "app/output_guard.h"
 #include "app/diagnose_job.h"
-#include "tools/report/fit_report.h"
-#include "tools/report/residual_plot_json.h"
+#include "app/fit_report.h"
+#include "app/residual_plot_json.h"
 #include "tools/report/value_format.h"
 
 namespace triadcal {

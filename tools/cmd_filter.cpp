@@ -19,7 +19,7 @@
 #include "tools/commands.h"
 #include "app/output_guard.h"
 #include "core/io/column_mapping.h"
-#include "tools/report/estimate_json.h"
+#include "app/estimate_json.h"
 #include "tools/report/result_plausibility.h"
 #include "tools/report/value_format.h"
 

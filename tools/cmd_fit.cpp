@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "app/fit_job.h"
+#include "app/fit_report.h"
 #include "app/output_guard.h"
 #include "app/run_loading.h"
 #include "core/io/file_util.h"
@@ -13,8 +14,7 @@
 #include "tools/command_util.h"
 #include "tools/commands.h"
 #include "tools/fit_options.h"
-#include "tools/report/estimate_json.h"
-#include "tools/report/fit_report.h"
+#include "tools/report/fit_table.h"
 #include "tools/report/result_plausibility.h"
 
 namespace triadcal {

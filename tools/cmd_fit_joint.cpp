@@ -12,7 +12,7 @@
 #include "app/output_guard.h"
 #include "core/model/errors.h"
 #include "tools/command_util.h"
-#include "tools/report/fit_report.h"
+#include "app/fit_report.h"
 #include "tools/report/result_plausibility.h"
 #include "tools/report/value_format.h"
 

@@ -19,7 +19,7 @@
 #include "tools/command_util.h"
 #include "tools/commands.h"
 #include "app/output_guard.h"
-#include "tools/report/estimate_json.h"
+#include "app/estimate_json.h"
 #include "tools/report/result_plausibility.h"
 #include "tools/report/value_format.h"
 
