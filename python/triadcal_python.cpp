@@ -31,6 +31,7 @@
 #include "app/fit_job.h"
 #include "app/run_loading.h"
 #include "app/session.h"
+#include "core/version/version.h"
 
 namespace py = pybind11;
 
@@ -251,7 +252,7 @@ py::dict LoadRunArrays(const py::object& run_arg) {
 PYBIND11_MODULE(triadcal, m) {
   using namespace pybind11::literals;
   m.doc() = "triadcal: calibrate a MEMS accelerometer triad from a two-axis bench run";
-  m.attr("__version__") = "0.1.0";
+  m.attr("__version__") = triadcal::ToolVersion();  // project()'s, core/version/version.h
   static py::exception<triadcal::InputError> input_error(m, "InputError", PyExc_ValueError);
   py::register_exception_translator([](std::exception_ptr p) {
     try {

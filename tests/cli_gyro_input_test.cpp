@@ -4,6 +4,7 @@
 // accelerometer as before. The runs are the fixture's simulated paper run,
 // here with a gyro.
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -99,6 +100,43 @@ TEST_F(CliGyroInput, GyroColumnsWithoutAGyroBlockWarnOnce) {
             "triadcal: warning: gx gy gz present but run.yaml has no gyro block: the gyro is not "
             "calibrated\n");
   EXPECT_TRUE(std::filesystem::exists(Path("out.json")));
+}
+
+// A scenario with a gyro block: montecarlo and observability carry the
+// gyro's parameters (batch estimates them against their Cramer-Rao bound;
+// the filter has no gyro measurement and says it did not estimate them,
+// without a figure); before, both left the gyro out.
+TEST_F(CliGyroInput, MonteCarloAndObservabilityCarryTheGyro) {
+  const std::string sc = WriteText(
+      "sc.yaml",
+      "seed: 3\n"
+      "profile: {amplitude_deg: [360, 90], period_s: [30, 12], duration_s: 30, rate_hz: 50}\n"
+      "truth: {Kx: 171.5, Ky: 175.8, Kz: 174.8, W0x: 1504.2, W0y: 1504.2, W0z: 1504.3, "
+      "gyro.Kx: 1.004, gyro.W0y: -0.5}\n"
+      "noise: {accel_mV: 0.97, angle_arcsec: 15, gyro_dps: 0.05}\n"
+      "run:\n"
+      "  triad: {scale_mV_per_g: [174, 174, 174], bias_mV: [1500, 1500, 1500]}\n"
+      "  gyro: {noise_dps: 0.05}\n"
+      "  constraints: [{expr: \"dpsi - dlambda2\", value_arcmin: 0, sigma_arcsec: 30}]\n");
+  const testing_fixtures::CliResult mc =
+      Run("montecarlo " + sc + " -n 4 -o " + Path("mc.json"));
+  ASSERT_EQ(mc.exit_code, 0) << mc.err;
+  const nlohmann::json m = nlohmann::json::parse(ReadFile(Path("mc.json")));
+  for (const char* name : {"gyro.Kx", "gyro.W0y", "gyro.alpha_x", "gyro.Gzz"}) {
+    const nlohmann::json& p = m["parameters"][name];
+    ASSERT_TRUE(p.is_object()) << name;
+    EXPECT_GT(p["crb"].get<double>(), 0.0) << name;
+    EXPECT_EQ(p["batch"]["held_runs"], 0) << name;
+    EXPECT_LT(p["batch"]["max_abs_normalised_error"].get<double>(), 4.0) << name;
+    EXPECT_EQ(p["rts"]["estimated"], false) << name;
+    EXPECT_FALSE(p["rts"].contains("scatter")) << name;
+  }
+  const testing_fixtures::CliResult ob = Run("observability " + sc + " -o " + Path("obs.json"));
+  ASSERT_EQ(ob.exit_code, 0) << ob.err;
+  const nlohmann::json o = nlohmann::json::parse(ReadFile(Path("obs.json")));
+  EXPECT_NEAR(o["crb"]["gyro.Kx"].get<double>(), m["parameters"]["gyro.Kx"]["crb"].get<double>(),
+              1e-12);
+  EXPECT_LT(o["crb"]["gyro.Kx"].get<double>(), 1e-3);  // prior 0.1: determined
 }
 
 }  // namespace

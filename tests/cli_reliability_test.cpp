@@ -830,6 +830,23 @@ TEST_F(CliReliability, ObservabilityUnitsFollowTheReadings) {
   EXPECT_NE(out.find("counts/g"), std::string::npos) << out;
 }
 
+// A run far from its nominal model (offsets of 1500 counts declared 0): the
+// readings model has no inverse at the filter's estimates, which become NaN.
+// The filter says it diverged (exit 4, no file); it crashed in the naming of
+// the weak directions (an empty matrix to Eigen's eigensolver).
+TEST_F(CliReliability, DivergedFilterSaysSoAndWritesNothing) {
+  WriteText("counts.yaml",
+            "data: run.csv\ncolumns:\n  wx: {source: wx, unit: counts, counts_per_g: 174}\n"
+            "  wy: {source: wy, unit: counts, counts_per_g: 174}\n"
+            "  wz: {source: wz, unit: counts, counts_per_g: 174}\n");
+  const CliResult r = Run("filter " + Path("counts.yaml") + " -o " + Path("out.json"));
+  EXPECT_EQ(r.exit_code, 4) << r.err;
+  EXPECT_NE(r.err.find("triadcal: error: " + Path("counts.yaml") + ": the filter diverged"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(Path("out.json")));
+}
+
 // batch names its units for each run's readings: Kx was "mV/g" for counts.
 TEST_F(CliReliability, BatchUnitsFollowEachRunsReadings) {
   CliResult r_failed;

@@ -418,6 +418,71 @@ TEST_F(ExportTest, MatrixFormIsTheReadingsModel) {
   }
 }
 
+// The labels follow the readings: a fit of a run read in counts exported as
+// YAML, json-matrix and C names counts (counts/g, counts/s, ...), never mV, and
+// its C code still gives what apply gives on that run.
+TEST_F(ExportTest, LabelsFollowTheReadingsUnitOfACountsFit) {
+  Simulate(Scenario(""));
+  // The simulated readings, declared as counts (174 counts/g, as the nominal).
+  const std::string counts = WriteText(
+      "sim/counts.yaml",
+      "data: run.csv\n"
+      "bench: {lever_arm_mm: [138, 20, 20], angle_noise_arcsec: 15}\n"
+      "triad: {scale_mV_per_g: [174, 174, 174], bias_mV: [1500, 1500, 1500], noise_mV: 1}\n"
+      "columns:\n"
+      "  wx: {source: wx, unit: counts, counts_per_g: 174}\n"
+      "  wy: {source: wy, unit: counts, counts_per_g: 174}\n"
+      "  wz: {source: wz, unit: counts, counts_per_g: 174}\n");
+  const std::string fit = Path("fit.json");
+  auto r = RunTriadcal("fit " + counts + " --effects thermal_drift,scale_asymmetry -o " + fit,
+                       Err());
+  ASSERT_EQ(r.status, 0) << r.err;
+  ASSERT_EQ(nlohmann::json::parse(ReadFile(fit))["parameters"]["Kx"]["unit"], "counts/g");
+
+  // Everything but the provenance (which quotes paths and the command line).
+  auto without_provenance = [](const std::string& text) {
+    std::string out, line;
+    std::istringstream in(text);
+    while (std::getline(in, line)) {
+      if (line.find("provenance") == std::string::npos) out += line + "\n";
+    }
+    return out;
+  };
+  for (const std::string format : {"json-matrix", "yaml"}) {
+    r = RunTriadcal("export " + fit + " --format " + format + " -o " + Path("m." + format), Err());
+    ASSERT_EQ(r.status, 0) << r.err;
+  }
+  nlohmann::json m = nlohmann::json::parse(ReadFile(Path("m.json-matrix")));
+  m.erase("provenance");
+  const std::string json = m.dump();
+  EXPECT_EQ(json.find("mV"), std::string::npos) << json;
+  EXPECT_EQ(m["readings_unit"], "counts");
+  EXPECT_TRUE(m.contains("S_counts_per_mps2")) << json;
+  EXPECT_TRUE(m.contains("b_counts")) << json;
+  EXPECT_TRUE(m.contains("S_inverse_mps2_per_counts")) << json;
+  EXPECT_TRUE(m["in_g"].contains("S_counts_per_g")) << json;
+  EXPECT_TRUE(m["effects"]["thermal_drift"].contains("rate_counts_per_s")) << json;
+  EXPECT_TRUE(m["effects"]["scale_asymmetry"].contains("dK_counts_per_g")) << json;
+  EXPECT_NE(m["model"].get<std::string>().find("z readings [counts]"), std::string::npos);
+
+  const std::string yaml = without_provenance(ReadFile(Path("m.yaml")));
+  EXPECT_EQ(yaml.find("mV"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("S_counts_per_mps2:"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("in_g:\n  S_counts_per_g:"), std::string::npos) << yaml;
+
+  EXPECT_LE(LargestDifference(fit, counts), 1e-9);  // exports cal.c and cal.h
+  const std::string h = without_provenance(ReadFile(Path("cal.h")));
+  const std::string c = without_provenance(ReadFile(Path("cal.c")));
+  EXPECT_EQ(h.find("mV"), std::string::npos) << h;
+  EXPECT_EQ(c.find("mV"), std::string::npos) << c;
+  EXPECT_NE(h.find("Raw readings z [counts]"), std::string::npos) << h;
+  EXPECT_NE(h.find("_apply(const double z_counts[3]"), std::string::npos) << h;
+  EXPECT_NE(c.find("Scale factors K_i [counts/g] and zero offsets W0_i [counts]"),
+            std::string::npos)
+      << c;
+  EXPECT_NE(c.find("zero drift [counts/s]"), std::string::npos) << c;
+}
+
 TEST_F(ExportTest, BadOptions) {
   Simulate(Scenario(""));
   const std::string cal = Path("sim/truth.json");

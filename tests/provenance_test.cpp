@@ -2,6 +2,7 @@
 // refusal to overwrite results of other inputs without --force.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <regex>
@@ -41,7 +42,7 @@ TEST_F(ProvenanceTest, SimulateAndFitRecordTheirInputs) {
   ASSERT_EQ(Triadcal("simulate " + Path("a.yaml") + " -o " + Path("a")).status, 0);
   const json tp = Json("a/truth.json")["provenance"];
   EXPECT_EQ(tp["tool"], "triadcal");
-  EXPECT_EQ(tp["version"], "0.1.0");
+  EXPECT_EQ(tp["version"], TRIADCAL_VERSION);  // project()'s, from tests/CMakeLists.txt
   EXPECT_FALSE(tp["git_commit"].get<std::string>().empty());
   EXPECT_TRUE(std::regex_match(tp["date_utc"].get<std::string>(),
                                std::regex(R"(\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ)")));
@@ -73,6 +74,22 @@ TEST_F(ProvenanceTest, SimulateAndFitRecordTheirInputs) {
   const json ap = json::parse(csv.substr(at + 14, csv.find('\n', at) - at - 14));
   EXPECT_EQ(ap["inputs"][0]["role"], "calibration");
   EXPECT_EQ(ap["inputs"][0]["sha256"], Sha256OfFile(Path("fit.json")));
+}
+
+// The version has one source, project() in CMakeLists.txt: --version, the
+// provenance (above) and the HTML report's generator all give it.
+TEST_F(ProvenanceTest, VersionIsTheProjectsEverywhere) {
+  ASSERT_EQ(std::system((std::string(TRIADCAL_BIN) + " --version > " + Path("version.txt")).c_str()),
+            0);
+  EXPECT_EQ(ReadFile(Path("version.txt")), std::string("triadcal ") + TRIADCAL_VERSION + "\n");
+  WriteText("a.yaml", Scenario(1));
+  ASSERT_EQ(Triadcal("simulate " + Path("a.yaml") + " -o " + Path("a")).status, 0);
+  ASSERT_EQ(Triadcal("fit " + Path("a/run.yaml") + " -o " + Path("fit.json")).status, 0);
+  ASSERT_EQ(Triadcal("report " + Path("fit.json") + " -o " + Path("fit.html")).status, 0);
+  EXPECT_NE(ReadFile(Path("fit.html"))
+                .find(std::string("<meta name=\"generator\" content=\"triadcal ") +
+                      TRIADCAL_VERSION + "\">"),
+            std::string::npos);
 }
 
 TEST_F(ProvenanceTest, RefusesToOverwriteResultsOfOtherInputs) {

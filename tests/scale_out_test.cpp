@@ -13,6 +13,7 @@
 #include <string>
 
 #include "tests/temp_dir_test.h"
+#include "tools/distribution/mpi_context.h"
 
 namespace triadcal {
 namespace {
@@ -30,7 +31,10 @@ nlohmann::json ReadJson(const fs::path& p) { return nlohmann::json::parse(Slurp(
 
 const char* kMpirun = "mpirun -n 2 --allow-run-as-root --oversubscribe ";
 
-bool HaveMpirun() { return std::system("command -v mpirun > /dev/null 2>&1") == 0; }
+// mpirun, and a triadcal built with MPI (TRIADCAL_MPI).
+bool HaveMpirun() {
+  return MpiBuilt() && std::system("command -v mpirun > /dev/null 2>&1") == 0;
+}
 
 // The scenario of every unit: the paper's bench, a short run at a low rate.
 std::string ScenarioText(int seed, double Kx) {
@@ -145,7 +149,7 @@ TEST_F(ScaleOut, MonteCarloShardsMergedEqualTheWhole) {
 }
 
 TEST_F(ScaleOut, MonteCarloOnTwoMpiRanksEqualsOneProcess) {
-  if (!HaveMpirun()) GTEST_SKIP() << "mpirun not installed (Debian: openmpi-bin)";
+  if (!HaveMpirun()) GTEST_SKIP() << "mpirun not installed (Debian: openmpi-bin) or built without MPI";
   const std::string scen = WriteText("mc.yaml", ScenarioText(1, 171.5));
   const std::string common = "montecarlo " + scen + " -n 6 --per-seed";
   ASSERT_EQ(Run(common + " -o " + Path("one.json")), 0) << Slurp(Path("log.txt"));
@@ -322,7 +326,7 @@ TEST_F(ScaleOut, BatchOnTwoMpiRanksAndAsShardsEqualsOneProcess) {
       EXPECT_EQ(a, b) << d << "/" << f;
     }
   }
-  if (!HaveMpirun()) GTEST_SKIP() << "mpirun not installed (Debian: openmpi-bin): MPI part skipped";
+  if (!HaveMpirun()) GTEST_SKIP() << "mpirun not installed (Debian: openmpi-bin) or built without MPI: MPI part skipped";
 }
 
 }  // namespace

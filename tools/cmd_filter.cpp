@@ -17,9 +17,10 @@
 #include "solvers/estimation/separability.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
+#include "app/estimate_json.h"
+#include "app/fit_report.h"
 #include "app/output_guard.h"
 #include "core/io/column_mapping.h"
-#include "app/estimate_json.h"
 #include "tools/report/result_plausibility.h"
 #include "tools/report/value_format.h"
 
@@ -111,6 +112,15 @@ int RunFilter(const FilterArgs& a, Session& session) {
   }
   const FilterResult r = RunFilterSmoother(run.description, run.data, layout, opt);
   EndProgress();
+  if (!r.ekf.theta.allFinite() || !r.rts.theta.allFinite()) {
+    // No number to write: a diverged filter's estimate is not a result.
+    std::fprintf(stderr,
+                 "triadcal: error: %s: the filter diverged (its estimate is not finite): the "
+                 "readings are far from the nominal model (check triad.bias_mV, "
+                 "triad.scale_mV_per_g and the readings' unit)\n",
+                 a.run_yaml.c_str());
+    return kExitNotConverged;
+  }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 

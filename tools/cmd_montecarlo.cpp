@@ -73,7 +73,9 @@ int RunMonteCarloCommand(MonteCarloArgs a, Session& session) {
   opt.threads = a.threads > 0 ? a.threads : std::max(1, DefaultThreads() / MpiLocalSize());
   opt.estimators = SplitList(a.estimators);
   WithFlags({{"estimators", "--estimators"}}, [&] { CheckEstimators(opt.estimators); return 0; });
-  opt.layout = ParameterLayout(ParseEffectList(a.effects));
+  // The gyro's parameters with a gyro block, as `fit` estimates them (the
+  // filter leaves them out).
+  opt.layout = ParameterLayout(ParseEffectList(a.effects), s.run.gyro.has_value());
   opt.filter.epoch_s = a.epoch_s;
   opt.batch.epoch_s = a.epoch_s;
   opt.keep_runs = a.per_seed;

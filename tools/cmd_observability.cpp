@@ -175,15 +175,19 @@ int RunObservability(ObservabilityArgs a, Session& session) {
     session.provenance.RecordInput("scenario", a.input);
     data = Simulate(s);
     run = s.run;
-    // The layout's units, named for the readings.
-    layout = ParameterLayout(ParseEffectList(a.effects), false, ReadingsUnit(run));
+    // The layout's units, named for the readings; the gyro's parameters with
+    // a gyro block, as `fit` estimates them.
+    layout = ParameterLayout(ParseEffectList(a.effects), run.gyro.has_value() && data.has_gyro(),
+                             ReadingsUnit(run));
     theta = TruthInLayout(s, layout);
     source = "scenario (simulated without noise)";
     at = "truth";
   } else {
     LoadedRun loaded = LoadRun(a.input, &session);
     data = std::move(loaded.data);
-    layout = ParameterLayout(ParseEffectList(a.effects), false, ReadingsUnit(loaded.description));
+    layout = ParameterLayout(ParseEffectList(a.effects),
+                             loaded.description.gyro.has_value() && data.has_gyro(),
+                             ReadingsUnit(loaded.description));
     // noise_mV: auto: the readings' own noise, as `fit` starts from (not the
     // default 2 mV, which gave a CRB 36 times below the fit's sigma).
     noise_auto = loaded.description.noise_auto;

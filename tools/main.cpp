@@ -12,11 +12,11 @@
 
 #include "core/io/file_util.h"
 #include "core/model/errors.h"
+#include "core/version/version.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
 #include "app/provenance.h"
 #include "app/session.h"
-#include "tools/provenance.h"
 #include "tools/distribution/mpi_context.h"
 
 namespace {
@@ -55,7 +55,7 @@ int main(int argc, char** argv) {
   CLI::App app{
       "triadcal: calibrate a MEMS accelerometer triad from a quasi-harmonic two-axis bench run"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "triadcal 0.1.0");
+  app.set_version_flag("--version", std::string("triadcal ") + triadcal::ToolVersion());
 
   std::vector<triadcal::Command> commands = {
       triadcal::AddSimulateCommand(app),

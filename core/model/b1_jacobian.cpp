@@ -229,9 +229,8 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
 
   // Sensor stage: u_i = (z_i - W0_i(t)) / s_i with s_i = K_i (+- dK_i with the
   // scale asymmetry, the sign of z_i - W0_i), and F(W) = M W + W o (K W) + Q(W) - u.
-  const Vec3<double> W = SpecificForceFromReadings_g(cfg, th, Vec3<double>(z), ctx);
-  const Mat3<double> M = MisalignmentMatrix(th);
-  const Mat3<double> K = NonlinearityMatrix(th);
+  Mat3<double> Jf_inv;  // (dF/dW)^-1 at W
+  const Vec3<double> W = SpecificForceFromReadings_g(cfg, th, Vec3<double>(z), ctx, &Jf_inv);
   const Vec3<double> w0 = ZeroOffset_mV(cfg, th, ctx);
   const int o_a = layout.offset(Effect::kScaleAsymmetry);
   const int o_q = layout.offset(Effect::kCrossQuadratic);
@@ -242,14 +241,8 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
     s[i] = th[kKx + i] + (o_a >= 0 ? sgn[i] * th[o_a + i] : 0.0);
     u[i] = v / s[i];
   }
-  Mat3<double> Jf = M;
-  Jf.diagonal() += K * W;
-  Jf += W.asDiagonal() * K;
-  if (o_q >= 0) {
-    for (int i = 0; i < 3; ++i) Jf.row(i) += CrossQuadraticGradient(th + o_q, i, W);
-  }
   // gC J^-1: each column of dF/dtheta maps to da by -gC J^-1.
-  const Mat3<double> T = -g * C * Jf.inverse();
+  const Mat3<double> T = -g * C * Jf_inv;
 
   const Vec3<double> CW = C * W;
   *a_out = g * CW;

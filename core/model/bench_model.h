@@ -425,10 +425,16 @@ double ScalarPart(const J& x) {
 //   (Q: cross_quadratic, zero without it).
 // The iterations run on the values only; one last Newton step in T with the
 // value Jacobian J0 gives the derivatives exactly (implicit function theorem:
-// dW = -J0^-1 dF), at a fraction of the cost of iterating in Jets.
+// dW = -J0^-1 dF), at a fraction of the cost of iterating in Jets. Newton
+// converges quadratically (error e -> c e^2, c ~ |K|), so it stops once a
+// step is below 1e-9 of W: the last step then leaves ~c 1e-18, and the step
+// in T takes what is left to rounding. Without nonlinearity (K = 0, no Q) F
+// is linear and W = M^-1 u is exact. jacobian_inverse (optional) receives
+// J0^-1, the one the last step used (B1's Jacobian needs it too).
 template <typename T>
 Vec3<T> SpecificForceFromReadings_g(const ModelConfig& cfg, const T* theta,
-                                    const Vec3<T>& readings_mV, const SampleContext& ctx) {
+                                    const Vec3<T>& readings_mV, const SampleContext& ctx,
+                                    Mat3<double>* jacobian_inverse = nullptr) {
   const Mat3<T> M = MisalignmentMatrix(theta);
   const Mat3<T> K = NonlinearityMatrix(theta);
   const Vec3<T> w0 = ZeroOffset_mV(cfg, theta, ctx);
@@ -470,19 +476,23 @@ Vec3<T> SpecificForceFromReadings_g(const ModelConfig& cfg, const T* theta,
     }
     return J;
   };
-  Vec3<double> W0 = M0.inverse() * u0;
-  for (int it = 0; it < 8; ++it) {  // quadratic: 2-3 steps for |K_ij| ~ 1e-3
-    const Vec3<double> F = M0 * W0 + W0.cwiseProduct(K0 * W0) + cross(W0) - u0;
-    const Vec3<double> step = jacobian(W0).inverse() * F;
-    W0 -= step;
-    if (step.cwiseAbs().maxCoeff() <= 1e-15 * (1.0 + W0.cwiseAbs().maxCoeff())) break;
+  Mat3<double> J0_inv = M0.inverse();
+  Vec3<double> W0 = J0_inv * u0;
+  if (o_q >= 0 || !K0.isZero(0.0)) {
+    for (int it = 0; it < 8; ++it) {  // quadratic: 2 steps for |K_ij| ~ 1e-3
+      const Vec3<double> F = M0 * W0 + W0.cwiseProduct(K0 * W0) + cross(W0) - u0;
+      J0_inv = jacobian(W0).inverse();
+      const Vec3<double> step = J0_inv * F;
+      W0 -= step;
+      if (step.cwiseAbs().maxCoeff() <= 1e-9 * (1.0 + W0.cwiseAbs().maxCoeff())) break;
+    }
   }
+  if (jacobian_inverse) *jacobian_inverse = J0_inv;
   const Vec3<T> W = W0.template cast<T>();
   Vec3<T> F = M * W + W.cwiseProduct(K * W) - u;
   if (o_q >= 0) {
     for (int i = 0; i < 3; ++i) F[i] += CrossQuadraticTerm(theta + o_q, i, W);
   }
-  const Mat3<double> J0_inv = jacobian(W0).inverse();
   const Mat3<T> J_inv = J0_inv.template cast<T>();
   return W - J_inv * F;
 }

@@ -36,6 +36,13 @@ RunDescription WithReadingNoise(RunDescription run, const RunData& data) {
   run.noise_auto = false;
   run.noise_channel_mV = noise;
   run.noise_mV = noise.maxCoeff();
+  if (run.gyro && run.gyro->noise_auto && data.has_gyro()) {
+    for (int i = 0; i < 3; ++i) {
+      const double sd = SecondDifferenceNoise(data.gyro_rad_s[i]);
+      if (sd > 0.0) run.gyro->noise_rad_s[i] = sd;
+    }
+    run.gyro->noise_auto = false;
+  }
   return run;
 }
 

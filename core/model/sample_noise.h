@@ -26,7 +26,8 @@ double SecondDifferenceNoise(const std::vector<double>& x);
 // starts from. For analyses that take the noise as known (observability).
 Eigen::Vector3d RunReadingNoise_mV(const RunDescription& run, const RunData& data);
 
-// `run` with RunReadingNoise_mV declared per channel and noise_auto off.
+// `run` with RunReadingNoise_mV declared per channel and noise_auto off; the
+// gyro's `noise_dps: auto` likewise (each gyro channel's own white noise).
 RunDescription WithReadingNoise(RunDescription run, const RunData& data);
 
 }  // namespace triadcal

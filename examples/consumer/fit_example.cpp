@@ -5,10 +5,10 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 
-#include "app/fit_job.h"
-#include "app/run_loading.h"
-#include "app/session.h"
-#include "core/model/errors.h"
+#include <triadcal/app/fit_job.h>
+#include <triadcal/app/run_loading.h>
+#include <triadcal/app/session.h>
+#include <triadcal/core/model/errors.h>
 
 int main(int argc, char** argv) {
   if (argc != 2) {

@@ -19,6 +19,12 @@ def run_cli(*args):
     subprocess.run([BIN, *args], check=True, stdout=subprocess.DEVNULL)
 
 
+def test_version_is_the_command_lines():
+    """One version, project()'s in CMakeLists.txt (core/version/version.h)."""
+    out = subprocess.run([BIN, "--version"], check=True, capture_output=True, text=True).stdout
+    assert out == f"triadcal {triadcal.__version__}\n"
+
+
 @pytest.fixture(scope="module")
 def example(tmp_path_factory):
     """The main job (examples/paper-experiment3/run.sh) through the command line."""

@@ -58,6 +58,11 @@ std::vector<MonteCarloRun> RunMonteCarloSeeds(const Scenario& s, const MonteCarl
     if (want_filter) {
       FilterOptions fo = opt.filter;
       fo.progress = nullptr;
+      // The filter has no gyro measurement (method.md section 11): the gyro's
+      // parameters stay out of its state.
+      for (int i = 0; i < layout.size(); ++i) {
+        if (layout.is_gyro(i)) fo.held.push_back(layout.info(i).name);
+      }
       try {
         fr = RunFilterSmoother(q.run, data, layout, fo);
       } catch (const std::exception& e) {
@@ -68,6 +73,7 @@ std::vector<MonteCarloRun> RunMonteCarloSeeds(const Scenario& s, const MonteCarl
       const std::string& name = opt.estimators[j];
       const Estimate* est = nullptr;
       BatchResult br;
+      std::vector<int> held_by_filter;  // not estimated by the filter: no error to judge
       if (name == "batch") {
         BatchOptions bo = opt.batch;
         bo.threads = 1;
@@ -80,12 +86,16 @@ std::vector<MonteCarloRun> RunMonteCarloSeeds(const Scenario& s, const MonteCarl
         }
       } else if (filter_failure.empty()) {
         est = name == "ekf" ? &fr.ekf : &fr.rts;
+        for (int i = 0; i < layout.size(); ++i) {
+          if (layout.is_gyro(i)) held_by_filter.push_back(i);
+        }
       } else {
         run.failure[j] = filter_failure;
       }
       if (est) {
         run.error[j] = est->theta - run.truth;
         run.sigma[j] = est->cov.diagonal().cwiseMax(0.0).cwiseSqrt();
+        for (int i : held_by_filter) run.error[j][i] = std::nan("");
         if (name == "batch") {
           // Not estimated (held, or considered: at nominal with the prior's
           // uncertainty): no error to judge against a sigma.

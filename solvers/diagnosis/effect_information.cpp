@@ -142,9 +142,9 @@ EffectInformation AnalyseCandidates(const RunDescription& run, const RunData& da
     const int k = static_cast<int>(GetEffectSpec(e).params.size());
     for (int q = 0; q < k; ++q) theta[full.offset(e) + q] = 0.0;
   }
-  const RunPass weights = EvaluatePass(p, p.prior.mean, false, threads);
+  const RunPass weights = WeightsPass(p, p.prior.mean, threads);
   const RunReduction red =
-      Reduce(p, EvaluatePass(p, theta, true, threads), p.noise_mV, threads, &weights);
+      Reduce(p, EvaluatePass(p, theta, true, threads), weights, p.noise_mV, threads);
   // The fit's held and considered parameters are not base parameters of the
   // tests below (the tests hold them), only of the check that an effect does
   // not ride on them (LooseConditional): free here, under their priors.

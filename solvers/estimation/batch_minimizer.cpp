@@ -95,14 +95,24 @@ BatchObjective::Point BatchMinimizer::Minimize(const Eigen::VectorXd& phi0,
   return current_;
 }
 
+ThetaPart BatchMinimizer::FullUnlessNoisy() const {
+  return noisy_.empty() ? ThetaPart::kGradientAndInformation : ThetaPart::kNone;
+}
+
 void BatchMinimizer::IterationZero(const Eigen::VectorXd& phi0) {
-  current_ = objective_.Evaluate(phi0, noise_, true);
+  // With a noise to estimate, the full reduction is formed at its maximum
+  // (MaximiseNoise), not at the start noise.
+  current_ = objective_.Evaluate(phi0, noise_, true, FullUnlessNoisy());
   summary_.passes += 1;
   summary_.initial_cost = current_.cost;
   for (int r : noisy_) {
     rho_.push_back(NoiseDofShare(current_.reductions[r], FittedFor(r)));
   }
-  if (current_.finite()) MaximiseNoise(&current_, &noise_);
+  if (current_.finite()) {
+    MaximiseNoise(&current_, &noise_);
+  } else {
+    objective_.Reweight(&current_, noise_);  // the point returned has every part
+  }
 }
 
 void BatchMinimizer::MaximiseNoise(BatchObjective::Point* pt,
@@ -136,8 +146,7 @@ void BatchMinimizer::MaximiseNoise(BatchObjective::Point* pt,
     if (largest < kNoiseTolerance) break;
     bool lowered = false;
     for (int halving = 0; halving < 20 && !lowered; ++halving) {
-      BatchObjective::Point trial = *pt;
-      objective_.Reweight(&trial, trial_noise, false);
+      BatchObjective::Point trial = objective_.AtNoise(*pt, trial_noise, ThetaPart::kNone);
       const double ft = Objective(trial);
       if (std::isfinite(ft) && ft <= f) {
         *pt = std::move(trial);
@@ -153,7 +162,7 @@ void BatchMinimizer::MaximiseNoise(BatchObjective::Point* pt,
     }
     if (!lowered) break;  // at the maximum to rounding
   }
-  objective_.Reweight(pt, *noise, true);
+  objective_.Reweight(pt, *noise);
 }
 
 bool BatchMinimizer::ComputeStep() {
@@ -221,12 +230,11 @@ void BatchMinimizer::MeasureCurvature(const BatchObjective::Point& trial,
   // d^T B d + y y^T / y^T d, S = B+ - H at the new point. A misfit's
   // residual curvature made Gauss-Newton converge linearly (real fast roll
   // run: 13 steps with the noise held, 5 with S).
-  BatchObjective::Point at = current_;
-  objective_.Reweight(&at, trial_noise, true);
+  BatchObjective::Point at = objective_.AtNoise(current_, trial_noise, ThetaPart::kGradient);
   objective_.ReweightGyro(&at, trial);
-  Eigen::VectorXd g0, g1;
-  Eigen::MatrixXd H0, H1;
-  Model(at, &g0, &H0);
+  Eigen::VectorXd g0(free_.size()), g1;
+  for (std::size_t a = 0; a < free_.size(); ++a) g0[a] = at.gradient[free_[a]];
+  Eigen::MatrixXd H1;
   Model(trial, &g1, &H1);
   const Eigen::VectorXd y = g1 - g0;
   Eigen::MatrixXd B = H1;
@@ -247,7 +255,7 @@ bool BatchMinimizer::TryStep() {
   // change of log sigma is Newton's on an exponential, and overshoots where
   // a channel's residual changed much): -log L profiled over the noise.
   std::vector<Eigen::Vector3d> noise = noise_;
-  BatchObjective::Point trial = objective_.Evaluate(phi, noise, true);
+  BatchObjective::Point trial = objective_.Evaluate(phi, noise, true, FullUnlessNoisy());
   if (trial.finite()) MaximiseNoise(&trial, &noise);
   summary_.iterations += 1;
   summary_.passes += 1;

@@ -91,6 +91,9 @@ class BatchMinimizer {
 
  private:
   void IterationZero(const Eigen::VectorXd& phi0);
+  // What a new point's reductions form: in full only when no noise is
+  // estimated (else MaximiseNoise forms them at the noise's maximum).
+  ThetaPart FullUnlessNoisy() const;
   // False when converged (or stopped: summary_.termination says why).
   bool ComputeStep();
   bool TryStep();

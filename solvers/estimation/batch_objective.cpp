@@ -25,7 +25,7 @@ BatchObjective::BatchObjective(std::vector<LinkedRun> runs, Eigen::MatrixXd A, E
     }
   }
   for (int r = 0; r < this->runs(); ++r) {
-    weights_.push_back(EvaluatePass(*runs_[r].problem, ThetaOf(r, weights_phi), false, threads_));
+    weights_.push_back(WeightsPass(*runs_[r].problem, ThetaOf(r, weights_phi), threads_));
     has_gyro_.push_back(RunHasGyro(*runs_[r].problem));
     gyro_noise_hint_.push_back(runs_[r].problem->gyro_noise_rad_s);
   }
@@ -45,41 +45,55 @@ Eigen::MatrixXd BatchObjective::MapOf(int r) const {
 
 BatchObjective::Point BatchObjective::Evaluate(const Eigen::VectorXd& phi,
                                                const std::vector<Eigen::Vector3d>& noise,
-                                               bool with_jacobian) const {
+                                               bool with_jacobian, ThetaPart theta_part) const {
   Point pt;
   pt.phi = phi;
   pt.passes.reserve(runs_.size());
   for (int r = 0; r < runs(); ++r) {
-    pt.passes.push_back(EvaluatePass(*runs_[r].problem, ThetaOf(r, phi), with_jacobian, threads_));
+    pt.passes.push_back(std::make_shared<const RunPass>(
+        EvaluatePass(*runs_[r].problem, ThetaOf(r, phi), with_jacobian, threads_)));
   }
   pt.gyro_passes.resize(runs_.size());
   pt.gyro.resize(runs_.size());
   for (int r = 0; r < runs(); ++r) {
     if (!has_gyro_[r]) continue;
     const RunProblem& p = *runs_[r].problem;
-    pt.gyro_passes[r] = EvaluateGyroPass(p, ThetaOf(r, phi), with_jacobian, threads_);
+    pt.gyro_passes[r] = std::make_shared<const GyroPass>(
+        EvaluateGyroPass(p, ThetaOf(r, phi), with_jacobian, threads_));
     const int fitted = p.cfg.layout.has_gyro() ? kNumGyroParams : 0;
-    pt.gyro[r] = ReduceGyroAtBestNoise(pt.gyro_passes[r], gyro_noise_hint_[r], fitted, true);
+    pt.gyro[r] = ReduceGyroAtBestNoise(*pt.gyro_passes[r], gyro_noise_hint_[r], fitted, true);
     if (pt.gyro[r].noise_rad_s.allFinite()) gyro_noise_hint_[r] = pt.gyro[r].noise_rad_s;
   }
-  Reweight(&pt, noise);
+  Reweight(&pt, noise, theta_part);
   return pt;
 }
 
 void BatchObjective::Reweight(Point* pt, const std::vector<Eigen::Vector3d>& noise,
-                              bool theta_part) const {
+                              ThetaPart theta_part) const {
   pt->reductions.clear();
   for (int r = 0; r < runs(); ++r) {
-    pt->reductions.push_back(Reduce(*runs_[r].problem, pt->passes[r], noise[r], threads_,
-                                    &weights_[r], theta_part));
+    pt->reductions.push_back(Reduce(*runs_[r].problem, *pt->passes[r], weights_[r], noise[r],
+                                    threads_, theta_part));
   }
   Assemble(pt);
+}
+
+BatchObjective::Point BatchObjective::AtNoise(const Point& pt,
+                                              const std::vector<Eigen::Vector3d>& noise,
+                                              ThetaPart theta_part) const {
+  Point at;
+  at.phi = pt.phi;
+  at.passes = pt.passes;
+  at.gyro_passes = pt.gyro_passes;
+  at.gyro = pt.gyro;
+  Reweight(&at, noise, theta_part);
+  return at;
 }
 
 void BatchObjective::ReweightGyro(Point* pt, const Point& other) const {
   for (int r = 0; r < runs(); ++r) {
     if (!HasGyroPart(*pt, r) || !HasGyroPart(other, r)) continue;
-    pt->gyro[r] = ReduceGyroAtNoise(pt->gyro_passes[r], other.gyro[r].noise_rad_s, pt->gyro[r].rho);
+    pt->gyro[r] = ReduceGyroAtNoise(*pt->gyro_passes[r], other.gyro[r].noise_rad_s, pt->gyro[r].rho);
   }
   Assemble(pt);
 }
@@ -100,26 +114,28 @@ void BatchObjective::Assemble(Point* pt) const {
     pt->data_information.resize(0, 0);
     return;
   }
+  const bool with_information = pt->reductions[0].information.size() > 0;
   pt->gradient = A_.transpose() * res;
-  pt->data_information = Eigen::MatrixXd::Zero(m_, m_);
+  pt->data_information = Eigen::MatrixXd::Zero(with_information ? m_ : 0, with_information ? m_ : 0);
   for (int r = 0; r < runs(); ++r) {
     const RunReduction& red = pt->reductions[r];
     Eigen::VectorXd g = red.gradient;
     Eigen::MatrixXd I = red.information;
     if (HasGyroPart(*pt, r) && pt->gyro[r].gradient.size() > 0) {
       g += pt->gyro[r].gradient;
-      I += pt->gyro[r].information;
+      if (with_information) I += pt->gyro[r].information;
     }
     if (runs_[r].map.size() == 0) {
       pt->gradient += g;
-      pt->data_information += I;
+      if (with_information) pt->data_information += I;
     } else {
       const Eigen::MatrixXd& T = runs_[r].map;
       pt->gradient.noalias() += T.transpose() * g;
-      pt->data_information.noalias() += T.transpose() * I * T;
+      if (with_information) pt->data_information.noalias() += T.transpose() * I * T;
     }
   }
-  pt->information = pt->data_information + A_.transpose() * A_;
+  pt->information = with_information ? Eigen::MatrixXd(pt->data_information + A_.transpose() * A_)
+                                     : Eigen::MatrixXd();
 }
 
 }  // namespace triadcal

@@ -17,6 +17,7 @@
 // new noise needs only the reductions again (Reweight).
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
@@ -43,11 +44,13 @@ class BatchObjective {
 
   struct Point {
     Eigen::VectorXd phi;
-    std::vector<RunPass> passes;            // per run
+    // Per run; a pass never changes once evaluated, and the same point at
+    // other noises (AtNoise) shares it.
+    std::vector<std::shared_ptr<const RunPass>> passes;
     std::vector<RunReduction> reductions;   // per run, at its noise
-    // Per run with a gyro triad (gyro_term.h; empty entries for the others):
+    // Per run with a gyro triad (gyro_term.h; null entries for the others):
     // its pass, and its reduction at its noise's maximum there.
-    std::vector<GyroPass> gyro_passes;
+    std::vector<std::shared_ptr<const GyroPass>> gyro_passes;
     std::vector<GyroReduction> gyro;
     double cost = 0.0;                      // 0.5 chi^2: data, priors, constraints, + gyro_cost
     double data_cost = 0.0;                 // the runs' accelerometer part
@@ -71,15 +74,27 @@ class BatchObjective {
   Eigen::MatrixXd MapOf(int r) const;
 
   // One pass over every run's samples at phi, each reduced at noise[r].
+  // theta_part: what the reductions form (run_evaluation.h); the pass keeps
+  // its Jacobian whatever it is, for a caller that moves the noise first and
+  // reduces in full there (BatchMinimizer::MaximiseNoise).
   Point Evaluate(const Eigen::VectorXd& phi, const std::vector<Eigen::Vector3d>& noise,
-                 bool with_jacobian) const;
-  // The same point at other noises (no pass over the samples); without
-  // theta_part, only the costs and the noises' parts (no gradient).
+                 bool with_jacobian,
+                 ThetaPart theta_part = ThetaPart::kGradientAndInformation) const;
+  // The same point at other noises (no pass over the samples), its
+  // reductions forming theta_part (without the information, pt has none;
+  // without the gradient, neither).
   void Reweight(Point* pt, const std::vector<Eigen::Vector3d>& noise,
-                bool theta_part = true) const;
+                ThetaPart theta_part = ThetaPart::kGradientAndInformation) const;
+  // pt at other noises as a new point (its passes shared, its reductions
+  // formed anew: pt's are not copied).
+  Point AtNoise(const Point& pt, const std::vector<Eigen::Vector3d>& noise,
+                ThetaPart theta_part = ThetaPart::kGradientAndInformation) const;
   // The same point with each gyro's part at the gyro noise of `other` (not
   // at its own maximum): what a change of the gradient at fixed noise needs.
   void ReweightGyro(Point* pt, const Point& other) const;
+
+  // Run r's reference pass of the noise weights (run_evaluation.h).
+  const RunPass& weights(int r) const { return weights_[r]; }
 
  private:
   void Assemble(Point* pt) const;

@@ -120,8 +120,11 @@ Estimate Initialise(const RunDescription& run, const RunData& data, const Parame
 }
 
 // Residuals at the solution, raw and whitened, and their summaries.
-void CollectResiduals(const RunProblem& p, const RunData& data, const RunPass& pass,
-                      const RunReduction& red, int fitted, BatchResult* res) {
+// weights: the reference pass whose noise weights whiten the residuals in the
+// cost (run_evaluation.h), so that the whitened residuals are the cost's.
+void CollectResiduals(const RunProblem& p, const RunData& data, const RunPass& weights,
+                      const Eigen::VectorXd& theta, const RunReduction& red, int fitted,
+                      BatchResult* res) {
   const std::size_t E = p.epochs.size();
   res->epoch_t.resize(E);
   res->epoch_samples = p.epochs;
@@ -134,7 +137,7 @@ void CollectResiduals(const RunProblem& p, const RunData& data, const RunPass& p
   for (std::size_t e = 0; e < E; ++e) {
     res->epoch_t[e] = data.t_s[p.epochs[e]];
     mss += red.measurement_residual[e].cwiseAbs2();
-    res->measurement_whitened[e] = pass.LR[e] * red.measurement_residual[e];
+    res->measurement_whitened[e] = weights.LR[e] * red.measurement_residual[e];
     mw += res->measurement_whitened[e].squaredNorm();
     if (e > 0) pss += red.process_residual[e].cwiseAbs2();
   }
@@ -143,7 +146,7 @@ void CollectResiduals(const RunProblem& p, const RunData& data, const RunPass& p
   q.noise_mV = red.noise_mV;
   const StateSpaceModel model(q);
   const std::vector<Vec6> raw(red.process_residual.begin() + 1, red.process_residual.end());
-  const std::vector<Vec6> white = model.WhitenProcessSequence(pass.process, raw, pass.theta);
+  const std::vector<Vec6> white = model.WhitenProcessSequence(weights.process, raw, theta);
   for (std::size_t e = 1; e < E; ++e) {
     res->process_whitened[e] = white[e - 1];
     pw += white[e - 1].squaredNorm();
@@ -500,7 +503,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   BatchMinimizer minimizer(objective, est, mo);
   MinimizerSummary summary;
   BatchObjective::Point pt = minimizer.Minimize(theta0, {noise0}, &summary);
-  const RunPass& pass = pt.passes[0];
+  const RunPass& pass = *pt.passes[0];
   const RunReduction& red = pt.reductions[0];
   const int fitted = static_cast<int>(est.size());
   res.converged = summary.converged;
@@ -510,8 +513,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   say(summary.termination);
   res.final_cost = pt.cost - pt.gyro_cost;
   if (opt.cost_at_noise.minCoeff() > 0.0) {
-    BatchObjective::Point at = pt;
-    objective.Reweight(&at, {opt.cost_at_noise}, false);
+    const BatchObjective::Point at = objective.AtNoise(pt, {opt.cost_at_noise}, ThetaPart::kNone);
     res.cost_at_noise = at.cost - at.gyro_cost;
   }
   if (objective.HasGyroPart(pt, 0)) {
@@ -521,7 +523,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
     res.gyro.noise_declared_rad_s = run.gyro ? run.gyro->noise_rad_s : p.gyro_noise_rad_s;
     res.gyro.degrees_of_freedom = g.degrees_of_freedom;
     res.gyro.neg_log_likelihood = g.neg_log_l;
-    const GyroPass& gp = pt.gyro_passes[0];
+    const GyroPass& gp = *pt.gyro_passes[0];
     Eigen::Vector3d ss = Eigen::Vector3d::Zero();
     std::size_t used = 0;
     for (std::size_t k = 0; k < gp.r.size(); ++k) {
@@ -558,7 +560,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
     return SolveBatch(run, data, layout, o);
   }
   res.solve_seconds = Seconds(t_solve);
-  CollectResiduals(p, data, pass, red, fitted, &res);
+  CollectResiduals(p, data, objective.weights(0), pass.theta, red, fitted, &res);
   res.noise_check = CheckNoise(red, res.noise_declared_mV, fitted, res.process_whitened);
 
   // 4. The covariance at the minimum.

@@ -48,7 +48,7 @@ TEST(RunEvaluation, GradientsMatchCentralDifferences) {
   const Scenario s = PaperScenario(50.0, 20.0, 2.0, 15.0, 1);
   const RunData data = Simulate(s);
   const RunProblem p = BuildRunProblem(s.run, data, ParameterLayout(), 0.5, {});
-  const RunPass ref = EvaluatePass(p, p.prior.mean, false, 1);
+  const RunPass ref = WeightsPass(p, p.prior.mean, 1);
   // Away from the optimum, so that the residual is not noise alone.
   Eigen::VectorXd theta = s.truth;
   theta[kKx] *= 1.01;
@@ -56,9 +56,9 @@ TEST(RunEvaluation, GradientsMatchCentralDifferences) {
   theta[kDpsi] += 5e-4;
   theta[kDx2] += 0.003;
   const Eigen::Vector3d noise(2.0, 2.5, 1.8);
-  const RunReduction at = Reduce(p, EvaluatePass(p, theta, true, 1), noise, 1, &ref);
+  const RunReduction at = Reduce(p, EvaluatePass(p, theta, true, 1), ref, noise, 1);
   auto cost = [&](const Eigen::VectorXd& th) {
-    return Reduce(p, EvaluatePass(p, th, false, 1), noise, 1, &ref).cost;
+    return Reduce(p, EvaluatePass(p, th, false, 1), ref, noise, 1).cost;
   };
   for (int i : {kKx, kKz, kW0y, kAlphaY, kGammaZ, kKxz, kDpsi, kDlambda2, kDx2}) {
     const double h = 1e-4 * std::max(std::abs(theta[i]), p.prior.sigma[i]);
@@ -78,11 +78,11 @@ TEST(RunEvaluation, NoiseUpdateIsTheLikelihoodMaximum) {
   const Scenario s = PaperScenario(50.0, 30.0, 2.0, 15.0, 2);
   const RunData data = Simulate(s);
   const RunProblem p = BuildRunProblem(s.run, data, ParameterLayout(), 0.5, {});
-  const RunPass ref = EvaluatePass(p, p.prior.mean, false, 1);
+  const RunPass ref = WeightsPass(p, p.prior.mean, 1);
   const RunPass pass = EvaluatePass(p, s.truth, false, 1);
   const int fitted = 27;
   auto minus_log_l = [&](const Eigen::Vector3d& noise, RunReduction* out) {
-    *out = Reduce(p, pass, noise, 1, &ref);
+    *out = Reduce(p, pass, ref, noise, 1);
     return out->cost + NoiseDofShare(*out, fitted) * out->log_det;
   };
   const Eigen::Vector3d noise(3.0, 1.5, 2.2);

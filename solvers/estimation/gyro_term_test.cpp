@@ -4,7 +4,9 @@
 // a gyro against its truth, judged by error / sigma over seeds.
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <random>
+#include <set>
 
 #include <ceres/jet.h>
 #include <gtest/gtest.h>
@@ -12,6 +14,7 @@
 #include "core/model/gyro_model.h"
 #include "solvers/estimation/batch_solver.h"
 #include "solvers/estimation/gyro_term.h"
+#include "solvers/estimation/observability.h"
 #include "tests/sim_fixtures.h"
 
 namespace triadcal {
@@ -28,10 +31,13 @@ struct GyroRun {
   RunData data;
 };
 
+// shape (optional) edits the scenario (its profile) before it is simulated.
 GyroRun MakeGyroRun(double rate_hz, double duration_s, double noise_dps, std::uint64_t seed,
-                    const std::vector<Effect>& effects = {}, const NamedValues& effect_truth = {}) {
+                    const std::vector<Effect>& effects = {}, const NamedValues& effect_truth = {},
+                    const std::function<void(Scenario*)>& shape = nullptr) {
   GyroRun g;
   g.s = PaperScenario(rate_hz, duration_s, 2.0, 15.0, seed);
+  if (shape) shape(&g.s);
   if (!effects.empty()) {
     // Effects in the data (the accelerometer's through the simulator, the
     // gyro's input rate is the bench's own).
@@ -288,6 +294,45 @@ TEST(GyroTerm, FitRecoversTheGyroWithinItsSigma) {
           << g.truth[i] << " sigma " << sigma;
     }
   }
+}
+
+// `observability` carries the gyro (DataInformation): on the paper's profile
+// each gyro parameter's Cramer-Rao bound within 0.85-1.2 of the readings
+// model's (given dlambda2, as the fit's sigma above); with the outer axis
+// still, the inner axis turns frame 2 about its x alone, so gyro.Kx is
+// determined and gyro.Ky, gyro.Kz are named in unobservable directions.
+TEST(GyroTerm, ObservabilityBoundsTheGyroAndNamesWhatASingleAxisLeaves) {
+  const GyroRun g = MakeGyroRun(50.0, 90.0, 0.05, 31);
+  const RunProblem p = BuildRunProblem(g.s.run, g.data, g.layout, kDefaultEpoch_s, {});
+  const ObservabilityResult r = AnalyseObservability(g.s.run, p, g.truth);
+  const Eigen::MatrixXd& C = r.with_constraints.cov;
+  ASSERT_EQ(C.rows(), g.layout.size());
+  const Eigen::VectorXd c_l = C.col(kDlambda2);
+  const Eigen::MatrixXd given_l2 = C - c_l * c_l.transpose() / c_l[kDlambda2];
+  const Eigen::VectorXd crb = ReadingsModelBound(g, g.s.run.gyro->noise_rad_s);
+  const int go = g.layout.gyro_offset();
+  for (int j = 0; j < kNumGyroParams; ++j) {
+    const std::string& name = g.layout.info(go + j).name;
+    const double ratio = std::sqrt(given_l2(go + j, go + j)) / crb[j];
+    EXPECT_GT(ratio, 0.85) << name;
+    EXPECT_LT(ratio, 1.2) << name;
+  }
+
+  const GyroRun one = MakeGyroRun(50.0, 90.0, 0.05, 32, {}, {},
+                                  [](Scenario* s) { s->profile.amplitude_rad[0] = 0.0; });
+  const RunProblem p1 = BuildRunProblem(one.s.run, one.data, one.layout, kDefaultEpoch_s, {});
+  const ObservabilityResult r1 = AnalyseObservability(one.s.run, p1, one.truth);
+  std::set<std::string> named;
+  for (const Direction& d : r1.with_constraints.unobservable) {
+    for (const auto& [name, weight] : d.named.weights) {
+      if (std::abs(weight) >= 0.2) named.insert(name);
+    }
+  }
+  EXPECT_TRUE(named.count("gyro.Ky")) << "gyro.Ky not named";
+  EXPECT_TRUE(named.count("gyro.Kz")) << "gyro.Kz not named";
+  EXPECT_FALSE(named.count("gyro.Kx")) << "gyro.Kx named";
+  const int kx = one.layout.IndexOf("gyro.Kx");
+  EXPECT_LT(std::sqrt(r1.with_constraints.cov(kx, kx)), 0.01 * r1.prior.sigma[kx]);
 }
 
 // The angles lag the bench by 8 ms (angle_latency, in the data of both

@@ -42,7 +42,7 @@ void AccumulateWithJacobian(const ModelConfig& cfg, const Eigen::VectorXd& theta
 
 IntervalIncrement IntegrateInterval(const ModelConfig& cfg, const Eigen::VectorXd& theta,
                                     const SampleSeries& s, std::size_t k0, std::size_t k1,
-                                    bool with_jacobian) {
+                                    bool with_jacobian, bool with_noise) {
   const RunData& run = *s.run;
   IntervalIncrement inc;
   const std::size_t m = k1 - k0;
@@ -58,7 +58,7 @@ IntervalIncrement IntegrateInterval(const ModelConfig& cfg, const Eigen::VectorX
     beta[j + 1] += 0.5 * dt * remain + dt * dt / 6.0;
   }
   for (Eigen::Matrix<double, 6, 6>& w : inc.channel_weight) w.setZero();
-  for (std::size_t j = 0; j <= m; ++j) {
+  for (std::size_t j = 0; j <= m && with_noise; ++j) {
     const double a2 = alpha[j] * alpha[j], ab = alpha[j] * beta[j], b2 = beta[j] * beta[j];
     inc.sum_alpha2 += a2;
     inc.sum_alpha_beta += ab;

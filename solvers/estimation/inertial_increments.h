@@ -55,10 +55,14 @@ struct SampleSeries {
 };
 
 // Increments over samples k0..k1 (inclusive) at theta; with_jacobian fills the
-// derivative blocks (automatic differentiation through bench_model.h).
+// derivative blocks (b1_jacobian.h, or automatic differentiation through
+// bench_model.h). with_noise fills the noise weights (sum_*, channel_weight,
+// first_* and last_*): the batch solver takes them from one reference pass
+// (run_evaluation.h) and skips them at every other point, where they would
+// cost a bench-motion evaluation per sample.
 IntervalIncrement IntegrateInterval(const ModelConfig& cfg, const Eigen::VectorXd& theta,
                                     const SampleSeries& series, std::size_t k0, std::size_t k1,
-                                    bool with_jacobian);
+                                    bool with_jacobian, bool with_noise = true);
 
 // Variance of one acceleration sample [m^2/s^4] that acts alike on every axis
 // of L: the angle noise rotating g, and a floor of 1e-6 m/s^2 that keeps

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "solvers/estimation/gyro_term.h"
 #include "solvers/estimation/run_evaluation.h"
 #include "solvers/estimation/parallel.h"
 
@@ -70,9 +71,14 @@ Eigen::MatrixXd RowEchelon(Eigen::MatrixXd B) {
 Eigen::MatrixXd DataInformation(const RunProblem& p, const Eigen::VectorXd& theta, int threads) {
   if (threads <= 0) threads = DefaultThreads();
   // The noise weights' shape at the nominal values, as the fit's (run_evaluation.h).
-  const RunPass weights = EvaluatePass(p, p.prior.mean, false, threads);
+  const RunPass weights = WeightsPass(p, p.prior.mean, threads);
   const RunPass pass = EvaluatePass(p, theta, true, threads);
-  return Symmetric(Reduce(p, pass, p.noise_mV, threads, &weights).information);
+  Eigen::MatrixXd info = Reduce(p, pass, weights, p.noise_mV, threads).information;
+  if (RunHasGyro(p)) {  // the gyro's increments at its noise (gyro_term.h)
+    info += ReduceGyroAtNoise(EvaluateGyroPass(p, theta, true, threads), p.gyro_noise_rad_s, 1.0)
+                .information;
+  }
+  return Symmetric(info);
 }
 
 void ClassifyDirections(const ParameterLayout& layout, const Eigen::MatrixXd& information,
@@ -80,6 +86,11 @@ void ClassifyDirections(const ParameterLayout& layout, const Eigen::MatrixXd& in
                         std::vector<Direction>* unobservable, std::vector<Direction>* weak) {
   const Eigen::MatrixXd In =
       Symmetric(prior_sigma.asDiagonal() * information * prior_sigma.asDiagonal());
+  if (!In.allFinite()) {  // a fit whose cost is not finite: nothing to classify
+    if (unobservable) unobservable->clear();
+    if (weak) weak->clear();
+    return;
+  }
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(In);
   const Eigen::VectorXd& lam = es.eigenvalues();  // ascending
   const int n = static_cast<int>(lam.size());
@@ -197,6 +208,10 @@ std::vector<WeakDirection> UnsupportedDirections(const ParameterLayout& layout,
     for (int b = 0; b < m; ++b) P(a, b) = posterior_cov(est[a], est[b]);
   }
   const Eigen::MatrixXd Pn = Symmetric(sinv.asDiagonal() * P * sinv.asDiagonal());
+  // A fit whose cost was not finite has no covariance to read (NaN variances:
+  // nothing counts as estimated, and Eigen's solver crashes on an empty
+  // matrix): nothing is named.
+  if (m == 0 || !Pn.allFinite()) return {};
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Pn);
   const Eigen::VectorXd info = es.eigenvalues().cwiseMax(1e-300).cwiseInverse().array() - 1.0;
   const Eigen::MatrixXd In = es.eigenvectors() * info.asDiagonal() * es.eigenvectors().transpose();

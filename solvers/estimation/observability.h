@@ -94,7 +94,9 @@ struct ObservabilityOptions {
 };
 
 // I_data at theta for the run of p (SI): one linearisation pass over the
-// samples and one Schur elimination of the trajectory.
+// samples and one Schur elimination of the trajectory; with a gyro triad in
+// the layout and the run, its increments' information (gyro_term.h) at
+// p.gyro_noise_rad_s as well.
 Eigen::MatrixXd DataInformation(const RunProblem& p, const Eigen::VectorXd& theta, int threads);
 
 // The whole analysis for the run of p (built from run) at theta.

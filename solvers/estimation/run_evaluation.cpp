@@ -32,28 +32,43 @@ Mat6 ProcessCovariance(const RunProblem& p, const ProcessStep& s, const Eigen::V
   return Q;
 }
 
-RunPass EvaluatePass(const RunProblem& p, const Eigen::VectorXd& theta, bool with_jacobian,
-                     int threads) {
+namespace {
+
+RunPass Pass(const RunProblem& p, const Eigen::VectorXd& theta, bool with_jacobian,
+             bool with_noise, int threads) {
   if (!p.held.empty()) throw std::logic_error("EvaluatePass: the problem holds parameters");
   const StateSpaceModel model(p);
   const std::size_t E = p.epochs.size();
   RunPass pass;
   pass.theta = theta;
   pass.with_jacobian = with_jacobian;
+  pass.with_noise = with_noise;
   pass.process.resize(E - 1);
   pass.measurement.resize(E);
-  pass.LR.resize(E);
+  if (with_noise) pass.LR.resize(E);
   ParallelFor(E, threads, [&](std::size_t e) {
-    if (e + 1 < E) pass.process[e] = model.Process(e, theta, with_jacobian);
-    pass.measurement[e] = model.Measurement(e, theta, with_jacobian, true);
-    pass.LR[e] = WhiteningOf(pass.measurement[e].R);
+    if (e + 1 < E) pass.process[e] = model.Process(e, theta, with_jacobian, with_noise);
+    pass.measurement[e] = model.Measurement(e, theta, with_jacobian, with_noise);
+    if (with_noise) pass.LR[e] = WhiteningOf(pass.measurement[e].R);
   });
   return pass;
 }
 
-RunReduction Reduce(const RunProblem& p, const RunPass& pass, const Eigen::Vector3d& noise_mV,
-                    int threads, const RunPass* weights, bool theta_part) {
-  const RunPass& wp = weights ? *weights : pass;
+}  // namespace
+
+RunPass EvaluatePass(const RunProblem& p, const Eigen::VectorXd& theta, bool with_jacobian,
+                     int threads) {
+  return Pass(p, theta, with_jacobian, false, threads);
+}
+
+RunPass WeightsPass(const RunProblem& p, const Eigen::VectorXd& theta_ref, int threads) {
+  return Pass(p, theta_ref, false, true, threads);
+}
+
+RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& weights,
+                    const Eigen::Vector3d& noise_mV, int threads, ThetaPart theta_part) {
+  if (!weights.with_noise) throw std::logic_error("Reduce: the weights' pass has no noise weights");
+  const RunPass& wp = weights;
   const std::size_t E = pass.measurement.size();
   const int n = pass.with_jacobian ? static_cast<int>(pass.theta.size()) : 0;
   const Eigen::VectorXd& theta = pass.theta;
@@ -151,7 +166,7 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const Eigen::Vecto
     out.channel_cross_trace += c.tt;
     out.log_det += c.log_det;
   }
-  if (!pass.with_jacobian || !theta_part) return out;
+  if (!pass.with_jacobian || theta_part == ThetaPart::kNone) return out;
 
   // 3. The theta part at the optimal states: the whitened Jacobians (the
   // process whitening's derivative by K_i acts on the residual there), the
@@ -179,7 +194,9 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const Eigen::Vecto
       pb[e].C.col(kKx + i) += dL * r;
     }
   });
-  out.information = ThetaInformationBySchur(pb, mb, Eigen::MatrixXd::Zero(0, n));
+  if (theta_part == ThetaPart::kGradientAndInformation) {
+    out.information = ThetaInformationBySchur(pb, mb, Eigen::MatrixXd::Zero(0, n));
+  }
   out.gradient = Eigen::VectorXd::Zero(n);
   for (std::size_t e = 0; e < E; ++e) {
     out.gradient.noalias() += mb[e].N.transpose() * mb[e].r0;

@@ -67,14 +67,22 @@ namespace triadcal {
 struct RunPass {
   Eigen::VectorXd theta;
   std::vector<ProcessStep> process;          // E - 1; U is 6 x n when with_jacobian
-  std::vector<MeasurementStep> measurement;  // E; H is 6 x n when with_jacobian, R always
-  std::vector<Mat6> LR;                      // E measurement whitenings
+  std::vector<MeasurementStep> measurement;  // E; H is 6 x n when with_jacobian
+  // With the noise (WeightsPass): each step's Q and its make-up, each epoch's
+  // R and its whitening; else they are left empty.
+  std::vector<Mat6> LR;  // E measurement whitenings
   bool with_jacobian = false;
+  bool with_noise = false;
 };
 
-// p must hold no parameter (p.held empty): the pass has every column.
+// The increments and reference motion at theta, with their Jacobian when
+// asked. p must hold no parameter (p.held empty): the pass has every column.
 RunPass EvaluatePass(const RunProblem& p, const Eigen::VectorXd& theta, bool with_jacobian,
                      int threads);
+
+// The reference pass of the noise weights' shape (above), at theta_ref (the
+// nominal values): the values and the noise weights, no Jacobian.
+RunPass WeightsPass(const RunProblem& p, const Eigen::VectorXd& theta_ref, int threads);
 
 // The run at theta with its trajectory solved for, at a reading noise.
 struct RunReduction {
@@ -108,13 +116,17 @@ struct RunReduction {
   std::vector<MeasurementBlock> measurement_blocks;
 };
 
-// weights: the pass whose noise weights' shape (each channel's sensitive axes
-// in L, the angle noise through B2) whitens the residuals (above); by default
-// `pass` itself. The scale factors' part of the process weight is always
-// pass's theta. Without theta_part only the cost, the states and the noise's
-// part are formed (what a noise estimate needs; no gradient, no information).
-RunReduction Reduce(const RunProblem& p, const RunPass& pass, const Eigen::Vector3d& noise_mV,
-                    int threads, const RunPass* weights = nullptr, bool theta_part = true);
+// What a reduction forms beyond the cost, the states and the noise's part
+// (all a noise estimate needs): the gradient in theta, and the information.
+enum class ThetaPart { kNone, kGradient, kGradientAndInformation };
+
+// weights: the WeightsPass whose noise weights' shape (each channel's
+// sensitive axes in L, the angle noise through B2) whitens the residuals
+// (above). The scale factors' part of the process weight is always pass's
+// theta. The theta part needs the pass's Jacobian.
+RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& weights,
+                    const Eigen::Vector3d& noise_mV, int threads,
+                    ThetaPart theta_part = ThetaPart::kGradientAndInformation);
 
 // The reading noise that maximises the (restricted) likelihood at the
 // reduction's theta, one step of the variance-component iteration from the

@@ -33,9 +33,39 @@ double CommonShare(const Weights& w, const std::vector<std::string>& names) {
   return all > 0 ? in / all : 0.0;
 }
 
+// M = [[1, -alpha_y, beta_z], [alpha_x, 1, -gamma_z], [-beta_x, gamma_y, 1]]:
+// each angle carries input `input` into reading `reading` (the gyro's M has
+// the same form, SPEC section 10).
+struct AngleEntry {
+  const char* name;
+  int reading, input;
+};
+constexpr AngleEntry kAngles[] = {{"alpha_x", 1, 0}, {"alpha_y", 0, 1}, {"beta_x", 2, 0},
+                                  {"beta_z", 0, 2},  {"gamma_y", 2, 1}, {"gamma_z", 1, 2}};
+
+// The gyro block's parameters (gyro.Kx ...), in a few words.
+std::string GyroParameterPhrase(const std::string& n) {
+  static const char* axis[3] = {"x", "y", "z"};
+  const std::string b = n.substr(5);
+  if (b.size() == 2 && b[0] == 'K') return "gyro scale factor " + n + " (gain of the " + b.substr(1) + " rate reading)";
+  if (b.rfind("W0", 0) == 0) return "gyro bias " + n;
+  if (b.size() == 3 && b[0] == 'G') {
+    return "gyro g-sensitivity " + n + " (W" + b.substr(2) + " into the " + b.substr(1, 1) +
+           " rate reading)";
+  }
+  for (const AngleEntry& a : kAngles) {
+    if (b == a.name) {
+      return "gyro misalignment " + n + " (the rate about " + axis[a.input] + " into the " +
+             axis[a.reading] + " reading)";
+    }
+  }
+  return n;
+}
+
 // What a parameter does, in a few words (base parameters; effects by name).
 std::string ParameterPhrase(const std::string& n) {
   static const char* axis[3] = {"x", "y", "z"};
+  if (n.rfind("gyro.", 0) == 0) return GyroParameterPhrase(n);
   if (n.size() == 2 && n[0] == 'K' && n[1] >= 'x' && n[1] <= 'z') {
     return "scale factor " + n + " (gain of the " + n.substr(1) + " reading)";
   }
@@ -45,11 +75,7 @@ std::string ParameterPhrase(const std::string& n) {
            "*W" + j + " term)";
   }
   if (n.rfind("W0", 0) == 0) return "zero offset " + n;
-  // M = [[1, -alpha_y, beta_z], [alpha_x, 1, -gamma_z], [-beta_x, gamma_y, 1]]
-  const struct { const char* name; int reading, input; } angles[] = {
-      {"alpha_x", 1, 0}, {"alpha_y", 0, 1}, {"beta_x", 2, 0},
-      {"beta_z", 0, 2},  {"gamma_y", 2, 1}, {"gamma_z", 1, 2}};
-  for (const auto& a : angles) {
+  for (const AngleEntry& a : kAngles) {
     if (n == a.name) {
       return "non-orthogonality angle " + n + " (W" + axis[a.input] + " into the " +
              axis[a.reading] + " reading)";

@@ -25,5 +25,18 @@ TEST(BeyondPrior, NamesParametersFarFromTheirPriorMeanLargestFirst) {
   EXPECT_EQ(DescribeExcursions({}), "");
 }
 
+// The gyro's parameters are named for what they do, as the accelerometer's
+// (observability printed a single-axis run's "gyro.gamma_z [gyro.gamma_z 1]").
+TEST(DescribeDirection, NamesTheGyrosParameters) {
+  EXPECT_EQ(DescribeDirection({{"gyro.Kz", 1.0}}),
+            "gyro scale factor gyro.Kz (gain of the z rate reading)");
+  EXPECT_EQ(DescribeDirection({{"gyro.W0x", -1.0}}), "gyro bias gyro.W0x");
+  EXPECT_EQ(DescribeDirection({{"gyro.gamma_z", 1.0}}),
+            "gyro misalignment gyro.gamma_z (the rate about z into the y reading)");
+  EXPECT_EQ(DescribeDirection({{"gyro.Gyx", 1.0}}),
+            "gyro g-sensitivity gyro.Gyx (Wx into the y rate reading)");
+  EXPECT_EQ(DescribeDirection({{"Kz", 1.0}}), "scale factor Kz (gain of the z reading)");
+}
+
 }  // namespace
 }  // namespace triadcal

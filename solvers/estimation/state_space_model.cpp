@@ -66,10 +66,10 @@ Eigen::MatrixXd StateSpaceModel::FreeColumns(const Eigen::MatrixXd& J) const {
 }
 
 ProcessStep StateSpaceModel::Process(std::size_t e, const Eigen::VectorXd& theta,
-                                     bool with_jacobian) const {
+                                     bool with_jacobian, bool with_noise) const {
   const Eigen::VectorXd theta_acc = theta.head(n_acc_);
   const IntervalIncrement inc = IntegrateInterval(acc_cfg_, theta_acc, p_.series, p_.epochs[e],
-                                                  p_.epochs[e + 1], with_jacobian);
+                                                  p_.epochs[e + 1], with_jacobian, with_noise);
   ProcessStep s;
   s.T_s = inc.T_s;
   s.u << inc.dv_mps, inc.ds_m;
@@ -78,6 +78,7 @@ ProcessStep StateSpaceModel::Process(std::size_t e, const Eigen::VectorXd& theta
     U << inc.ddv_dtheta, inc.dds_dtheta;
     s.U = FreeColumns(Widen(U));
   }
+  if (!with_noise) return s;
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
   s.Q.block<3, 3>(0, 0) = p_.isotropic_var * inc.sum_alpha2 * I;
   s.Q.block<3, 3>(0, 3) = s.Q.block<3, 3>(3, 0) = p_.isotropic_var * inc.sum_alpha_beta * I;

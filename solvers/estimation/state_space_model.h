@@ -98,8 +98,10 @@ class StateSpaceModel {
   // columns for the held parameters).
   Eigen::MatrixXd ExpandCovariance(const Eigen::MatrixXd& cov_free) const;
 
-  // Interval e -> e+1 at the full theta. with_jacobian fills U.
-  ProcessStep Process(std::size_t e, const Eigen::VectorXd& theta, bool with_jacobian) const;
+  // Interval e -> e+1 at the full theta. with_jacobian fills U, with_noise
+  // Q and its make-up (without it they are zero).
+  ProcessStep Process(std::size_t e, const Eigen::VectorXd& theta, bool with_jacobian,
+                      bool with_noise = true) const;
   // Epoch e at the full theta. with_jacobian fills H, with_noise R.
   MeasurementStep Measurement(std::size_t e, const Eigen::VectorXd& theta, bool with_jacobian,
                               bool with_noise) const;

@@ -1,14 +1,26 @@
 #include "tools/distribution/mpi_context.h"
 
+#if TRIADCAL_HAVE_MPI
 #include <mpi.h>
+#endif
 
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
+#include <initializer_list>
 #include <stdexcept>
 
 namespace triadcal {
 namespace {
 
+bool LaunchedByMpi() {
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE"}) {
+    if (std::getenv(v)) return true;
+  }
+  return false;
+}
+
+#if TRIADCAL_HAVE_MPI
 struct JobState {
   bool active = false;  // MPI initialised by MpiSession
   int rank = 0, size = 1, local_size = 1;
@@ -19,19 +31,48 @@ JobState& State() {
   return s;
 }
 
-bool LaunchedByMpi() {
-  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE"}) {
-    if (std::getenv(v)) return true;
-  }
-  return false;
-}
-
 void Check(int rc, const char* what) {
   if (rc != MPI_SUCCESS) throw std::runtime_error(std::string("MPI: ") + what + " failed");
 }
+#else
+// The rank or size the launcher gave this process (0 when it gave none).
+int LauncherNumber(std::initializer_list<const char*> names) {
+  for (const char* v : names) {
+    if (const char* text = std::getenv(v)) return std::atoi(text);
+  }
+  return 0;
+}
+#endif
 
 }  // namespace
 
+bool MpiBuilt() { return TRIADCAL_HAVE_MPI != 0; }
+
+#if !TRIADCAL_HAVE_MPI
+// Built without MPI (TRIADCAL_MPI=OFF): every process is a job of one rank. A
+// launcher's job of several ranks is refused, as each rank would do all the
+// work and write the same outputs; a launcher's single rank runs as usual.
+MpiSession::MpiSession(int*, char***) {
+  if (!LaunchedByMpi()) return;
+  const int size = LauncherNumber({"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"});
+  const int rank = LauncherNumber({"OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK"});
+  if (size > 1 || rank > 0) {
+    std::fprintf(stderr,
+                 "triadcal: error: this triadcal was built without MPI (TRIADCAL_MPI=OFF) and "
+                 "cannot run as one of %d ranks; run it as one process, or split a batch with "
+                 "--shard I/N (docs/scale-out.md)\n",
+                 size > 1 ? size : rank + 1);
+    std::exit(2);
+  }
+}
+MpiSession::~MpiSession() = default;
+int MpiRank() { return 0; }
+int MpiSize() { return 1; }
+int MpiLocalSize() { return 1; }
+std::vector<std::string> GatherOnRoot(const std::string& mine) { return {mine}; }
+void MpiAbortIfShared(int) {}
+std::string BroadcastFromRoot(const std::string& text) { return text; }
+#else
 MpiSession::MpiSession(int* argc, char*** argv) {
   if (!LaunchedByMpi()) return;
   int provided = 0;
@@ -88,6 +129,8 @@ std::vector<std::string> GatherOnRoot(const std::string& mine) {
   return out;
 }
 
+#endif  // TRIADCAL_HAVE_MPI
+
 std::vector<nlohmann::json> GatherJsonOnRoot(const nlohmann::json& mine) {
   const std::vector<std::uint8_t> bytes = nlohmann::json::to_cbor(mine);
   std::vector<nlohmann::json> out;
@@ -97,6 +140,7 @@ std::vector<nlohmann::json> GatherJsonOnRoot(const nlohmann::json& mine) {
   return out;
 }
 
+#if TRIADCAL_HAVE_MPI
 void MpiAbortIfShared(int code) {
   if (State().active && State().size > 1) MPI_Abort(MPI_COMM_WORLD, code);
 }
@@ -110,5 +154,6 @@ std::string BroadcastFromRoot(const std::string& text) {
   Check(MPI_Bcast(out.data(), n, MPI_CHAR, 0, MPI_COMM_WORLD), "MPI_Bcast");
   return out;
 }
+#endif  // TRIADCAL_HAVE_MPI
 
 }  // namespace triadcal

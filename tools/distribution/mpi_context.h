@@ -15,6 +15,11 @@
 
 namespace triadcal {
 
+// Whether this build has MPI (CMake option TRIADCAL_MPI). Without it every
+// process is a job of one rank, and a launcher's job of several ranks is
+// refused by MpiSession (exit 2, one line on stderr).
+bool MpiBuilt();
+
 class MpiSession {
  public:
   // Initialises MPI when launched by an MPI launcher; finalises on destruction.

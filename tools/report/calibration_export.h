@@ -1,7 +1,8 @@
 // `triadcal export`: a calibration in forms other programs use.
 //
 //   c            a dependency-free C99 header and source applying the
-//                calibration: raw readings -> specific force W [g], the exact
+//                calibration: raw readings (in the unit of the readings it
+//                was estimated from) -> specific force W [g], the exact
 //                inverse of the readings model (paper eq. 1) with the same
 //                Newton iteration as bench_model.h SpecificForceFromReadings_g,
 //                including the sensor-stage effects (thermal_drift,
@@ -52,13 +53,17 @@ std::string ExportRefusal(const Calibration& cal);
 
 // The readings model as matrices, in SI and in g (g0 = 9.80665 m/s^2):
 //
-//   z = S a + b + diag(a) N a          z readings [mV], a specific force
+//   z = S a + b + diag(a) N a          z readings [U], a specific force
 //                                      [m/s^2] in the triad frame
-//   S = diag(K) M / g0                 scale-misalignment [mV per m/s^2]
-//   N = diag(K) Kij / g0^2             nonlinearity [mV per (m/s^2)^2]
-//   b = W0                             bias [mV]
+//   S = diag(K) M / g0                 scale-misalignment [U per m/s^2]
+//   N = diag(K) Kij / g0^2             nonlinearity [U per (m/s^2)^2]
+//   b = W0                             bias [U]
 //
-// plus S^-1 (the linear inverse) and the sensor-stage effects' parameters;
+// U is the unit of the readings the calibration was estimated from
+// (cal.readings_unit: mV, mg or counts; mV when the file names none, as a
+// truth.json): "readings_unit" holds it and the keys name it (S_U_per_mps2,
+// b_U, ...), as do the C code's comments and its argument z_U.
+// Plus S^-1 (the linear inverse) and the sensor-stage effects' parameters;
 // with the gyro, "gyro":
 //
 //   g = S_g w + b_g + G W              g readings, w rate [deg/s], W [g]

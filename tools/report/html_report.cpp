@@ -5,6 +5,7 @@
 
 #include "core/io/file_util.h"
 #include "core/model/errors.h"
+#include "core/version/version.h"
 #include "tools/report/report_assets.h"
 
 namespace triadcal {
@@ -83,7 +84,7 @@ std::string HtmlReport(const std::vector<ReportInput>& inputs) {
   std::string h;
   h += "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n";
   h += "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n";
-  h += "<meta name=\"generator\" content=\"triadcal 0.1.0\">\n";
+  h += std::string("<meta name=\"generator\" content=\"triadcal ") + ToolVersion() + "\">\n";
   h += "<title>" + HtmlEscape(title) + "</title>\n";
   h += "<style>\n/* uPlot 1.6.32, MIT licence (c) Leon Sorokin */\n";
   h += kUplotCss;

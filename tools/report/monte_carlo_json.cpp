@@ -55,6 +55,11 @@ nlohmann::json MonteCarloJson(const MonteCarloSettings& a, const MonteCarloResul
     const double f = p.si_per_unit;
     nlohmann::json j = {{"unit", p.unit}, {"truth", r.truth[i] / f}, {"crb", r.crb[i] / f}};
     for (const EstimatorStats& st : r.estimators) {
+      if (st.runs > 0 && st.held_runs[i] >= st.runs) {
+        // Never estimated (held; the filter and the gyro): no figure to give.
+        j[st.name] = {{"estimated", false}, {"held_runs", st.held_runs[i]}};
+        continue;
+      }
       const double spread = std::sqrt(
           std::max(0.0, st.scatter[i] * st.scatter[i] - st.mean_error[i] * st.mean_error[i]));
       j[st.name] = {
@@ -154,13 +159,19 @@ void PrintMonteCarlo(const MonteCarloSettings& a, const MonteCarloResult& r,
     const ParameterInfo& p = L.info(i);
     const double f = p.si_per_unit;
     std::printf("%-9s %-7s %9.3g", p.name.c_str(), p.unit.c_str(), r.crb[i] / f);
+    std::string held;  // the estimators that left it out, and in how many runs
     for (const EstimatorStats& st : r.estimators) {
-      std::printf(" | %9.3g %9.3g %6.3f %6.3f", st.scatter[i] / f, st.mean_sigma[i] / f,
-                  st.scatter[i] / r.crb[i], st.rms_z[i]);
+      if (st.runs > 0 && st.held_runs[i] >= st.runs) {
+        std::printf(" | %9s %9s %6s %6s", "-", "-", "-", "-");
+      } else {
+        std::printf(" | %9.3g %9.3g %6.3f %6.3f", st.scatter[i] / f, st.mean_sigma[i] / f,
+                    st.scatter[i] / r.crb[i], st.rms_z[i]);
+      }
+      if (st.held_runs[i] > 0) {
+        held += (held.empty() ? "" : ", ") + st.name + " in " + std::to_string(st.held_runs[i]);
+      }
     }
-    int held = 0;
-    for (const EstimatorStats& st : r.estimators) held = std::max(held, st.held_runs[i]);
-    if (held > 0) std::printf("  not estimated in %d runs", held);
+    if (!held.empty()) std::printf("  not estimated by %s runs", held.c_str());
     std::printf("\n");
   }
   std::printf("sampling error of a scatter from %d runs: about %.1f %% (1/sqrt(2N))\n", a.runs,
