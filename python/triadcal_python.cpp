@@ -1,7 +1,7 @@
 // The Python module `triadcal`: the library's main jobs on numpy arrays and
 // dicts (python/README in docs/library.md).
 //
-//   triadcal.fit(run, **options) -> dict         the OUT of `triadcal fit`
+//   triadcal.fit(run, **options) -> dict         the OUT of `triadcal fit` (its job)
 //   triadcal.apply(calibration, readings_mV, t_s=None, temp_C=None) -> (N, 3)
 //   triadcal.apply_gyro(calibration, gyro_dps, W_g) -> (N, 3)     [deg/s]
 //   triadcal.simulate(scenario, seed=None, out_dir=None) -> dict of arrays
@@ -28,11 +28,10 @@
 #include "core/model/errors.h"
 #include "core/model/units.h"
 #include "core/simulation/simulator.h"
+#include "app/fit_job.h"
+#include "app/run_loading.h"
+#include "app/session.h"
 #include "core/version/version.h"
-#include "solvers/estimation/batch_solver.h"
-#include "tools/report/estimate_json.h"
-#include "tools/report/fit_report.h"
-#include "solvers/estimation/run_problem.h"
 
 namespace py = pybind11;
 
@@ -140,51 +139,32 @@ py::dict RunDataDict(const RunData& d) {
   return out;
 }
 
+// `triadcal fit` through its job (app/fit_job.h): the same settings (their
+// defaults those of the command line), the same OUT.
 py::object Fit(const py::object& run_arg, const std::string& effects, double epoch_s,
-               double rate_window_s, const std::string& init, int threads, bool correlations,
-               bool auto_hold, const std::vector<std::string>& hold,
-               const std::vector<std::string>& free) {
-  if (init != "rts" && init != "nominal") {
-    throw InputError("init: expected rts or nominal, got '" + init + "'");
-  }
-  const RunDescription run = RunFrom(run_arg);
-  std::vector<Effect> list;
-  std::string item;
-  for (std::size_t start = 0; start <= effects.size();) {
-    const std::size_t end = std::min(effects.find(',', start), effects.size());
-    item = effects.substr(start, end - start);
-    if (!item.empty()) {
-      try {
-        list.push_back(EffectFromName(item));
-      } catch (const std::invalid_argument& e) {
-        throw InputError(std::string("effects: ") + e.what());
-      }
-    }
-    start = end + 1;
-  }
-  // The gyro with a gyro block, as `triadcal fit` (its columns are then read).
-  const ParameterLayout layout(list, /*gyro=*/run.gyro.has_value());
-  BatchResult r;
-  std::size_t samples = 0;
+               double rate_window_s, const std::string& init, const std::string& sigma,
+               int threads, bool correlations, bool auto_hold,
+               const std::vector<std::string>& hold, const std::vector<std::string>& free) {
+  FitSettings settings;
+  settings.effects = effects;
+  settings.epoch_s = epoch_s;
+  settings.rate_window_s = rate_window_s;
+  settings.init = ParseFitInit(init);
+  settings.sigma = ParseSigmaMethod(sigma);
+  settings.threads = threads;
+  settings.correlations = correlations;
+  settings.auto_hold = auto_hold;
+  settings.hold = hold;
+  settings.free = free;
+  settings.Validate();
+  const RunDescription description = RunFrom(run_arg);
+  json out;
   {
     py::gil_scoped_release release;
-    const RunData data = LoadRunData(run, nullptr);
-    samples = data.size();
-    BatchOptions opt;  // the options of `triadcal fit`, with its defaults
-    opt.epoch_s = epoch_s;
-    opt.derivatives.half_window_s = rate_window_s;
-    opt.init = init == "rts" ? BatchInit::kRts : BatchInit::kNominal;
-    opt.threads = threads;
-    opt.holding.auto_hold = auto_hold;
-    opt.holding.hold = hold;
-    opt.holding.free = free;
-    r = SolveBatch(run, data, layout, opt);
+    Session session;
+    const LoadedRun run = LoadRun(description, &session);
+    out = FitRun(settings, description.yaml_path, run, session).json;
   }
-  const FitReport rep = MakeFitReport(layout, r);
-  json out = FitJson(layout, r, rep, correlations);
-  out["command"] = "fit";
-  out["run"] = run.yaml_path;
-  out["samples"] = samples;
   return FromJson(out);
 }
 
@@ -261,7 +241,7 @@ py::dict SimulateScenario(const std::string& scenario, std::optional<std::uint64
   return out;
 }
 
-py::dict LoadRun(const py::object& run_arg) {
+py::dict LoadRunArrays(const py::object& run_arg) {
   const RunDescription run = RunFrom(run_arg);
   return RunDataDict(LoadRunData(run, nullptr));
 }
@@ -281,12 +261,17 @@ PYBIND11_MODULE(triadcal, m) {
       input_error(e.what());
     }
   });
-  m.def("fit", &triadcal::Fit, "run"_a, py::kw_only(), "effects"_a = "", "epoch_s"_a = triadcal::kDefaultEpoch_s,
-        "rate_window_s"_a = 0.1, "init"_a = "rts", "threads"_a = 0,
-        "correlations"_a = false, "auto_hold"_a = true, "hold"_a = std::vector<std::string>{},
-        "free"_a = std::vector<std::string>{},
-        "Batch least-squares fit of a run (run.yaml path or dict); returns the OUT of "
-        "`triadcal fit` as a dict (parameters: {name: {value, sigma, unit, ...}}).");
+  const triadcal::FitSettings defaults;  // those of `triadcal fit`
+  m.def("fit", &triadcal::Fit, "run"_a, py::kw_only(), "effects"_a = defaults.effects,
+        "epoch_s"_a = defaults.epoch_s, "rate_window_s"_a = defaults.rate_window_s,
+        "init"_a = triadcal::FitInitName(defaults.init),
+        "sigma"_a = triadcal::SigmaMethodName(defaults.sigma), "threads"_a = defaults.threads,
+        "correlations"_a = defaults.correlations, "auto_hold"_a = defaults.auto_hold,
+        "hold"_a = defaults.hold, "free"_a = defaults.free,
+        "Batch least-squares fit of a run (run.yaml path or dict), as `triadcal fit` fits it "
+        "(the same job); returns its OUT as a dict (parameters: {name: {value, sigma, unit, "
+        "...}}, sigma, residual_analysis, settings, ...), without the provenance a written "
+        "file carries.");
   m.def("apply", &triadcal::Apply, "calibration"_a, "readings_mV"_a, "t_s"_a = py::none(),
         "temp_C"_a = py::none(),
         "Raw readings (N, 3) [mV, triad axes] -> specific force W (N, 3) [g] by the exact "
@@ -303,7 +288,7 @@ PYBIND11_MODULE(triadcal, m) {
         "gyro_dps (N, 3) with a gyro, truth {name: value in file units}; also writes run.csv, "
         "run.yaml, truth.json to "
         "out_dir when given.");
-  m.def("load_run", &triadcal::LoadRun, "run"_a,
+  m.def("load_run", &triadcal::LoadRunArrays, "run"_a,
         "The data of a run (run.yaml path or dict) as numpy arrays (gyro_dps (N, 3) when it "
         "has a gyro block).");
 }

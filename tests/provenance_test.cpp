@@ -1,4 +1,4 @@
-// Provenance (tools/provenance.h) in the outputs of the commands, and the
+// Provenance (app/provenance.h, app/output_guard.h) in the outputs of the commands, and the
 // refusal to overwrite results of other inputs without --force.
 #include <gtest/gtest.h>
 

@@ -17,7 +17,7 @@
 #include "core/model/units.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
-#include "tools/provenance.h"
+#include "app/output_guard.h"
 
 namespace triadcal {
 namespace {
@@ -63,14 +63,14 @@ std::string GyroWarning(const ApplyArgs& a, const Calibration& cal, const Loaded
   return "";
 }
 
-int RunApply(const ApplyArgs& a) {
+int RunApply(const ApplyArgs& a, Session& session) {
   const bool to_stdout = IsStdout(a.out_csv);
   if (!to_stdout) CheckOutputPath(a.out_csv);
   const Calibration cal = LoadCalibration(a.calibration_json);
-  RecordInput("calibration", a.calibration_json);
-  const LoadedRun run = LoadRunOrThrow(a.run_yaml);
+  session.provenance.RecordInput("calibration", a.calibration_json);
+  const LoadedRun run = LoadRun(a.run_yaml, &session);
   CheckCalibrationForRun(cal, run.description);
-  if (!to_stdout) CheckOverwrite(a.out_csv);
+  if (!to_stdout) CheckOverwrite(a.out_csv, session);
   const std::vector<Eigen::Vector3d> W = ApplyCalibration(cal, run.description, run.data);
   const bool gyro = cal.layout.has_gyro() && run.data.has_gyro();
   const std::vector<Eigen::Vector3d> omega_rad_s =
@@ -87,7 +87,7 @@ int RunApply(const ApplyArgs& a) {
   out.reserve(128 + run.data.size() * 96);
   out += "# triadcal apply: calibration " + a.calibration_json + " (" + cal.section +
          (cal.command.empty() ? "" : ", from " + cal.command) + "), run " + a.run_yaml + "\n";
-  out += "# provenance: " + CurrentProvenance().dump() + "\n";
+  out += "# provenance: " + session.provenance.Json().dump() + "\n";
   out += "# W = specific force in the triad frame [g], an axis pointing up reads +1 g at rest:\n";
   out += "# the exact inverse of the readings model (paper eq. 1); t [s]";
   out += angles ? ", lambda1 lambda2 [deg] as recorded\n" : "\n";
@@ -139,7 +139,7 @@ Command AddApplyCommand(CLI::App& app) {
                    "output CSV: t, Wx, Wy, Wz [g] (+ omega_x, omega_y, omega_z [deg/s] with "
                    "the gyro, + angles); - for stdout")
       ->required();
-  c.run = [a] { return RunApply(*a); };
+  c.run = [a](Session& session) { return RunApply(*a, session); };
   return c;
 }
 

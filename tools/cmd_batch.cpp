@@ -1,5 +1,5 @@
 // `triadcal batch MANIFEST -o DIR`: a production line's runs (tools/batch/
-// manifest.h), each fitted exactly as `triadcal fit` fits it (tools/fit_job.h),
+// manifest.h), each fitted exactly as `triadcal fit` fits it (app/fit_job.h),
 // diagnosed when the manifest asks, judged against its limits and filed as
 // DIR/<serial>/<UTC date>[_k]/ (tools/batch/calibration_store.h), with one
 // summary table (tools/batch/batch_summary.h). A run that fails is a row of the
@@ -17,13 +17,9 @@
 #include <map>
 #include <memory>
 #include <mutex>
-#include <set>
 #include <nlohmann/json.hpp>
 
-#include "core/io/column_mapping.h"
 #include "core/io/file_util.h"
-#include "core/io/run_description_io.h"
-#include "core/io/run_io.h"
 #include "core/model/errors.h"
 #include "solvers/estimation/parallel.h"
 #include "tools/batch/acceptance.h"
@@ -32,10 +28,11 @@
 #include "tools/batch/manifest.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
-#include "tools/diagnose_job.h"
+#include "app/diagnose_job.h"
 #include "tools/distribution/mpi_context.h"
 #include "tools/distribution/work_split.h"
-#include "tools/fit_job.h"
+#include "app/fit_job.h"
+#include "tools/fit_options.h"
 
 namespace triadcal {
 namespace {
@@ -45,13 +42,16 @@ namespace fs = std::filesystem;
 struct BatchArgs {
   std::string manifest, out_dir, shard, date;
   int threads = 0;
-  FitSettings fit;
+  FitOptions fit;
 };
 
-// What a rank hands to rank 0 for one manifest run.
-// `own_unit`: name the output units for this run's readings (process-wide:
-// only when the runs are fitted one at a time, see RunBatch).
-nlohmann::json FitUnit(const BatchArgs& a, const ManifestEntry& e, int item, bool own_unit) {
+// What a rank hands to rank 0 for one manifest run: the fit job and, when the
+// manifest asks, the diagnose job with its defaults, each run in a session of
+// its own (the runs are fitted in parallel; each names its units for its own
+// readings, through its layout).
+nlohmann::json FitUnit(const FitSettings& settings, const ManifestEntry& e, int item,
+                       OutputGuard* guard) {
+  const ScopedOutputGuard on(guard);  // this thread's reads are the command's inputs
   const auto t0 = std::chrono::steady_clock::now();
   nlohmann::json j = {{"item", item},
                       {"status", "fitted"},
@@ -59,17 +59,17 @@ nlohmann::json FitUnit(const BatchArgs& a, const ManifestEntry& e, int item, boo
                       {"warnings", nlohmann::json::array()},
                       {"diagnose", nullptr}};
   try {
-    LoadedRun run;
-    run.description = LoadRunDescription(e.run_path);
-    if (own_unit) SetReadingsUnitName(ReadingsUnit(run.description));
-    RunWarnings warnings;
-    run.data = LoadRunData(run.description, &warnings);
-    j["warnings"] = warnings.lines;
-    FitSettings fs = a.fit;
+    Session session;
+    const LoadedRun run = LoadRun(e.run_path, &session);
+    j["warnings"] = run.warnings;
+    FitSettings fs = settings;
     fs.threads = 1;  // the result must not depend on the split (see above)
-    j["calibration"] = FitRun(fs, e.run_path, run, nullptr).json;
-    // `triadcal diagnose` as run with its defaults (0.2-s epochs).
-    if (e.diagnose) j["diagnose"] = DiagnoseRun(e.run_path, run, 0.2, 1);
+    j["calibration"] = FitRun(fs, e.run_path, run, session).json;
+    if (e.diagnose) {
+      DiagnoseSettings ds;  // `triadcal diagnose` with its defaults
+      ds.threads = 1;
+      j["diagnose"] = DiagnoseRun(ds, e.run_path, run, nullptr, session).json;
+    }
   } catch (const InputError& err) {
     j["status"] = "error";
     j["reason"] = err.what();
@@ -83,7 +83,7 @@ nlohmann::json FitUnit(const BatchArgs& a, const ManifestEntry& e, int item, boo
 
 // Rank 0: files one fitted run and judges it.
 UnitResult FileUnit(const BatchArgs& a, const std::string& date, const ManifestEntry& e,
-                    const nlohmann::json& job) {
+                    const nlohmann::json& job, const Session& session) {
   UnitResult u;
   u.item = job["item"].get<int>();
   u.serial = e.serial;
@@ -99,9 +99,9 @@ UnitResult FileUnit(const BatchArgs& a, const std::string& date, const ManifestE
   u.folder = ClaimCalibrationFolder(a.out_dir, e.serial, date);
   u.previous = PreviousCalibration(a.out_dir, e.serial, u.folder);
   const fs::path folder = fs::path(a.out_dir) / u.folder;
-  WriteJson(cal, (folder / "calibration.json").string());
+  WriteJson(cal, (folder / "calibration.json").string(), session);
   if (!job["diagnose"].is_null()) {
-    WriteJson(job["diagnose"], (folder / "diagnose.json").string());
+    WriteJson(job["diagnose"], (folder / "diagnose.json").string(), session);
     u.diagnosed = true;
     u.diagnose_selected = job["diagnose"]["selected"].get<std::vector<std::string>>();
   }
@@ -144,7 +144,7 @@ UnitResult FileUnit(const BatchArgs& a, const std::string& date, const ManifestE
     unit["limits"].push_back(jl);
   }
   unit["manifest"] = a.manifest;
-  WriteJson(unit, (folder / "unit.json").string());
+  WriteJson(unit, (folder / "unit.json").string(), session);
   return u;
 }
 
@@ -161,42 +161,28 @@ std::string SummaryBase(const std::string& dir, const std::string& stamp, const 
   }
 }
 
-int RunBatch(const BatchArgs& a) {
+int RunBatch(const BatchArgs& a, Session& session) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::string started = UtcStampNow();
   const Shard shard = ParseShard(a.shard);
   const std::string date = a.date.empty() ? UtcDateToday() : a.date;
   CheckDate(date);
-  CheckFitSettings(a.fit);
+  const FitSettings settings = a.fit.Settings();
   const std::vector<ManifestEntry> entries = LoadManifest(a.manifest);
   // On every rank (the same answer on a shared file system), so that a bad
   // DIR stops them all before the gather.
   std::error_code ec;
   fs::create_directories(a.out_dir, ec);
   CheckOutputPath((fs::path(a.out_dir) / "summary.json").string());
-  int threads = a.threads > 0 ? a.threads : std::max(1, DefaultThreads() / MpiLocalSize());
+  const int threads = a.threads > 0 ? a.threads : std::max(1, DefaultThreads() / MpiLocalSize());
   const ItemRange range = ShardRange(static_cast<int>(entries.size()), shard);
   const std::vector<int> mine = RankItems(range, MpiRank(), MpiSize());
-  // The units of the outputs are named for the readings (mV/g, counts/g,
-  // mg/g) by one process-wide name: set once when every run reads the same
-  // unit; runs in several units are fitted one at a time, each naming its own
-  // (a run that cannot be read fails in FitUnit, as before).
-  std::set<std::string> readings_units;
-  for (int item : mine) {
-    try {
-      readings_units.insert(ReadingsUnit(LoadRunDescription(entries[item].run_path)));
-    } catch (const std::exception&) {
-    }
-  }
-  const bool own_unit = readings_units.size() > 1;
-  if (readings_units.size() == 1) SetReadingsUnitName(*readings_units.begin());
-  if (own_unit) threads = 1;
 
   std::vector<nlohmann::json> jobs(mine.size());
   std::mutex mutex;
   int done = 0;
   ParallelFor(mine.size(), threads, [&](std::size_t k) {
-    jobs[k] = FitUnit(a, entries[mine[k]], mine[k], own_unit);
+    jobs[k] = FitUnit(settings, entries[mine[k]], mine[k], session.output_guard.get());
     std::lock_guard<std::mutex> lock(mutex);
     ++done;
     if (MpiRoot()) {
@@ -215,7 +201,9 @@ int RunBatch(const BatchArgs& a) {
     }
   }
   std::vector<UnitResult> units;
-  for (const auto& [item, job] : by_item) units.push_back(FileUnit(a, date, entries[item], job));
+  for (const auto& [item, job] : by_item) {
+    units.push_back(FileUnit(a, date, entries[item], job, session));
+  }
 
   nlohmann::json execution = {
       {"ranks", MpiSize()},
@@ -231,7 +219,7 @@ int RunBatch(const BatchArgs& a) {
   }
   const std::string base = SummaryBase(a.out_dir, started, shard);
   WriteFileAtomically(base + ".csv", BatchSummaryCsv(units));
-  WriteJson(summary, base + ".json");
+  WriteJson(summary, base + ".json", session);
 
   for (const UnitResult& u : units) {
     std::printf("%-16s %-5s %-24s", u.serial.c_str(), u.status.c_str(),
@@ -276,7 +264,7 @@ Command AddBatchCommand(CLI::App& app) {
                     "do shard I of N (1 <= I <= N) of the runs, e.g. $SLURM_ARRAY_TASK_ID/N; "
                     "join the N summaries with `triadcal merge`");
   AddFitOptions(c.app, &a->fit);
-  c.run = [a] { return RunBatch(*a); };
+  c.run = [a](Session& session) { return RunBatch(*a, session); };
   return c;
 }
 

@@ -9,13 +9,14 @@
 
 #include "core/model/errors.h"
 #include "solvers/estimation/batch_solver.h"
-#include "tools/report/estimate_json.h"
+#include "app/estimate_json.h"
 #include "solvers/estimation/kalman_smoother.h"
 #include "tools/command_util.h"
 #include "solvers/estimation/run_problem.h"
 #include "tools/commands.h"
-#include "tools/provenance.h"
-#include "tools/report/fit_report.h"
+#include "app/output_guard.h"
+#include "core/io/column_mapping.h"
+#include "app/fit_report.h"
 #include "tools/report/value_format.h"
 
 namespace triadcal {
@@ -30,12 +31,13 @@ double Seconds(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-int RunCompare(const CompareArgs& a) {
+int RunCompare(const CompareArgs& a, Session& session) {
   if (!a.report_html.empty()) CheckOutputPath(a.report_html);
   CheckOutputPath(a.out_json);
-  const LoadedRun run = LoadRunOrThrow(a.run_yaml);
-  CheckOverwrite(a.out_json);  // before the long work
-  const ParameterLayout layout(ParseEffectList(a.effects, run.data));
+  const LoadedRun run = LoadRun(a.run_yaml, &session);
+  CheckOverwrite(a.out_json, session);  // before the long work
+  const ParameterLayout layout(ParseEffectList(a.effects, run.data), /*gyro=*/false,
+                               ReadingsUnit(run.description));
 
   // One decision of what the run determines, for both estimators: the filter
   // holds what fit holds or considers (at nominal).
@@ -123,8 +125,8 @@ int RunCompare(const CompareArgs& a) {
   }
   out["differences_in_sigma"] = diff;
   out["largest_batch_minus_rts"] = {{"parameter", max_name}, {"sigma", max_abs}};
-  WriteJson(out, a.out_json);
-  WriteReportIfAsked(a.report_html, out, a.out_json);
+  WriteJson(out, a.out_json, session);
+  WriteReportIfAsked(a.report_html, out, a.out_json, session);
   std::printf("differences in units of the batch sigma; largest |batch - RTS| among estimable: "
               "%.3f (%s)\n",
               max_abs, max_name.c_str());
@@ -146,7 +148,7 @@ Command AddCompareCommand(CLI::App& app) {
   c.app->add_option("--effects", a->effects, "catalogue effects to estimate too, e.g. a,b");
   c.app->add_option("--epoch-s", a->epoch_s, "interval between epochs [s]")->capture_default_str()
       ->check(kEpochRange);
-  c.run = [a] { return RunCompare(*a); };
+  c.run = [a](Session& session) { return RunCompare(*a, session); };
   return c;
 }
 

@@ -24,7 +24,7 @@
 #include "tools/command_util.h"
 #include "solvers/estimation/run_problem.h"
 #include "tools/commands.h"
-#include "tools/provenance.h"
+#include "app/output_guard.h"
 #include "tools/report/design_report.h"
 
 namespace triadcal {
@@ -125,13 +125,13 @@ DesignStudyOptions StudyOptions(const DesignArgs& a, const ParameterLayout& layo
   return o;
 }
 
-int RunDesign(const DesignArgs& a) {
+int RunDesign(const DesignArgs& a, Session& session) {
   if (!a.report_html.empty()) CheckOutputPath(a.report_html);
   const auto t_start = std::chrono::steady_clock::now();
   CheckOutputPath(a.out_json);
   const Scenario s = LoadScenario(a.scenario);
-  RecordInput("scenario", a.scenario);
-  CheckOverwrite(a.out_json);  // before the long work
+  session.provenance.RecordInput("scenario", a.scenario);
+  CheckOverwrite(a.out_json, session);  // before the long work
   const ParameterLayout layout(ParseEffectList(a.effects));
   return WithFlags(DesignFlags(), [&] {
     const DesignStudyOptions options = StudyOptions(a, layout);
@@ -143,8 +143,8 @@ int RunDesign(const DesignArgs& a) {
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
     out["time_s"] = seconds;
-    WriteJson(out, a.out_json);
-    WriteReportIfAsked(a.report_html, out, a.out_json);
+    WriteJson(out, a.out_json, session);
+    WriteReportIfAsked(a.report_html, out, a.out_json, session);
 
     PrintDesign(s, layout, options, r, settings);
     std::printf("time %.1f s; wrote %s\n", seconds, a.out_json.c_str());
@@ -195,7 +195,7 @@ Command AddDesignCommand(CLI::App& app) {
   c.app->add_option("--threads", a->threads, "threads (0: all cores)")
       ->capture_default_str()
       ->check(kThreadsRange);
-  c.run = [a] { return RunDesign(*a); };
+  c.run = [a](Session& session) { return RunDesign(*a, session); };
   return c;
 }
 

@@ -10,24 +10,22 @@
 #include "core/io/parameters_json.h"
 #include "core/simulation/simulator.h"
 #include "solvers/diagnosis/effect_discovery.h"
-#include "tools/report/estimate_json.h"
+#include "app/estimate_json.h"
 #include "tools/command_util.h"
 #include "solvers/estimation/run_problem.h"
 #include "tools/commands.h"
-#include "tools/provenance.h"
-#include "tools/diagnose_job.h"
-#include "tools/report/fit_report.h"
-#include "tools/report/residual_plot_json.h"
+#include "app/output_guard.h"
+#include "app/diagnose_job.h"
+#include "app/fit_report.h"
+#include "app/residual_plot_json.h"
 #include "tools/report/value_format.h"
 
 namespace triadcal {
 namespace {
 
 struct DiagnoseArgs {
-  std::string run_yaml, out_json, report_html, truth_json, candidates;
-  double alpha = 0.01;
-  int max_effects = 4;
-  double epoch_s = kDefaultEpoch_s;
+  std::string run_yaml, out_json, report_html, truth_json;
+  DiagnoseSettings settings;
 };
 
 // Truth values in file units keyed by layout parameter name; keys the file
@@ -36,33 +34,29 @@ std::map<std::string, double> ReadTruth(const std::string& path) {
   return FileValues(ReadParametersJson(path, {""}, "{\"parameters\": {name: value}}"));
 }
 
-int RunDiagnose(const DiagnoseArgs& a) {
+int RunDiagnose(const DiagnoseArgs& a, Session& session) {
   if (!a.report_html.empty()) CheckOutputPath(a.report_html);
   CheckOutputPath(a.out_json);
-  const LoadedRun run = LoadRunOrThrow(a.run_yaml);
-  CheckOverwrite(a.out_json);  // before the long work
-  DiagnoseOptions opt;
-  opt.alpha = a.alpha;
-  opt.max_effects = a.max_effects;
-  opt.fit.epoch_s = a.epoch_s;
-  opt.candidates = ParseEffectList(a.candidates, "--candidates");
-  StageProgress progress("diagnose: ");
-  opt.progress = [&](const std::string& s) { progress.Stage(s); };
-  opt.fraction = [&](double f) { progress.Fraction(f); };
-  if (!(a.alpha > 0.0 && a.alpha < 1.0)) throw InputError("--alpha: must be in (0, 1)");
+  const LoadedRun run = LoadRun(a.run_yaml, &session);
+  CheckOverwrite(a.out_json, session);  // before the long work
+  a.settings.Validate();
   std::map<std::string, double> truth;
   // Read the truth first: a bad truth file must fail before the work.
   if (!a.truth_json.empty()) {
     truth = ReadTruth(a.truth_json);
-    RecordInput("truth", a.truth_json);
+    session.provenance.RecordInput("truth", a.truth_json);
   }
-  const DiagnosisResult d = Diagnose(run.description, run.data, opt);
-  EndProgress();
   const std::map<std::string, double>* tp = a.truth_json.empty() ? nullptr : &truth;
-
-  const nlohmann::json out = DiagnoseJson(a.run_yaml, a.alpha, d, tp);
-  WriteJson(out, a.out_json);
-  WriteReportIfAsked(a.report_html, out, a.out_json);
+  StageProgress progress("diagnose: ");
+  Session diagnosing = session;
+  diagnosing.stage = [&](const std::string& s) { progress.Stage(s); };
+  diagnosing.fraction = [&](double f) { progress.Fraction(f); };
+  const DiagnoseOutcome outcome = DiagnoseRun(a.settings, a.run_yaml, run, tp, diagnosing);
+  EndProgress();
+  const DiagnosisResult& d = outcome.result;
+  const nlohmann::json& out = outcome.json;
+  WriteJson(out, a.out_json, session);
+  WriteReportIfAsked(a.report_html, out, a.out_json, session);
 
   // The readable report.
   std::printf("diagnose: %s\n", d.verdict.c_str());
@@ -159,16 +153,17 @@ Command AddDiagnoseCommand(CLI::App& app) {
   c.app->add_option("--report", a->report_html,
                     "also write the HTML report of OUT (one self-contained file)");
   c.app->add_option("--truth", a->truth_json, "truth.json of a simulated run: errors before/after");
-  c.app->add_option("--candidates", a->candidates,
+  c.app->add_option("--candidates", a->settings.candidates,
                     "effects to test (default: the whole catalogue), e.g. a,b");
-  c.app->add_option("--alpha", a->alpha, "false-selection rate per round, in (0, 1)")
+  c.app->add_option("--alpha", a->settings.alpha, "false-selection rate per round, in (0, 1)")
       ->capture_default_str();
-  c.app->add_option("--max-effects", a->max_effects, "at most this many effects")
+  c.app->add_option("--max-effects", a->settings.max_effects, "at most this many effects")
       ->capture_default_str()
       ->check(BoundedInt(0, 20));
-  c.app->add_option("--epoch-s", a->epoch_s, "interval between epochs [s]")->capture_default_str()
+  c.app->add_option("--epoch-s", a->settings.epoch_s, "interval between epochs [s]")
+      ->capture_default_str()
       ->check(kEpochRange);
-  c.run = [a] { return RunDiagnose(*a); };
+  c.run = [a](Session& session) { return RunDiagnose(*a, session); };
   return c;
 }
 

@@ -14,7 +14,7 @@
 #include "core/model/errors.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
-#include "tools/provenance.h"
+#include "app/output_guard.h"
 #include "tools/report/calibration_export.h"
 
 namespace triadcal {
@@ -57,7 +57,7 @@ void EmitYaml(const nlohmann::ordered_json& j, YAML::Emitter* out) {
   }
 }
 
-int RunExport(const ExportArgs& a) {
+int RunExport(const ExportArgs& a, Session& session) {
   if (a.format != "c" && a.format != "yaml" && a.format != "json-matrix") {
     throw InputError("--format: expected c, yaml or json-matrix, got '" + a.format + "'");
   }
@@ -81,13 +81,13 @@ int RunExport(const ExportArgs& a) {
   }
   // Before any output: an effect the exported forms cannot carry.
   if (const std::string why = ExportRefusal(cal); !why.empty()) throw InputError(why);
-  RecordInput("calibration", a.calibration_json);
-  const std::string provenance = CurrentProvenance().dump();
+  session.provenance.RecordInput("calibration", a.calibration_json);
+  const std::string provenance = session.provenance.Json().dump();
 
   if (a.format == "json-matrix") {
-    WriteJson(nlohmann::json::parse(MatrixForm(cal).dump()), a.out);
+    WriteJson(nlohmann::json::parse(MatrixForm(cal).dump()), a.out, session);
   } else if (a.format == "yaml") {
-    if (!to_stdout) CheckOverwrite(a.out);
+    if (!to_stdout) CheckOverwrite(a.out, session);
     YAML::Emitter y;
     EmitYaml(MatrixForm(cal), &y);
     WriteOutput(a.out,
@@ -108,8 +108,8 @@ int RunExport(const ExportArgs& a) {
     fs::path c_path = out, h_path = out;
     c_path.replace_extension(".c");
     h_path.replace_extension(".h");
-    CheckOverwrite(c_path.string());
-    CheckOverwrite(h_path.string());
+    CheckOverwrite(c_path.string(), session);
+    CheckOverwrite(h_path.string(), session);
     // The source includes the header by the name it is written under (the
     // stem of -o), whatever --name calls the function.
     const CExport code = ExportC(cal, name,
@@ -146,7 +146,7 @@ Command AddExportCommand(CLI::App& app) {
                    "output file (for c: NAME.c or NAME.h; - for stdout with yaml, json-matrix)")
       ->required();
   c.app->add_option("--name", a->name, "C function prefix (default: the file name)");
-  c.run = [a] { return RunExport(*a); };
+  c.run = [a](Session& session) { return RunExport(*a, session); };
   return c;
 }
 

@@ -17,9 +17,10 @@
 #include "solvers/estimation/separability.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
-#include "tools/provenance.h"
-#include "tools/report/estimate_json.h"
-#include "tools/report/fit_report.h"
+#include "app/estimate_json.h"
+#include "app/fit_report.h"
+#include "app/output_guard.h"
+#include "core/io/column_mapping.h"
 #include "tools/report/result_plausibility.h"
 #include "tools/report/value_format.h"
 
@@ -34,7 +35,7 @@ constexpr int kMaxIterations = 20;
 struct FilterArgs {
   std::string run_yaml, out_json, report_html, series_csv, effects;
   double epoch_s = kDefaultEpoch_s;
-  double rate_window_s = 0.1;
+  double rate_window_s = AngleDerivativeOptions().half_window_s;
   int iterations = 2;
   bool correlations = false, no_auto_hold = false;
   std::string hold, free;
@@ -69,7 +70,7 @@ std::string SeriesCsv(const ParameterLayout& layout, const FilterResult& r) {
   return s.str();
 }
 
-int RunFilter(const FilterArgs& a) {
+int RunFilter(const FilterArgs& a, Session& session) {
   if (!a.report_html.empty()) CheckOutputPath(a.report_html, "--report");
   const auto t0 = std::chrono::steady_clock::now();
   CheckOutputPath(a.out_json);
@@ -78,10 +79,11 @@ int RunFilter(const FilterArgs& a) {
     throw InputError("--iterations: Value " + std::to_string(a.iterations) + " not in range 1 to " +
                      std::to_string(kMaxIterations));
   }
-  CheckHoldFree(a.hold, a.free, ParameterLayout(ParseEffectList(a.effects)));
-  const LoadedRun run = LoadRunOrThrow(a.run_yaml);
-  CheckOverwrite(a.out_json);  // before the long work
-  const ParameterLayout layout(ParseEffectList(a.effects, run.data));
+  CheckHoldFree(SplitList(a.hold), SplitList(a.free), ParameterLayout(ParseEffectList(a.effects)));
+  const LoadedRun run = LoadRun(a.run_yaml, &session);
+  CheckOverwrite(a.out_json, session);  // before the long work
+  const ParameterLayout layout(ParseEffectList(a.effects, run.data), /*gyro=*/false,
+                               ReadingsUnit(run.description));
   FilterOptions opt;
   opt.epoch_s = a.epoch_s;
   opt.derivatives.half_window_s = a.rate_window_s;
@@ -169,8 +171,8 @@ int RunFilter(const FilterArgs& a) {
   for (const std::string& w : ImplausibleResultWarnings(out["rts"]["parameters"], a.out_json)) {
     std::fprintf(stderr, "triadcal: warning: %s\n", OneLine(w).c_str());
   }
-  WriteJson(out, a.out_json);
-  WriteReportIfAsked(a.report_html, out, a.out_json);
+  WriteJson(out, a.out_json, session);
+  WriteReportIfAsked(a.report_html, out, a.out_json, session);
   if (!a.series_csv.empty()) WriteFileAtomically(a.series_csv, SeriesCsv(layout, r));
 
   std::printf("filter: %zu samples, %d epochs of %.3g s, %d pass(es), %.2f s\n",
@@ -268,7 +270,7 @@ Command AddFilterCommand(CLI::App& app) {
   c.app->add_flag("--no-auto-hold", args->no_auto_hold,
                   "estimate every parameter (by default those the run's motion does not support "
                   "are held at nominal, as in fit)");
-  c.run = [args] { return RunFilter(*args); };
+  c.run = [args](Session& session) { return RunFilter(*args, session); };
   return c;
 }
 

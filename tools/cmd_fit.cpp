@@ -1,26 +1,20 @@
-// `triadcal fit RUN.yaml -o OUT.json`: the batch solution (solvers/estimation/batch_solver.h).
-#include <cmath>
+// `triadcal fit RUN.yaml -o OUT.json`: the batch solution of the fit job
+// (app/fit_job.h), written and printed.
 #include <cstdio>
 #include <memory>
-#include <set>
-#include <sstream>
 
+#include "app/fit_job.h"
+#include "app/fit_report.h"
+#include "app/output_guard.h"
+#include "app/run_loading.h"
 #include "core/io/file_util.h"
 #include "core/io/runs_file_io.h"
 #include "core/model/errors.h"
-#include "solvers/diagnosis/residual_analysis.h"
-#include "solvers/estimation/batch_solver.h"
-#include "solvers/estimation/run_problem.h"
-#include "solvers/estimation/separability.h"
+#include "tools/cmd_fit_joint.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
-#include "tools/fit_job.h"
-#include "tools/joint_fit_job.h"
-#include "tools/provenance.h"
-#include "tools/report/estimate_json.h"
-#include "tools/report/fit_report.h"
-#include "tools/report/html_report.h"
-#include "tools/report/residual_plot_json.h"
+#include "tools/fit_options.h"
+#include "tools/report/fit_table.h"
 #include "tools/report/result_plausibility.h"
 
 namespace triadcal {
@@ -29,28 +23,29 @@ namespace {
 struct FitArgs {
   std::vector<std::string> runs;
   std::string run_yaml, out_json, report_html, residuals_csv;
-  FitSettings fit;
+  FitOptions fit;
 };
 
-int RunFit(FitArgs a) {
+int RunFit(FitArgs a, Session& session) {
   // Several runs, or one runs file: one problem over all (docs/multi-run.md).
   if (a.runs.size() > 1 || IsRunsFile(a.runs[0])) {
     if (!a.residuals_csv.empty()) {
       throw InputError("--residuals: not available for a joint fit of several runs");
     }
-    return RunJointFit(a.fit, a.runs, a.out_json, a.report_html);
+    return RunJointFit(a.fit.Settings(), a.runs, a.out_json, a.report_html, session);
   }
   a.run_yaml = a.runs[0];
   if (!a.report_html.empty()) CheckOutputPath(a.report_html, "--report");
-  CheckFitSettings(a.fit);
+  const FitSettings settings = a.fit.Settings();
   CheckOutputPath(a.out_json);
   if (!a.residuals_csv.empty()) CheckOutputPath(a.residuals_csv, "--residuals");
-  const LoadedRun run = LoadRunOrThrow(a.run_yaml);
-  CheckOverwrite(a.out_json);  // before the long work
+  const LoadedRun run = LoadRun(a.run_yaml, &session);
+  CheckOverwrite(a.out_json, session);  // before the long work
   StageProgress progress("fit: ");
-  const FitOutcome f = FitRun(
-      a.fit, a.run_yaml, run, [&](const std::string& s) { progress.Stage(s); },
-      [&](double x) { progress.Fraction(x); });
+  Session fitting = session;
+  fitting.stage = [&](const std::string& s) { progress.Stage(s); };
+  fitting.fraction = [&](double x) { progress.Fraction(x); };
+  const FitOutcome f = FitRun(settings, a.run_yaml, run, fitting);
   EndProgress();
   const ParameterLayout& layout = f.layout;
   const BatchResult& r = f.result;
@@ -60,8 +55,8 @@ int RunFit(FitArgs a) {
   for (const std::string& w : ImplausibleResultWarnings(f.json["parameters"], a.out_json)) {
     std::fprintf(stderr, "triadcal: warning: %s\n", OneLine(w).c_str());
   }
-  WriteJson(f.json, a.out_json);
-  WriteReportIfAsked(a.report_html, f.json, a.out_json);
+  WriteJson(f.json, a.out_json, session);
+  WriteReportIfAsked(a.report_html, f.json, a.out_json, session);
   if (!a.residuals_csv.empty()) WriteFileAtomically(a.residuals_csv, ResidualsCsv(r));
 
   std::printf("fit: %zu samples, %d epochs, %s\n", run.data.size(), r.epochs,
@@ -94,7 +89,7 @@ int RunFit(FitArgs a) {
               r.solve_seconds, r.covariance_seconds);
   std::printf("wrote %s\n", a.out_json.c_str());
   std::string why;
-  const int status = FitExitStatus(a.fit, a.run_yaml, r, rep, &why);
+  const int status = FitExitStatus(settings, a.run_yaml, r, rep, &why);
   if (status != 0) std::fprintf(stderr, "triadcal: error: %s\n", why.c_str());
   return status;
 }
@@ -115,11 +110,11 @@ Command AddFitCommand(CLI::App& app) {
   c.app->add_option("--report", a->report_html,
                     "also write the HTML report of OUT (one self-contained file)");
   AddFitOptions(c.app, &a->fit);
-  c.app->add_option("--threads", a->fit.threads, "threads (0: all cores)")
+  c.app->add_option("--threads", a->fit.settings.threads, "threads (0: all cores)")
       ->capture_default_str()
       ->check(kThreadsRange);
   c.app->add_option("--residuals", a->residuals_csv, "write the residuals per epoch (CSV)");
-  c.run = [a] { return RunFit(*a); };
+  c.run = [a](Session& session) { return RunFit(*a, session); };
   return c;
 }
 

@@ -11,7 +11,7 @@ namespace triadcal {
 Command AddInfoCommand(CLI::App& app) {
   Command c;
   c.app = app.add_subcommand("params", "List parameter names and units, and the effect catalogue");
-  c.run = [] {
+  c.run = [](Session&) {
     std::printf("Base parameters (docs/file-formats.md):\n");
     for (const ParameterInfo& p : BaseParameterInfo()) {
       std::printf("  %-10s %s\n", p.name.c_str(), p.unit.c_str());

@@ -24,7 +24,7 @@ struct MergeArgs {
   std::string out_json;
 };
 
-int RunMerge(const MergeArgs& a) {
+int RunMerge(const MergeArgs& a, Session& session) {
   CheckOutputPath(a.out_json);
   std::vector<nlohmann::json> shards;
   std::string command;
@@ -54,7 +54,7 @@ int RunMerge(const MergeArgs& a) {
       for (const nlohmann::json& s : shards)
         out["ranks"] = out["ranks"].get<int>() + s.value("ranks", 1);
       out["shards"] = shards.size();
-      WriteJson(out, a.out_json);
+      WriteJson(out, a.out_json, session);
       PrintMonteCarlo(m.settings, m.result, out);
     } else {
       const nlohmann::json out = MergeBatchShards(shards, a.shards);
@@ -65,7 +65,7 @@ int RunMerge(const MergeArgs& a) {
         csv.resize(csv.size() - 5);
       csv += ".csv";
       WriteFileAtomically(csv, BatchSummaryCsv(units));
-      WriteJson(out, a.out_json);
+      WriteJson(out, a.out_json, session);
       std::printf("batch: %d pass, %d fail, %d error of %d runs\n", out["pass"].get<int>(),
                   out["fail"].get<int>(), out["error"].get<int>(), out["units"].get<int>());
       std::printf("wrote %s\n", csv.c_str());
@@ -87,7 +87,7 @@ Command AddMergeCommand(CLI::App& app) {
       "merge", "Join the outputs of the shards of a montecarlo or batch job (--shard I/N)");
   c.app->add_option("shards", a->shards, "the N shard outputs (JSON)")->required();
   c.app->add_option("-o,--output", a->out_json, "output JSON (batch: and OUT.csv)")->required();
-  c.run = [a] { return RunMerge(*a); };
+  c.run = [a](Session& session) { return RunMerge(*a, session); };
   return c;
 }
 

@@ -22,7 +22,7 @@
 #include "tools/command_util.h"
 #include "solvers/estimation/run_problem.h"
 #include "tools/commands.h"
-#include "tools/provenance.h"
+#include "app/output_guard.h"
 #include "tools/distribution/mpi_context.h"
 #include "tools/distribution/work_split.h"
 #include "tools/report/monte_carlo_json.h"
@@ -46,7 +46,7 @@ struct MonteCarloArgs {
   bool per_seed = false;
 };
 
-int RunMonteCarloCommand(MonteCarloArgs a) {
+int RunMonteCarloCommand(MonteCarloArgs a, Session& session) {
   const auto t0 = std::chrono::steady_clock::now();
   a.first_seed = ParseSeed(a.first_seed_text, "--first-seed");
   if (a.runs > 0 && a.first_seed > UINT64_MAX - static_cast<std::uint64_t>(a.runs - 1)) {
@@ -64,8 +64,8 @@ int RunMonteCarloCommand(MonteCarloArgs a) {
   const Shard shard = ParseShard(a.shard);
   CheckOutputPath(a.out_json);
   const Scenario s = LoadScenario(a.scenario);
-  RecordInput("scenario", a.scenario);
-  CheckOverwrite(a.out_json);  // before the long work
+  session.provenance.RecordInput("scenario", a.scenario);
+  CheckOverwrite(a.out_json, session);  // before the long work
   MonteCarloOptions opt;
   opt.runs = a.runs;
   opt.first_seed = a.first_seed;
@@ -138,8 +138,8 @@ int RunMonteCarloCommand(MonteCarloArgs a) {
     out["shard"] = MonteCarloShardJson(shard.index, shard.count, range.begin, range.end, whole, r,
                                        runs);
   }
-  WriteJson(out, a.out_json);
-  WriteReportIfAsked(a.report_html, out, a.out_json);
+  WriteJson(out, a.out_json, session);
+  WriteReportIfAsked(a.report_html, out, a.out_json, session);
   PrintMonteCarlo(mine_settings, r, out);
   if (MpiSize() > 1) std::printf("%d MPI ranks of %d threads each\n", MpiSize(), opt.threads);
   if (!shard.whole()) {
@@ -191,7 +191,7 @@ Command AddMonteCarloCommand(CLI::App& app) {
   c.app->add_option("--shard", a->shard,
                     "do shard I of N (1 <= I <= N) of the seeds, e.g. $SLURM_ARRAY_TASK_ID/N; "
                     "merge the N outputs with `triadcal merge`");
-  c.run = [a] { return RunMonteCarloCommand(*a); };
+  c.run = [a](Session& session) { return RunMonteCarloCommand(*a, session); };
   return c;
 }
 

@@ -20,9 +20,9 @@ struct MountingArgs {
   double zero_range_deg = 45.0;
 };
 
-int RunMounting(const MountingArgs& a) {
+int RunMounting(const MountingArgs& a, Session& session) {
   if (!a.out_json.empty()) CheckOutputPath(a.out_json);
-  const LoadedRun run = LoadRunOrThrow(a.run_yaml);
+  const LoadedRun run = LoadRun(a.run_yaml, &session);
   const std::vector<MountingFit> fits =
       SearchMountings(run.description, run.data, a.zero_range_deg * kDegToRad, 5.0 * kDegToRad);
   std::printf(
@@ -57,7 +57,7 @@ int RunMounting(const MountingArgs& a) {
                 fits[1].AxesText().c_str(), fits[1].rms_g);
   }
   if (!a.out_json.empty()) {
-    WriteJson({{"command", "mounting"}, {"run", a.run_yaml}, {"fits", list}}, a.out_json);
+    WriteJson({{"command", "mounting"}, {"run", a.run_yaml}, {"fits", list}}, a.out_json, session);
     std::printf("wrote %s\n", a.out_json.c_str());
   }
   return 0;
@@ -75,7 +75,7 @@ Command AddMountingCommand(CLI::App& app) {
   c.app->add_option("--zero-range-deg", a->zero_range_deg, "search the zeros within +-this")
       ->capture_default_str()
       ->check(Bounded(0.0, 90.0));
-  c.run = [a] { return RunMounting(*a); };
+  c.run = [a](Session& session) { return RunMounting(*a, session); };
   return c;
 }
 

@@ -24,11 +24,11 @@
 #include "tools/command_util.h"
 #include "solvers/estimation/run_problem.h"
 #include "tools/commands.h"
-#include "tools/provenance.h"
+#include "app/output_guard.h"
 #include "tools/report/observability_report.h"
 #include "core/io/runs_file_io.h"
-#include "tools/joint_fit_job.h"
-#include "tools/diagnose_job.h"
+#include "app/joint_fit_job.h"
+#include "app/diagnose_job.h"
 
 namespace triadcal {
 namespace {
@@ -36,7 +36,7 @@ namespace {
 struct ObservabilityArgs {
   std::vector<std::string> inputs;
   std::string input, out_json, report_html, at, effects;
-  double epoch_s = kDefaultEpoch_s, rate_window_s = 0.1;
+  double epoch_s = kDefaultEpoch_s, rate_window_s = AngleDerivativeOptions().half_window_s;
   double unobservable_below = ObservabilityThresholds{}.unobservable;
   double weak_below = ObservabilityThresholds{}.weak;
   int threads = 0;
@@ -58,13 +58,15 @@ bool IsScenario(const std::string& path) {
 
 // Several runs (or a runs file): the combined problem at the nominal values,
 // as `fit` on several runs poses it (docs/multi-run.md).
-int RunJointObservability(const ObservabilityArgs& a) {
+int RunJointObservability(const ObservabilityArgs& a, Session& session) {
   if (!a.report_html.empty() || !a.at.empty()) {
     throw InputError(std::string(a.at.empty() ? "--report" : "--at") +
                      ": not available for several runs yet");
   }
   ShowProgress("observability: loading the runs", 0.0);
-  JointInput in = LoadJointInput(a.inputs, a.effects, a.out_json);
+  CheckOutputPath(a.out_json);
+  JointInput in = LoadJointInput(a.inputs, a.effects, &session);
+  CheckOverwrite(a.out_json, session);
   // noise_mV: auto: each run's readings' own noise, as `fit` starts from.
   for (JointRun& r : in.runs) r.run = WithReadingNoise(r.run, r.data);
   const RunsFile& file = in.file;
@@ -113,7 +115,7 @@ int RunJointObservability(const ObservabilityArgs& a) {
   }
   out["runs"] = jr;
   out["settings"] = {{"epoch_s", a.epoch_s}, {"effects", a.effects}};
-  WriteJson(out, a.out_json);
+  WriteJson(out, a.out_json, session);
 
   std::printf("observability: %zu runs together, at the nominal values, the runs' noise "
               "(declared, or the readings' own with noise_mV: auto)\n",
@@ -145,8 +147,8 @@ int RunJointObservability(const ObservabilityArgs& a) {
   return 0;
 }
 
-int RunObservability(ObservabilityArgs a) {
-  if (a.inputs.size() > 1 || IsRunsFile(a.inputs[0])) return RunJointObservability(a);
+int RunObservability(ObservabilityArgs a, Session& session) {
+  if (a.inputs.size() > 1 || IsRunsFile(a.inputs[0])) return RunJointObservability(a, session);
   a.input = a.inputs[0];
   if (!a.report_html.empty()) CheckOutputPath(a.report_html);
   if (!(a.unobservable_below > 0.0) || !(a.weak_below >= a.unobservable_below)) {
@@ -170,20 +172,22 @@ int RunObservability(ObservabilityArgs a) {
   bool noise_auto = false;
   if (IsScenario(a.input)) {
     const Scenario s = NoiseFreeScenario(LoadScenario(a.input));
-    RecordInput("scenario", a.input);
+    session.provenance.RecordInput("scenario", a.input);
     data = Simulate(s);
     run = s.run;
-    SetReadingsUnitName(ReadingsUnit(run));  // the layout's units, named for the readings
-    // The gyro's parameters with a gyro block, as `fit` estimates them.
-    layout = ParameterLayout(ParseEffectList(a.effects), run.gyro.has_value() && data.has_gyro());
+    // The layout's units, named for the readings; the gyro's parameters with
+    // a gyro block, as `fit` estimates them.
+    layout = ParameterLayout(ParseEffectList(a.effects), run.gyro.has_value() && data.has_gyro(),
+                             ReadingsUnit(run));
     theta = TruthInLayout(s, layout);
     source = "scenario (simulated without noise)";
     at = "truth";
   } else {
-    LoadedRun loaded = LoadRunOrThrow(a.input);  // sets the readings unit
+    LoadedRun loaded = LoadRun(a.input, &session);
     data = std::move(loaded.data);
     layout = ParameterLayout(ParseEffectList(a.effects),
-                             loaded.description.gyro.has_value() && data.has_gyro());
+                             loaded.description.gyro.has_value() && data.has_gyro(),
+                             ReadingsUnit(loaded.description));
     // noise_mV: auto: the readings' own noise, as `fit` starts from (not the
     // default 2 mV, which gave a CRB 36 times below the fit's sigma).
     noise_auto = loaded.description.noise_auto;
@@ -239,8 +243,8 @@ int RunObservability(ObservabilityArgs a) {
     out["could_hide"] = CouldHideJson(hide);
     out["settings"]["could_hide_alpha"] = a.alpha;
   }
-  WriteJson(out, a.out_json);
-  WriteReportIfAsked(a.report_html, out, a.out_json);
+  WriteJson(out, a.out_json, session);
+  WriteReportIfAsked(a.report_html, out, a.out_json, session);
 
   std::printf("observability: %s, %zu samples over %.4g s, %zu epochs; evaluated at %s; %.2f s\n",
               source.c_str(), r.samples, r.duration_s, r.epochs, at.c_str(), r.seconds);
@@ -317,7 +321,7 @@ Command AddObservabilityCommand(CLI::App& app) {
   c.app->add_option("--threads", a->threads, "threads (0: all cores)")
       ->capture_default_str()
       ->check(kThreadsRange);
-  c.run = [a] { return RunObservability(*a); };
+  c.run = [a](Session& session) { return RunObservability(*a, session); };
   return c;
 }
 

@@ -16,7 +16,7 @@ struct ReportArgs {
   std::string out_html;
 };
 
-int RunReport(const ReportArgs& a) {
+int RunReport(const ReportArgs& a, Session& session) {
   CheckOutputPath(a.out_html);
   const std::vector<ReportInput> inputs = LoadReportInputs(a.inputs);
   WriteHtmlReport(inputs, a.out_html);
@@ -35,7 +35,7 @@ Command AddReportCommand(CLI::App& app) {
   c.app->add_option("outputs", a->inputs, "OUT.json files of fit, diagnose, compare, ...")
       ->required();
   c.app->add_option("-o,--output", a->out_html, "output HTML")->required();
-  c.run = [a] { return RunReport(*a); };
+  c.run = [a](Session& session) { return RunReport(*a, session); };
   return c;
 }
 

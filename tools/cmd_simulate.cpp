@@ -12,7 +12,7 @@
 #include "core/simulation/simulator.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
-#include "tools/provenance.h"
+#include "app/output_guard.h"
 
 namespace triadcal {
 namespace {
@@ -98,21 +98,21 @@ Command AddSimulateCommand(CLI::App& app) {
   c.app->add_option("-o,--out", opt->out_dir, "output folder (created when missing)")->required();
   CLI::Option* seed =
       c.app->add_option("--seed", opt->seed, "noise seed, 0 to 2^64 - 1 (overrides `seed:`)");
-  c.run = [opt, seed] {
+  c.run = [opt, seed](Session& session) {
     const std::uint64_t seed_value = seed->count() > 0 ? ParseSeed(opt->seed, "--seed") : 0;
     CheckSimulationOutputs(opt->out_dir);
     Scenario s = LoadScenario(opt->scenario_path);
-    RecordInput("scenario", opt->scenario_path);
+    session.provenance.RecordInput("scenario", opt->scenario_path);
     // No output may be an input, --force or not: DIR/run.yaml of `simulate
     // run.yaml -o .` is the scenario itself.
     for (const char* name : kSimulationFiles) {
       CheckOutputsAreNotInputs((std::filesystem::path(opt->out_dir) / name).string());
     }
-    CheckSimulationFolder(opt->out_dir);
+    CheckSimulationFolder(opt->out_dir, session);
     if (seed->count() > 0) s.seed = seed_value;
     SampleTruth(&s);
     const RunData data = Simulate(s);
-    WriteSimulation(s, data, opt->out_dir, CurrentProvenance().dump());
+    WriteSimulation(s, data, opt->out_dir, session.provenance.Json().dump());
     PrintSummary(s, data, opt->out_dir);
     return 0;
   };

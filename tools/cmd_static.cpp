@@ -18,8 +18,8 @@
 #include "solvers/static/static_method.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
-#include "tools/provenance.h"
-#include "tools/report/estimate_json.h"
+#include "app/output_guard.h"
+#include "app/estimate_json.h"
 #include "tools/report/result_plausibility.h"
 #include "tools/report/value_format.h"
 
@@ -312,7 +312,7 @@ StaticReference Reference(const StaticArgs& a, const LoadedRun& run) {
   }
 }
 
-int RunStatic(const StaticArgs& a) {
+int RunStatic(const StaticArgs& a, Session& session) {
   if (!a.report_html.empty()) CheckOutputPath(a.report_html, "--report");
   CheckOutputPath(a.out_json);
   StaticOptions opt = a.options;
@@ -322,8 +322,8 @@ int RunStatic(const StaticArgs& a) {
     throw InputError("--placement-sigma-deg: must be at most 45");
   }
   opt.placement_sigma_rad = a.placement_sigma_deg * kDegToRad;
-  const LoadedRun run = LoadRunOrThrow(a.run_yaml);
-  CheckOverwrite(a.out_json);  // before the long work
+  const LoadedRun run = LoadRun(a.run_yaml, &session);
+  CheckOverwrite(a.out_json, session);  // before the long work
   const StaticResult r = WithFlags(StaticFlags(), [&] {
     return SolveStatic(run.description, run.data, Reference(a, run), opt);
   });
@@ -340,8 +340,8 @@ int RunStatic(const StaticArgs& a) {
   for (const std::string& w : ImplausibleResultWarnings(out["parameters"], a.out_json)) {
     std::fprintf(stderr, "triadcal: warning: %s\n", OneLine(w).c_str());
   }
-  WriteJson(out, a.out_json);
-  WriteReportIfAsked(a.report_html, out, a.out_json);
+  WriteJson(out, a.out_json, session);
+  WriteReportIfAsked(a.report_html, out, a.out_json, session);
   PrintReport(run, r);
   if (gyro) PrintGyroReport(*gyro);
   std::printf("wrote %s\n", a.out_json.c_str());
@@ -402,7 +402,7 @@ Command AddStaticCommand(CLI::App& app) {
                    "with angles: half window of the local cubic fit giving lambda' [s]")
       ->capture_default_str()
       ->check(kRateWindowRange);
-  c.run = [a] { return RunStatic(*a); };
+  c.run = [a](Session& session) { return RunStatic(*a, session); };
   return c;
 }
 

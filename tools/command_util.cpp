@@ -12,71 +12,12 @@
 #include <iostream>
 #include <sstream>
 
-#include "core/io/column_mapping.h"
 #include "core/io/file_util.h"
-#include "core/io/run_description_io.h"
-#include "core/io/run_io.h"
 #include "core/model/angle_derivatives.h"
 #include "core/model/errors.h"
-#include "solvers/static/mounting_search.h"
-#include "tools/provenance.h"
 #include "tools/report/html_report.h"
 
 namespace triadcal {
-
-LoadedRun LoadRunOrThrow(const std::string& run_yaml) {
-  LoadedRun r;
-  r.description = LoadRunDescription(run_yaml);
-  SetReadingsUnitName(ReadingsUnit(r.description));  // output units named for what was read
-  RecordInput("run", run_yaml);
-  RecordSensor(r.description.sensor_serial, r.description.sensor_model);
-  RunWarnings warnings;
-  r.data = LoadRunData(r.description, &warnings);
-  const std::string mounting = MountingWarning(r.description, r.data);
-  if (!mounting.empty()) warnings.lines.push_back(mounting);
-  for (const std::string& w : warnings.lines) std::cerr << "triadcal: warning: " << OneLine(w) << "\n";
-  RecordInput("data", r.description.data_path);
-  return r;
-}
-
-std::vector<std::string> SplitList(const std::string& list) {
-  std::vector<std::string> out;
-  std::stringstream ss(list);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    // "a, b" as "a,b": the blanks around an item are not part of its name.
-    const std::size_t first = item.find_first_not_of(" \t");
-    if (first == std::string::npos) continue;
-    out.push_back(item.substr(first, item.find_last_not_of(" \t") - first + 1));
-  }
-  return out;
-}
-
-std::vector<Effect> ParseEffectList(const std::string& list, const std::string& option) {
-  std::vector<Effect> out;
-  for (const std::string& item : SplitList(list)) {
-    try {
-      out.push_back(EffectFromName(item));
-    } catch (const std::invalid_argument& e) {
-      throw InputError(option + ": " + e.what());
-    }
-  }
-  return out;
-}
-
-std::vector<Effect> ParseEffectList(const std::string& list, const RunData& data,
-                                    const std::string& option) {
-  const std::vector<Effect> effects = ParseEffectList(list, option);
-  for (Effect e : effects) {
-    const EffectSpec& spec = GetEffectSpec(e);
-    if (spec.needs.temp_C && !data.has_temp()) {
-      throw InputError(option + ": " + spec.name +
-                       " needs a temp_C column, which this run does not have (columns.temp_C "
-                       "in run.yaml)");
-    }
-  }
-  return effects;
-}
 
 namespace {
 
@@ -189,20 +130,6 @@ std::uint64_t ParseSeed(const std::string& text, const std::string& option) {
   return v;
 }
 
-void CheckHoldFree(const std::string& hold, const std::string& free,
-                   const ParameterLayout& layout) {
-  const std::vector<std::string> held = SplitList(hold), freed = SplitList(free);
-  for (const std::string& h : held) {
-    if (std::find(freed.begin(), freed.end(), h) != freed.end()) {
-      throw InputError("--hold/--free: '" + Excerpt(h, 40) + "' given to both: hold it or free it");
-    }
-  }
-  for (int i = 0; i < layout.size(); ++i) {
-    if (std::find(held.begin(), held.end(), layout.info(i).name) == held.end()) return;
-  }
-  throw InputError("--hold: holds every parameter; nothing left to estimate");
-}
-
 void CheckOutputPath(const std::string& path, const std::string& option) {
   namespace fs = std::filesystem;
   if (path.empty()) throw InputError(option + ": empty file name (give a file name)");
@@ -230,12 +157,12 @@ void WriteOutput(const std::string& path, const std::string& content) {
   }
 }
 
-void WriteJson(const nlohmann::json& j, const std::string& path) {
-  if (!IsStdout(path)) CheckOverwrite(path);
+void WriteJson(const nlohmann::json& j, const std::string& path, const Session& session) {
+  if (!IsStdout(path)) CheckOverwrite(path, session);
   // "provenance" first, the other keys in their (sorted) order: the output
-  // guard reads only the start of an existing output (tools/provenance.h).
+  // guard reads only the start of an existing output (app/output_guard.h).
   nlohmann::ordered_json stamped = nlohmann::ordered_json::object();
-  stamped["provenance"] = nlohmann::ordered_json::parse(CurrentProvenance().dump());
+  stamped["provenance"] = nlohmann::ordered_json::parse(session.provenance.Json().dump());
   if (j.is_object()) {
     for (const auto& [key, value] : j.items()) {
       if (key != "provenance") stamped[key] = nlohmann::ordered_json::parse(value.dump());
@@ -245,13 +172,15 @@ void WriteJson(const nlohmann::json& j, const std::string& path) {
 }
 
 void WriteReportIfAsked(const std::string& report_html, const nlohmann::json& out,
-                        const std::string& out_json) {
+                        const std::string& out_json, const Session& session) {
   if (report_html.empty()) return;
   ReportInput in;
   in.name = std::filesystem::path(out_json).filename().string();
   in.out = out;
   // The provenance the OUT file carries (WriteJson stamps it), on the page too.
-  if (in.out.is_object() && !in.out.contains("provenance")) in.out["provenance"] = CurrentProvenance();
+  if (in.out.is_object() && !in.out.contains("provenance")) {
+    in.out["provenance"] = session.provenance.Json();
+  }
   WriteHtmlReport({in}, report_html);
   std::printf("wrote %s\n", report_html.c_str());
 }

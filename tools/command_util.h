@@ -1,5 +1,6 @@
-// What several commands share: loading a run with its warnings on stderr,
-// the --effects list, a progress line, and writing JSON outputs whole.
+// What several commands share: the checks of an output path, a progress
+// line, bounded number options, and writing JSON outputs whole. (The run
+// loading, the lists of the settings and the provenance are the jobs': app/.)
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -11,51 +12,13 @@
 #include <utility>
 #include <vector>
 
-#include "core/model/effects.h"
+#include "app/option_lists.h"
+#include "app/output_guard.h"
+#include "app/run_loading.h"
+#include "app/session.h"
 #include "core/model/errors.h"
-#include "core/model/parameters.h"
-#include "core/model/run_data.h"
-#include "core/model/run_description.h"
 
 namespace triadcal {
-
-struct LoadedRun {
-  RunDescription description;
-  RunData data;
-};
-
-// Loads run.yaml and its data; prints each validation warning to stderr as
-// "triadcal: warning: ...".
-LoadedRun LoadRunOrThrow(const std::string& run_yaml);
-
-// "a,b" -> {"a", "b"} (empty items dropped).
-std::vector<std::string> SplitList(const std::string& list);
-
-// Runs f. An OptionError (errors.h) whose option is a key of `flags` (setting
-// -> flag, e.g. {"static_positions", "--static-positions"}) is rethrown as
-// InputError("FLAG: problem"): solvers speak of the setting, the command of
-// its flag.
-template <typename F>
-auto WithFlags(const std::map<std::string, std::string>& flags, F&& f) -> decltype(f()) {
-  try {
-    return f();
-  } catch (const OptionError& e) {
-    const auto it = flags.find(e.option());
-    if (it == flags.end()) throw;
-    throw InputError(it->second + ": " + e.problem());
-  }
-}
-
-// "a,b" -> effects; throws InputError("OPTION: unknown effect ...").
-std::vector<Effect> ParseEffectList(const std::string& list,
-                                    const std::string& option = "--effects");
-
-// The same for effects to be estimated from `data`: also throws
-// InputError("OPTION: EFFECT needs a temp_C column, which this run does not
-// have (columns.temp_C in run.yaml)") when the data lack what the effect's
-// catalogue entry needs (EffectSpec::needs).
-std::vector<Effect> ParseEffectList(const std::string& list, const RunData& data,
-                                    const std::string& option = "--effects");
 
 // Fails early (before any work) when an output cannot be written: an empty
 // name ("OPTION: empty file name"), a path that exists and is not a regular
@@ -94,9 +57,10 @@ class StageProgress {
 };
 
 // `--report FILE` of the long commands: the HTML report of `out` (to be
-// written as out_json) into report_html; nothing when report_html is empty.
+// written as out_json, with the session's provenance) into report_html;
+// nothing when report_html is empty.
 void WriteReportIfAsked(const std::string& report_html, const nlohmann::json& out,
-                        const std::string& out_json);
+                        const std::string& out_json, const Session& session);
 
 // A number option within [lo, hi] (inclusive; NaN and infinities are out,
 // which CLI::Range lets through): "--flag: Value X not in range 0.010000 to
@@ -120,13 +84,6 @@ inline const CLI::Validator kThreadsRange = BoundedInt(0, 1024);
 // InputError("OPTION: expected an integer 0 to 18446744073709551615, got 'X'").
 std::uint64_t ParseSeed(const std::string& text, const std::string& option);
 
-// --hold and --free against the parameters of `layout`: a name given to both
-// is a contradiction ("--hold/--free: 'X' given to both: hold it or free
-// it"), and holding every parameter leaves nothing to estimate ("--hold:
-// holds every parameter; nothing left to estimate"). Unknown names are left
-// to the solver (OptionError "hold_free").
-void CheckHoldFree(const std::string& hold, const std::string& free, const ParameterLayout& layout);
-
 // `-o -`: the output goes to stdout (apply, export --format yaml|json-matrix:
 // text outputs that a pipe can take; the command then prints nothing else
 // on stdout).
@@ -135,9 +92,9 @@ inline bool IsStdout(const std::string& path) { return path == "-"; }
 // fails: a closed pipe, a full disk), else WriteFileAtomically.
 void WriteOutput(const std::string& path, const std::string& content);
 
-// Adds "provenance" (tools/provenance.h), refuses to replace an output of
-// other inputs (CheckOverwrite), serialises with 2-space indentation and
-// writes atomically.
-void WriteJson(const nlohmann::json& j, const std::string& path);
+// Adds the session's "provenance" (app/provenance.h), refuses to replace an
+// output of other inputs (app/output_guard.h CheckOverwrite), serialises with
+// 2-space indentation and writes atomically.
+void WriteJson(const nlohmann::json& j, const std::string& path, const Session& session);
 
 }  // namespace triadcal

@@ -1,5 +1,6 @@
 // The subcommands of `triadcal`. Each Add* registers its options on the app and
-// returns the action to run when the subcommand was chosen. Actions throw
+// returns the action to run when the subcommand was chosen, in the session
+// main() makes (app/session.h: provenance, --force, warnings). Actions throw
 // InputError for bad input; main() turns that into one line on stderr and a
 // non-zero exit.
 #pragma once
@@ -8,11 +9,13 @@
 
 #include <CLI/CLI.hpp>
 
+#include "app/session.h"
+
 namespace triadcal {
 
 struct Command {
   CLI::App* app = nullptr;
-  std::function<int()> run;
+  std::function<int(Session&)> run;
 };
 
 Command AddSimulateCommand(CLI::App& app);

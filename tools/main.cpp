@@ -3,6 +3,7 @@
 #include <exception>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -14,7 +15,8 @@
 #include "core/version/version.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
-#include "tools/provenance.h"
+#include "app/provenance.h"
+#include "app/session.h"
 #include "tools/distribution/mpi_context.h"
 
 namespace {
@@ -79,13 +81,19 @@ int main(int argc, char** argv) {
   FLAGS_minloglevel = google::GLOG_FATAL;
   FLAGS_logtostderr = false;
 
+  // What every command runs in: the provenance of its outputs (this binary,
+  // this command line), --force, and its warnings on stderr.
+  triadcal::Session session;
+  session.provenance = triadcal::Provenance(triadcal::ToolVersion(), triadcal::ToolGitCommit(),
+                                            triadcal::CommandLineOf(argc, argv));
+  session.warning = [](const std::string& w) {
+    std::cerr << "triadcal: warning: " << triadcal::OneLine(w) << "\n";
+  };
   bool quiet = false;
   for (const triadcal::Command& c : commands) {
-    c.app->add_flag("--force", triadcal::ForceOverwrite(),
-                    "replace outputs that hold results of other inputs");
+    c.app->add_flag("--force", session.force, "replace outputs that hold results of other inputs");
     c.app->add_flag("-q,--quiet", quiet, "no progress lines on stderr");
   }
-  triadcal::SetCommandLine(argc, argv);
   // An unknown command is named, with the nearest one (CLI11 says only
   // "A subcommand is required" for `triadcal fitt`).
   if (argc >= 2 && argv[1][0] != '-') {
@@ -121,7 +129,10 @@ int main(int argc, char** argv) {
               << (command.empty() ? "" : command + " ") << "--help`)\n";
     return 2;
   }
-  triadcal::EnableOutputGuard();  // an output never replaces an input
+  // An output never replaces an input: the readers note their files into the
+  // session's guard, installed on this thread (batch installs it on its own).
+  session.output_guard = std::make_shared<triadcal::OutputGuard>();
+  const triadcal::ScopedOutputGuard guard(session.output_guard.get());
   try {
     for (const triadcal::Command& c : commands) {
       if (!c.app->parsed()) continue;
@@ -130,7 +141,7 @@ int main(int argc, char** argv) {
       const std::string name = c.app->get_name();
       if (!triadcal::MpiRoot() && name != "montecarlo" && name != "batch") return 0;
       triadcal::SetQuiet(quiet);
-      return c.run();
+      return c.run(session);
     }
   } catch (const triadcal::OptionError& e) {
     // A setting the estimators rejected, named by its flag here.

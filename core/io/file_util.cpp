@@ -25,19 +25,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Readers note their files from several threads at once (`batch` loads its
-// units in parallel: ASan found the race on `inputs`), so every access holds
-// the mutex.
-struct OutputGuard {
-  std::mutex mutex;
-  bool on = false;
-  std::vector<std::string> inputs, outputs;
-};
-
-OutputGuard& Guard() {
-  static OutputGuard guard;
-  return guard;
-}
+// The guard of this thread (ScopedOutputGuard): a pointer to the session's
+// value, scoped to the command (or the batch unit) that installed it.
+thread_local OutputGuard* t_guard = nullptr;
 
 bool SameFile(const std::string& a, const std::string& b) {
   if (a.empty() || b.empty()) return false;
@@ -158,51 +148,48 @@ std::string WriteTarget(const std::string& path) {
 
 }  // namespace
 
-void EnableOutputGuard() {
-  const std::lock_guard<std::mutex> lock(Guard().mutex);
-  Guard().on = true;
+ScopedOutputGuard::ScopedOutputGuard(OutputGuard* guard) : previous_(t_guard) { t_guard = guard; }
+ScopedOutputGuard::~ScopedOutputGuard() { t_guard = previous_; }
+
+void OutputGuard::NoteInput(const std::string& path) {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  inputs_.push_back(path);
 }
 
-void DisableOutputGuard() {
-  OutputGuard& g = Guard();
-  const std::lock_guard<std::mutex> lock(g.mutex);
-  g.on = false;
-  g.inputs.clear();
-  g.outputs.clear();
-}
-
-void NoteInputFile(const std::string& path) {
-  OutputGuard& g = Guard();
-  const std::lock_guard<std::mutex> lock(g.mutex);
-  if (g.on) g.inputs.push_back(path);
-}
-
-void NoteOutputFile(const std::string& path) {
-  OutputGuard& g = Guard();
-  const std::lock_guard<std::mutex> lock(g.mutex);
-  if (!g.on) return;
-  for (const std::string& out : g.outputs) {
+void OutputGuard::NoteOutput(const std::string& path) {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  for (const std::string& out : outputs_) {
     if (SameFile(out, path)) {
       throw InputError(path + ": given for two outputs (each output needs its own file)");
     }
   }
-  g.outputs.push_back(path);
+  outputs_.push_back(path);
 }
 
-void CheckOutputsAreNotInputs(const std::string& path) {
-  OutputGuard& g = Guard();
-  const std::lock_guard<std::mutex> lock(g.mutex);
-  if (!g.on) return;
-  std::vector<std::string> outs = g.outputs;
+void OutputGuard::CheckOutputsAreNotInputs(const std::string& path) const {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<std::string> outs = outputs_;
   outs.push_back(path);
   for (const std::string& out : outs) {
-    for (const std::string& in : g.inputs) {
+    for (const std::string& in : inputs_) {
       if (SameFile(out, in)) {
         throw InputError(out + ": is the input file '" + in +
                          "' (an output never replaces an input; choose another name)");
       }
     }
   }
+}
+
+void NoteInputFile(const std::string& path) {
+  if (t_guard) t_guard->NoteInput(path);
+}
+
+void NoteOutputFile(const std::string& path) {
+  if (t_guard) t_guard->NoteOutput(path);
+}
+
+void CheckOutputsAreNotInputs(const std::string& path) {
+  if (t_guard) t_guard->CheckOutputsAreNotInputs(path);
 }
 
 std::string PathForMessage(const std::string& path) {

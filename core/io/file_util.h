@@ -3,7 +3,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <mutex>
 #include <string>
+#include <vector>
 
 namespace triadcal {
 
@@ -62,22 +64,47 @@ std::string PathForMessage(const std::string& path);
 // existing output than this.
 std::string ReadFileRange(const std::string& path, std::uintmax_t offset, std::size_t max_bytes);
 
-// The output guard of the command line (off by default, so that tests may
-// rewrite what they read): once on, every file read is noted as an input and
-// every output is checked before anything is written, so an output never
-// replaces an input and two outputs never share a file.
-// Thread-safe: readers note their files from several threads (`batch`).
-void EnableOutputGuard();
-// Switches the guard off and forgets what it noted (tests).
-void DisableOutputGuard();
-// Notes a file read (readers call it; a no-op while the guard is off).
+// The output guard of a command: the files it read and the outputs it
+// announced, so that an output never replaces an input and two outputs never
+// share a file. A value: the command's session holds one (app/session.h) and
+// installs it on its thread (ScopedOutputGuard); the readers below note their
+// files into the guard of their thread, and nothing is noted where none is
+// installed (tests that rewrite what they read, Python, a library caller).
+// Thread-safe: `batch` installs its guard on the threads that load its units.
+class OutputGuard {
+ public:
+  void NoteInput(const std::string& path);
+  // Throws InputError("PATH: given for two outputs ...") when another output
+  // names the same file.
+  void NoteOutput(const std::string& path);
+  // Throws InputError("PATH: is the input file 'IN' ...") when an output noted
+  // so far, or `path`, is one of the inputs noted so far.
+  void CheckOutputsAreNotInputs(const std::string& path) const;
+
+ private:
+  mutable std::mutex mutex_;
+  std::vector<std::string> inputs_, outputs_;
+};
+
+// Installs `guard` (may be null: none) on this thread for its lifetime; the
+// guard installed before comes back after.
+class ScopedOutputGuard {
+ public:
+  explicit ScopedOutputGuard(OutputGuard* guard);
+  ~ScopedOutputGuard();
+  ScopedOutputGuard(const ScopedOutputGuard&) = delete;
+  ScopedOutputGuard& operator=(const ScopedOutputGuard&) = delete;
+
+ private:
+  OutputGuard* previous_;
+};
+
+// The same on the guard of this thread (no-ops when none is installed):
+// readers note a file read; a command notes an output before the work starts.
+// WriteFileAtomically calls CheckOutputsAreNotInputs before writing, so a
+// command with several outputs writes none of them.
 void NoteInputFile(const std::string& path);
-// Notes an output before the work starts; throws InputError("PATH: given for
-// two outputs") when another output names the same file.
 void NoteOutputFile(const std::string& path);
-// Throws InputError("PATH: is the input file 'IN' ...") when an output noted so
-// far, or `path`, is one of the inputs noted so far. WriteFileAtomically calls
-// it before writing, so a command with several outputs writes none of them.
 void CheckOutputsAreNotInputs(const std::string& path);
 
 // Reads a whole file; throws InputError("PATH: cannot read ...")

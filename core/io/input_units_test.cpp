@@ -56,12 +56,13 @@ TEST_F(InputUnitsTest, CountsKeepTheirScaleAndNameTheOutputUnits) {
   RunWarnings w;
   const RunData data = LoadRunData(run, &w);
   EXPECT_EQ(data.w_mV[0][0], 16384.0);  // counts stay counts
-  SetReadingsUnitName(ReadingsUnit(run));
-  const ParameterLayout layout;
+  const ParameterLayout layout({}, /*gyro=*/false, ReadingsUnit(run));
+  EXPECT_EQ(layout.readings_unit(), "counts");
   EXPECT_EQ(layout.info(kKx).unit, "counts/g");
   EXPECT_EQ(layout.info(kW0x).unit, "counts");
   EXPECT_EQ(layout.info(kAlphaX).unit, "arcmin");
-  SetReadingsUnitName("mV");
+  EXPECT_EQ(layout.WithGyro(true).info(kKx).unit, "counts/g");  // the unit goes along
+  // A value of the layout: another layout made afterwards names mV.
   EXPECT_EQ(ParameterLayout().info(kKx).unit, "mV/g");
 }
 

@@ -10,6 +10,8 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <mutex>
+#include <string>
 #include <vector>
 
 #include "core/io/data_table.h"
@@ -100,21 +102,29 @@ std::string ToVector(const matvar_t& v, std::vector<double>* out) {
   return "";
 }
 
-// What matio logged while reading (errors and warnings: a damaged file).
-std::string* g_mat_log = nullptr;
+// What matio logged while this thread reads a file (errors and warnings: a
+// damaged file). matio's log hook is one C function for the whole process,
+// with no pointer of the caller's; what it captures into is the reading's
+// own string, reached through this thread's pointer (set for one read only:
+// two threads reading MAT files, as `batch` does, each get their own log).
+thread_local std::string* t_mat_log = nullptr;
 
 void CaptureMatLog(int level, char* message) {
-  if (g_mat_log && level <= MATIO_LOG_LEVEL_WARNING && g_mat_log->empty() && message) *g_mat_log = message;
+  if (t_mat_log && level <= MATIO_LOG_LEVEL_WARNING && t_mat_log->empty() && message) {
+    *t_mat_log = message;
+  }
 }
 
-// Sets the matio log to *out for its lifetime (matio's default prints to stderr).
+// Sets the matio log of this thread to *out for its lifetime (matio's
+// default prints to stderr); the hook is installed once.
 class MatLogCapture {
  public:
   explicit MatLogCapture(std::string* out) {
-    g_mat_log = out;
-    Mat_LogInitFunc("triadcal", &CaptureMatLog);
+    static std::once_flag hook;
+    std::call_once(hook, [] { Mat_LogInitFunc("triadcal", &CaptureMatLog); });
+    t_mat_log = out;
   }
-  ~MatLogCapture() { g_mat_log = nullptr; }
+  ~MatLogCapture() { t_mat_log = nullptr; }
   MatLogCapture(const MatLogCapture&) = delete;
   MatLogCapture& operator=(const MatLogCapture&) = delete;
 };

@@ -46,26 +46,17 @@ const std::vector<ParameterInfo>& GyroParameterInfo() {
 
 ParameterLayout::ParameterLayout() : ParameterLayout(std::vector<Effect>{}) {}
 
-namespace {
-std::string& ReadingsUnitNameRef() {
-  static std::string name = "mV";
-  return name;
-}
-}  // namespace
-
-void SetReadingsUnitName(const std::string& name) { ReadingsUnitNameRef() = name; }
-const std::string& ReadingsUnitName() { return ReadingsUnitNameRef(); }
-
-std::string InReadingsUnit(const std::string& unit) {
-  const std::string& name = ReadingsUnitNameRef();
+std::string InReadingsUnit(const std::string& unit, const std::string& name) {
   const std::size_t at = unit.find("mV");
   if (at == std::string::npos || name == "mV") return unit;
   return unit.substr(0, at) + name + unit.substr(at + 2);
 }
 
-ParameterLayout::ParameterLayout(const std::vector<Effect>& effects, bool gyro) {
+ParameterLayout::ParameterLayout(const std::vector<Effect>& effects, bool gyro,
+                                 const std::string& readings_unit)
+    : readings_unit_(readings_unit) {
   info_ = BaseParameterInfo();
-  for (ParameterInfo& p : info_) p.unit = InReadingsUnit(p.unit);
+  for (ParameterInfo& p : info_) p.unit = InReadingsUnit(p.unit, readings_unit_);
   for (int i = 0; i < kNumEffects; ++i) offset_[i] = -1;
   for (Effect e : effects) {
     if (offset_[static_cast<int>(e)] >= 0) continue;  // listed twice
@@ -77,7 +68,8 @@ ParameterLayout::ParameterLayout(const std::vector<Effect>& effects, bool gyro) 
       zero_offset_terms_.push_back({offset_[static_cast<int>(e)], spec.zero_offset_signal});
     }
     for (const ParamSpec& p : spec.params) {
-      info_.push_back({spec.name + "." + p.name, InReadingsUnit(p.unit), p.si_per_unit, e});
+      info_.push_back(
+          {spec.name + "." + p.name, InReadingsUnit(p.unit, readings_unit_), p.si_per_unit, e});
     }
   }
   if (gyro) {

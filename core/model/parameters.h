@@ -56,21 +56,33 @@ const std::vector<ParameterInfo>& BaseParameterInfo();
 // Names (gyro.Kx, ...) and units of the 21 gyro parameters (SPEC section 10).
 const std::vector<ParameterInfo>& GyroParameterInfo();
 
-// The unit of the readings, for naming the parameter units of the layouts made
-// afterwards ("mV/g" becomes "counts/g" when the readings are counts, "mg/g"
-// when they were read in g): set once per command from the run's columns.
-void SetReadingsUnitName(const std::string& name);
-const std::string& ReadingsUnitName();
-// `unit` with its "mV" replaced by the readings unit.
-std::string InReadingsUnit(const std::string& unit);
+// The unit the readings are in when nothing else is said (run.yaml columns in mV).
+inline constexpr const char* kDefaultReadingsUnit = "mV";
+// `unit` with its "mV" replaced by `readings_unit` ("mV/g" -> "counts/g").
+std::string InReadingsUnit(const std::string& unit, const std::string& readings_unit);
 
 // Which effects are switched on and where their parameters sit in theta.
+//
+// The layout of a run names its units for the run's readings: `readings_unit`
+// ("mV", "counts" or "mg": core/io/column_mapping.h ReadingsUnit(run)) turns
+// "mV/g" into "counts/g" or "mg/g" in every ParameterInfo::unit, so that every
+// table, OUT file and message that names a unit through the layout follows
+// the readings (a value of the layout, not a process-wide setting).
 class ParameterLayout {
  public:
-  ParameterLayout();  // base parameters only
-  explicit ParameterLayout(const std::vector<Effect>& effects, bool gyro = false);
+  ParameterLayout();  // base parameters only, readings in mV
+  explicit ParameterLayout(const std::vector<Effect>& effects, bool gyro = false,
+                           const std::string& readings_unit = kDefaultReadingsUnit);
   // The same parameters with the gyro block on or off.
-  ParameterLayout WithGyro(bool gyro) const { return ParameterLayout(effects_, gyro); }
+  ParameterLayout WithGyro(bool gyro) const {
+    return ParameterLayout(effects_, gyro, readings_unit_);
+  }
+  // Other effects, the same gyro block and readings unit.
+  ParameterLayout WithEffects(const std::vector<Effect>& effects) const {
+    return ParameterLayout(effects, has_gyro(), readings_unit_);
+  }
+  // The unit the readings are in ("mV", "counts", "mg").
+  const std::string& readings_unit() const { return readings_unit_; }
 
   int size() const { return static_cast<int>(info_.size()); }
   const ParameterInfo& info(int i) const { return info_[i]; }
@@ -103,6 +115,7 @@ class ParameterLayout {
 
  private:
   std::vector<Effect> effects_;
+  std::string readings_unit_ = kDefaultReadingsUnit;
   std::vector<ParameterInfo> info_;
   int offset_[kNumEffects];
   int gyro_offset_ = -1;

@@ -1,16 +1,14 @@
-// fit_example RUN.yaml: the batch fit of `triadcal fit RUN.yaml` through the
-// library; prints {"NAME": {"value": v, "sigma": s, "unit": u}, ...} in the
-// units of the OUT files.
-#include <cmath>
+// fit_example RUN.yaml: `triadcal fit RUN.yaml` through the library, by the
+// very job the command runs (app/fit_job.h); prints {"NAME": {"value": v,
+// "sigma": s, "unit": u}, ...} from its OUT, in the units of the OUT files.
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
 
-#include <triadcal/core/io/run_description_io.h>
-#include <triadcal/core/io/run_io.h>
+#include <triadcal/app/fit_job.h>
+#include <triadcal/app/run_loading.h>
+#include <triadcal/app/session.h>
 #include <triadcal/core/model/errors.h>
-#include <triadcal/core/model/parameters.h>
-#include <triadcal/solvers/estimation/batch_solver.h>
 
 int main(int argc, char** argv) {
   if (argc != 2) {
@@ -18,21 +16,14 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    const triadcal::RunDescription run = triadcal::LoadRunDescription(argv[1]);
-    const triadcal::RunData data = triadcal::LoadRunData(run, nullptr);
-    const triadcal::ParameterLayout layout;  // the 27 base parameters
-    triadcal::BatchOptions options;          // as `triadcal fit` sets them by default
-    options.epoch_s = 0.5;
-    options.derivatives.half_window_s = 0.1;
-    const triadcal::BatchResult r = triadcal::SolveBatch(run, data, layout, options);
+    triadcal::Session session;  // no progress, no provenance of a binary
+    const triadcal::LoadedRun run = triadcal::LoadRun(argv[1], &session);
+    const triadcal::FitSettings settings;  // the defaults of `triadcal fit`
+    const triadcal::FitOutcome fit = triadcal::FitRun(settings, argv[1], run, session);
 
     nlohmann::ordered_json out;
-    for (int i = 0; i < layout.size(); ++i) {
-      const triadcal::ParameterInfo& info = layout.info(i);
-      out[info.name] = {
-          {"value", r.estimate.theta[i] / info.si_per_unit},
-          {"sigma", std::sqrt(std::max(0.0, r.estimate.cov(i, i))) / info.si_per_unit},
-          {"unit", info.unit}};
+    for (const auto& [name, p] : fit.json["parameters"].items()) {
+      out[name] = {{"value", p["value"]}, {"sigma", p["sigma"]}, {"unit", p["unit"]}};
     }
     std::cout << out.dump(2) << "\n";
   } catch (const triadcal::InputError& e) {

@@ -7,6 +7,7 @@
 #include <set>
 #include <sstream>
 
+#include "core/io/column_mapping.h"
 #include "solvers/estimation/observability.h"
 #include "solvers/statistics/statistics.h"
 
@@ -419,7 +420,9 @@ Loop::Loop(const RunDescription& run, const RunData& data, const DiagnoseOptions
 
 void Loop::FitDeclaredModel() {
   Say("fitting the declared model");
-  res_.before_layout = ParameterLayout();
+  // Units named for the readings (mV/g, counts/g, mg/g): every layout below
+  // is made from this one.
+  res_.before_layout = ParameterLayout({}, /*gyro=*/false, ReadingsUnit(run_));
   res_.before = SolveBatch(run_, data_, res_.before_layout, fit_opt_);
   res_.before_residuals = AnalyzeResiduals(run_, data_, res_.before_layout, res_.before);
   layout_ = res_.before_layout;
@@ -552,7 +555,7 @@ BatchResult Loop::RefitCandidate(const CandidateInformation& c, CandidateTest* t
     span_end_ = span_begin_ + 0.5 * (round_end_ - span_begin_);
   }
   ++refit_count_;
-  const ParameterLayout aug(WithEffect(current_, e));
+  const ParameterLayout aug = res_.before_layout.WithEffects(WithEffect(current_, e));
   // Started at the Gauss-Newton step from the current fit (effect_information.h).
   Eigen::VectorXd start = Embed(layout_, fit_.estimate.theta, aug);
   for (std::size_t j = 0; j < info_.base_names.size(); ++j) {
@@ -756,7 +759,7 @@ void Loop::AdvanceRound(int pick) {
   const Effect chosen = sorted_[pick].effect;
   res_.selected.push_back(chosen);
   current_.push_back(chosen);
-  const ParameterLayout next(current_);
+  const ParameterLayout next = res_.before_layout.WithEffects(current_);
   // The selected candidate's refit (with its covariance) is the new fit.
   const Eigen::Vector3d round_noise = fit_.noise_used_mV;
   fit_ = std::move(refits_[order_[pick]]);

@@ -659,7 +659,7 @@ StaticResult SolveStatic(const RunDescription& run, const RunData& data,
                          StaticReference reference, const StaticOptions& options) {
   StaticResult r;
   r.reference = reference;
-  r.layout = ParameterLayout();
+  r.layout = ParameterLayout({}, /*gyro=*/false, ReadingsUnit(run));  // units of the readings
   r.held = HeldFor(reference, options.fixed, r.layout);
   const ModelConfig cfg = MakeModelConfig(run, r.layout, data);
 

@@ -1,8 +1,12 @@
-#include "tools/report/fit_report.h"
+// What a fit says of its solution, in the OUT (app/fit_report.h) and in the
+// printed table (tools/report/fit_table.h), from one made-up solution each.
+#include "app/fit_report.h"
 
 #include <cmath>
 
 #include <gtest/gtest.h>
+
+#include "tools/report/fit_table.h"
 
 namespace triadcal {
 namespace {

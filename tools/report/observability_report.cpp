@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <set>
 
-#include "tools/report/estimate_json.h"
+#include "app/estimate_json.h"
 
 namespace triadcal {
 namespace {

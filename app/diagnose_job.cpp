@@ -1,10 +1,12 @@
-#include "tools/diagnose_job.h"
+#include "app/diagnose_job.h"
 
 #include <cmath>
 
-#include "tools/report/estimate_json.h"
-#include "tools/report/fit_report.h"
-#include "tools/report/residual_plot_json.h"
+#include "app/option_lists.h"
+#include "core/model/errors.h"
+#include "app/estimate_json.h"
+#include "app/fit_report.h"
+#include "app/residual_plot_json.h"
 
 namespace triadcal {
 namespace {
@@ -170,13 +172,31 @@ nlohmann::json DiagnoseJson(const std::string& run_yaml, double alpha, const Dia
   return out;
 }
 
-nlohmann::json DiagnoseRun(const std::string& run_yaml, const LoadedRun& run, double epoch_s,
-                           int threads) {
+void DiagnoseSettings::Validate() const {
+  ParseEffectList(candidates, "--candidates");
+  if (!(alpha > 0.0 && alpha < 1.0)) throw InputError("--alpha: must be in (0, 1)");
+  if (max_effects < 0 || max_effects > 20) {
+    throw InputError("--max-effects: Value " + std::to_string(max_effects) +
+                     " not in range 0 to 20");
+  }
+}
+
+DiagnoseOutcome DiagnoseRun(const DiagnoseSettings& s, const std::string& run_yaml,
+                            const LoadedRun& run, const std::map<std::string, double>* truth,
+                            const Session& session) {
+  s.Validate();
   DiagnoseOptions opt;
-  opt.fit.epoch_s = epoch_s;
-  opt.fit.threads = threads;
-  const DiagnosisResult d = Diagnose(run.description, run.data, opt);
-  return DiagnoseJson(run_yaml, opt.alpha, d, nullptr);
+  opt.alpha = s.alpha;
+  opt.max_effects = s.max_effects;
+  opt.fit.epoch_s = s.epoch_s;
+  opt.fit.threads = s.threads;
+  opt.candidates = ParseEffectList(s.candidates, "--candidates");
+  opt.progress = session.stage;
+  opt.fraction = session.fraction;
+  DiagnoseOutcome out;
+  out.result = Diagnose(run.description, run.data, opt);
+  out.json = DiagnoseJson(run_yaml, s.alpha, out.result, truth);
+  return out;
 }
 
 }  // namespace triadcal

@@ -1,6 +1,6 @@
 // What `fit` and `compare` say about a batch solution: the verdict line, the
-// parameters the run cannot separate or that sit at their prior, the JSON and
-// the printed table.
+// parameters the run cannot separate or that sit at their prior, and the OUT
+// JSON (the printed table: tools/report/fit_table.h).
 #pragma once
 
 #include <map>
@@ -53,7 +53,5 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
 // out["parameters"] (which must be written) its prior sigma as "sigma",
 // "determined": false and "considered": true.
 void AddConsiderJson(const ParameterLayout& layout, const BatchResult& r, nlohmann::json* out);
-void PrintParameterTable(const ParameterLayout& layout, const BatchResult& r, const FitReport& rep);
-std::string ResidualsCsv(const BatchResult& r);
 
 }  // namespace triadcal

@@ -1,4 +1,4 @@
-#include "tools/report/residual_plot_json.h"
+#include "app/residual_plot_json.h"
 
 #include <gtest/gtest.h>
 

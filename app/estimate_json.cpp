@@ -1,4 +1,4 @@
-#include "tools/report/estimate_json.h"
+#include "app/estimate_json.h"
 
 #include <cmath>
 

@@ -1,15 +1,11 @@
-#include "tools/provenance.h"
+#include "app/output_guard.h"
 
-#include <ctime>
 #include <filesystem>
-#include <fstream>
 #include <set>
 #include <sstream>
 #include <utility>
-#include <vector>
 
 #include "core/io/file_util.h"
-#include "core/io/sha256.h"
 #include "core/model/errors.h"
 
 namespace triadcal {
@@ -17,44 +13,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
-
-struct ProvenanceState {
-  std::string command_line;
-  bool force = false;
-  json inputs = json::array();
-  std::string sensor_serial, sensor_model;
-};
-
-ProvenanceState& State() {
-  static ProvenanceState s;
-  return s;
-}
-
-std::string AbsolutePath(const std::string& path) {
-  std::error_code ec;
-  const fs::path p = fs::absolute(path, ec);
-  return ec ? path : p.lexically_normal().string();
-}
-
-// A shell word: quoted when it holds anything but safe characters.
-std::string ShellWord(const std::string& w) {
-  if (!w.empty() && w.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
-                                        "0123456789_-+=./:,@%") == std::string::npos) {
-    return w;
-  }
-  std::string q = "'";
-  for (char c : w) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-std::string UtcNow() {
-  const std::time_t now = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&now, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof(buf), "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
 
 // How much of an existing output the guard reads, from its start and from its
 // end: never the whole file (a copy of /dev/zero, a 10-GB file of one line).
@@ -157,68 +115,28 @@ std::string Describe(const InputSet& inputs) {
 
 }  // namespace
 
-void SetCommandLine(int argc, char** argv) {
-  std::string line;
-  for (int i = 0; i < argc; ++i) {
-    std::string word = argv[i];
-    if (i == 0) word = fs::path(word).filename().string();
-    line += (i ? " " : "") + ShellWord(word);
-  }
-  State().command_line = line;
-}
-
-bool& ForceOverwrite() { return State().force; }
-
-void RecordInput(const std::string& role, const std::string& path) {
-  const std::string abs = AbsolutePath(path);
-  for (const json& in : State().inputs) {
-    if (in["role"] == role && in["path"] == abs) return;
-  }
-  State().inputs.push_back({{"role", role}, {"path", abs}, {"sha256", Sha256OfFile(path)}});
-}
-
-void RecordSensor(const std::string& serial, const std::string& model) {
-  State().sensor_serial = serial;
-  State().sensor_model = model;
-}
-
-json CurrentProvenance() {
-  const ProvenanceState& s = State();
-  json p;
-  p["tool"] = "triadcal";
-  p["version"] = ToolVersion();
-  p["git_commit"] = ToolGitCommit();
-  p["date_utc"] = UtcNow();
-  p["command_line"] = s.command_line;
-  p["inputs"] = s.inputs;
-  if (!s.sensor_serial.empty() || !s.sensor_model.empty()) {
-    p["sensor"] = {{"serial", s.sensor_serial}, {"model", s.sensor_model}};
-  }
-  return p;
-}
-
-void CheckOverwrite(const std::string& out_path) {
+void CheckOverwrite(const std::string& out_path, const Session& session) {
   CheckOutputsAreNotInputs(out_path);  // the plainer error first
   // Not even --force writes into a directory, FIFO, device node or socket.
   CheckOutputFile(out_path);
   std::error_code ec;
-  if (ForceOverwrite() || !fs::exists(out_path, ec)) return;
+  if (session.force || !fs::exists(out_path, ec)) return;
   const json stored = StoredProvenance(out_path);
   if (stored.is_null()) {
     throw InputError(out_path +
                      ": exists and is not a triadcal output (no provenance); --force "
                      "overwrites it");
   }
-  const InputSet old_inputs = InputsOf(stored), new_inputs = InputsOf(CurrentProvenance());
+  const InputSet old_inputs = InputsOf(stored), new_inputs = InputsOf(session.provenance.Json());
   if (old_inputs != new_inputs) {
     throw InputError(out_path + ": holds results of other inputs (" + Describe(old_inputs) +
                      "); --force overwrites it");
   }
 }
 
-void CheckSimulationFolder(const std::string& dir) {
+void CheckSimulationFolder(const std::string& dir, const Session& session) {
   std::error_code ec;
-  if (ForceOverwrite() || !fs::is_directory(dir, ec)) return;
+  if (session.force || !fs::is_directory(dir, ec)) return;
   bool holds_results = false;
   for (const char* name : {"run.csv", "run.yaml", "truth.json"}) {
     holds_results = holds_results || fs::exists(fs::path(dir) / name, ec);
@@ -233,7 +151,7 @@ void CheckSimulationFolder(const std::string& dir) {
   const fs::path truth = fs::path(dir) / "truth.json";
   const InputSet old_inputs =
       fs::exists(truth, ec) ? InputsOf(StoredProvenance(truth.string())) : InputSet{};
-  const InputSet new_inputs = InputsOf(CurrentProvenance());
+  const InputSet new_inputs = InputsOf(session.provenance.Json());
   if (old_inputs != new_inputs) {
     throw InputError(dir + ": holds results of " +
                      (old_inputs.empty() ? std::string("another simulation or command")

@@ -1,30 +1,18 @@
-#include "tools/joint_fit_job.h"
+#include "app/joint_fit_job.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <numeric>
 
-#include "core/io/file_util.h"
+#include "app/option_lists.h"
+#include "app/run_loading.h"
+#include "core/io/column_mapping.h"
 #include "core/model/errors.h"
-#include "tools/command_util.h"
-#include "tools/provenance.h"
-#include "tools/report/fit_report.h"
-#include "tools/report/result_plausibility.h"
-#include "tools/report/value_format.h"
+#include "app/fit_report.h"
 
 namespace triadcal {
 namespace {
-
-// What the joint fit did with an unknown.
-enum class Treatment { kEstimated, kConsidered, kHeld };
-
-std::vector<Treatment> TreatmentOf(const JointResult& r, int m) {
-  std::vector<Treatment> t(m, Treatment::kEstimated);
-  for (int j : r.consider) t[j] = Treatment::kConsidered;
-  for (int j : r.held) t[j] = Treatment::kHeld;
-  return t;
-}
 
 nlohmann::json Entry(const JointParam& p, double value, double var, Treatment t) {
   const bool estimated = t == Treatment::kEstimated;
@@ -62,24 +50,14 @@ nlohmann::json BetweenJson(const JointParam& p, const BetweenRuns& b, double sig
           {"unit", p.unit}};
 }
 
-// "Kz: Q 48.1 for 3 (p 1.2e-10), spread 7.1 mg/g between the runs: sigma 0.074 -> 4.1 mg/g"
-std::string BetweenText(const JointParam& p, const BetweenRuns& b, double sigma) {
-  char buf[300];
-  std::snprintf(buf, sizeof(buf),
-                "%s: Q %.1f for %d (p %.2g), spread %.3g %s between the runs: sigma %.3g -> "
-                "%.3g %s",
-                p.name.c_str(), b.q, b.dof, b.p_value, b.tau / p.si_per_unit, p.unit.c_str(),
-                sigma / b.sigma_factor / p.si_per_unit, sigma / p.si_per_unit, p.unit.c_str());
-  return buf;
-}
-
-std::string Names(const std::vector<std::string>& v) {
-  std::string s;
-  for (const std::string& x : v) s += (s.empty() ? "" : ", ") + x;
-  return s.empty() ? "none" : s;
-}
-
 }  // namespace
+
+std::vector<Treatment> TreatmentOf(const JointResult& r, int m) {
+  std::vector<Treatment> t(m, Treatment::kEstimated);
+  for (int j : r.consider) t[j] = Treatment::kConsidered;
+  for (int j : r.held) t[j] = Treatment::kHeld;
+  return t;
+}
 
 RunsFile RunsOfCommandLine(const std::vector<std::string>& inputs) {
   if (inputs.size() == 1) return LoadRunsFile(inputs[0]);
@@ -91,11 +69,11 @@ RunsFile RunsOfCommandLine(const std::vector<std::string>& inputs) {
   return RunsFromCommandLine(inputs);
 }
 
-std::vector<JointRun> LoadJointRuns(const RunsFile& file) {
+std::vector<JointRun> LoadJointRuns(const RunsFile& file, Session* session) {
   std::vector<JointRun> runs;
   for (const RunsFile::Entry& e : file.runs) {
-    LoadedRun lr = LoadRunOrThrow(e.run_yaml);
-    RecordInput("run " + e.name, e.run_yaml);
+    LoadedRun lr = LoadRun(e.run_yaml, session);
+    session->provenance.RecordInput("run " + e.name, e.run_yaml);
     JointRun r;
     r.name = e.name;
     r.source = e.where;
@@ -118,16 +96,17 @@ std::vector<JointRun> LoadJointRuns(const RunsFile& file) {
 }
 
 JointInput LoadJointInput(const std::vector<std::string>& inputs, const std::string& effects,
-                          const std::string& out_json) {
-  CheckOutputPath(out_json);
+                          Session* session) {
   JointInput in;
   in.file = RunsOfCommandLine(inputs);
-  in.runs = LoadJointRuns(in.file);
-  CheckOverwrite(out_json);
+  in.runs = LoadJointRuns(in.file, session);
   // The effects must suit every run's data.
   std::vector<Effect> list;
   for (const JointRun& r : in.runs) list = ParseEffectList(effects, r.data);
-  in.layout = std::make_unique<JointLayout>(in.runs, ParameterLayout(list), JointSpecOf(in.file),
+  const std::string unit =
+      in.runs.empty() ? std::string(kDefaultReadingsUnit) : ReadingsUnit(in.runs.front().run);
+  in.layout = std::make_unique<JointLayout>(in.runs, ParameterLayout(list, false, unit),
+                                            JointSpecOf(in.file),
                                             in.file.path.empty() ? "command line" : in.file.path);
   return in;
 }
@@ -173,8 +152,9 @@ std::string JointVerdict(const JointLayout& jl, const JointResult& r) {
     std::string s = "RUNS DISAGREE: ";
     for (std::size_t k = 0; k < bad.size(); ++k) s += (k ? "; " : "") + bad[k];
     if (!spread.empty()) s += (bad.empty() ? "" : "; ") + ("spread between the runs " + spread);
-    return s + " -- a remount, a turn-on bias or an effect that differs between the runs; the "
-               "joint sigma carry the spread";
+    return s +
+           " -- a remount, a turn-on bias or an effect that differs between the runs; the "
+           "joint sigma carry the spread";
   }
   if (tested < 2) return "converged (fewer than two runs could be compared with the others)";
   return "converged; the runs agree within their sigma";
@@ -233,8 +213,8 @@ nlohmann::json JointJson(const JointLayout& jl, const std::vector<JointRun>& run
     e["noise_source"] = rr.alone.noise_source;
     e["chi2_per_dof"] = rr.chi2_per_dof;
     e["sigma_method"] = rr.sigma_method;
-    e["hac_bandwidth_epochs"] =
-        rr.sigma_method == "hac" ? nlohmann::json(rr.hac_bandwidth_epochs) : nlohmann::json(nullptr);
+    e["hac_bandwidth_epochs"] = rr.sigma_method == "hac" ? nlohmann::json(rr.hac_bandwidth_epochs)
+                                                         : nlohmann::json(nullptr);
     nlohmann::json own = nlohmann::json::object();
     for (int j = 0; j < jl.size(); ++j) {
       const JointParam& p = jl.param(j);
@@ -253,15 +233,16 @@ nlohmann::json JointJson(const JointLayout& jl, const std::vector<JointRun>& run
       const ParameterInfo& info = jl.layout().info(i);
       const bool h = !IsEstimated(a, info.name);
       auto sigma_of = [&](const Eigen::MatrixXd& cov) {
-        return h || cov.rows() <= i ? nlohmann::json(nullptr)
-                                    : nlohmann::json(std::sqrt(std::max(0.0, cov(i, i))) /
-                                                     info.si_per_unit);
+        return h || cov.rows() <= i
+                   ? nlohmann::json(nullptr)
+                   : nlohmann::json(std::sqrt(std::max(0.0, cov(i, i))) / info.si_per_unit);
       };
-      ap[info.name] = {{"value", a.estimate.theta[i] / info.si_per_unit},
-                       {"sigma", sigma_of(a.estimate.cov)},
-                       {"sigma_given_consider", a.consider.empty() ? sigma_of(a.estimate.cov)
-                                                                   : sigma_of(a.cov_given_consider)},
-                       {"unit", info.unit}};
+      ap[info.name] = {
+          {"value", a.estimate.theta[i] / info.si_per_unit},
+          {"sigma", sigma_of(a.estimate.cov)},
+          {"sigma_given_consider",
+           a.consider.empty() ? sigma_of(a.estimate.cov) : sigma_of(a.cov_given_consider)},
+          {"unit", info.unit}};
     }
     alone["parameters"] = ap;
     alone["axes"] = "platform";
@@ -290,95 +271,16 @@ nlohmann::json JointJson(const JointLayout& jl, const std::vector<JointRun>& run
   return out;
 }
 
-int RunJointFit(const FitSettings& s, const std::vector<std::string>& inputs,
-                const std::string& out_json, const std::string& report_html) {
-  CheckFitSettings(s);
-  if (!report_html.empty()) {
-    throw InputError("--report: not available for a joint fit of several runs yet");
-  }
-  const JointInput in = LoadJointInput(inputs, s.effects, out_json);
-  const RunsFile& file = in.file;
-  const std::vector<JointRun>& runs = in.runs;
-  const JointLayout& jl = *in.layout;
+JointFitOutcome JointFitRun(const FitSettings& s, const JointInput& in, const Session& session) {
+  s.Validate();
   JointOptions opt;
   opt.batch = MakeBatchOptions(s);
-  StageProgress progress("fit: ");
-  opt.batch.progress = [&](const std::string& line) { progress.Stage(line); };
-  opt.batch.fraction = [&](double x) { progress.Fraction(x); };
-  const JointResult r = SolveJoint(runs, jl, opt);
-  EndProgress();
-  const nlohmann::json out = JointJson(jl, runs, r, file);
-  for (const std::string& w : ImplausibleResultWarnings(out["parameters"], out_json)) {
-    std::fprintf(stderr, "triadcal: warning: %s\n", OneLine(w).c_str());
-  }
-  WriteJson(out, out_json);
-
-  std::printf("fit: %zu runs of one IMU as one problem; %s\n", runs.size(),
-              JointVerdict(jl, r).c_str());
-  std::printf("joint: chi2/dof %.3f over %d degrees of freedom, %d iterations, %.1f s (runs "
-              "alone %.1f s)\n",
-              r.chi2_per_dof, r.degrees_of_freedom, r.iterations, r.seconds_joint,
-              r.seconds_alone);
-  const std::vector<Treatment> treat = TreatmentOf(r, jl.size());
-  std::vector<const BetweenRuns*> between(jl.size(), nullptr);
-  for (const BetweenRuns& b : r.between) between[b.index] = &b;
-  std::printf("%-26s %22s %-10s", "parameter (IMU axes)", "value ± sigma", "unit");
-  for (int q = 0; q < jl.runs(); ++q) std::printf(" %8.8s", jl.run_name(q).c_str());
-  std::printf("   (share of the information)\n");
-  for (int j = 0; j < jl.size(); ++j) {
-    const JointParam& p = jl.param(j);
-    const double value = r.phi[j] / p.si_per_unit;
-    const bool spread = between[j] && between[j]->sigma_factor > 1.0;
-    const std::string text =
-        treat[j] == Treatment::kHeld         ? FormatDouble(value) + " (held)"
-        : treat[j] == Treatment::kConsidered ? FormatDouble(value) + " (not determined)"
-                                             : ValuePlusMinus(value, std::sqrt(std::max(0.0, r.cov(j, j))) /
-                                                                         p.si_per_unit) +
-                                                   (spread ? "*" : "");
-    std::printf("%-26s %22s %-10s", p.name.c_str(), text.c_str(), p.unit.c_str());
-    if (treat[j] == Treatment::kEstimated) {
-      for (int q = 0; q < jl.runs(); ++q) std::printf(" %8.2f", r.share(q, j));
-    }
-    std::printf("\n");
-  }
-  bool any_spread = false;
-  for (const BetweenRuns& b : r.between) {
-    if (b.sigma_factor <= 1.0) continue;
-    if (!any_spread) std::printf("* sigma with the spread between the runs (random effects):\n");
-    any_spread = true;
-    const double sigma = std::sqrt(std::max(0.0, r.cov(b.index, b.index)));
-    std::printf("  %s%s\n", BetweenText(jl.param(b.index), b, sigma).c_str(),
-                b.disagree ? " -- the runs DISAGREE" : "");
-  }
-  if (!r.consider.empty()) {
-    std::vector<std::string> names;
-    for (int j : r.consider) names.push_back(jl.param(j).name);
-    std::printf("not determined by the runs together (nominal, prior uncertainty carried): %s\n",
-                Names(names).c_str());
-  }
-  for (const JointRunResult& rr : r.runs) {
-    const RunConsistency& c = rr.consistency;
-    std::vector<std::string> undetermined = rr.alone.held;
-    undetermined.insert(undetermined.end(), rr.alone.consider.begin(), rr.alone.consider.end());
-    std::printf("run %s: chi2/dof %.3f at the joint solution, sigma %s; alone %s, not determined "
-                "%s; ",
-                rr.name.c_str(), rr.chi2_per_dof, rr.sigma_method.c_str(),
-                rr.alone.converged ? "converged" : "NOT converged", Names(undetermined).c_str());
-    if (c.tested) {
-      std::printf("against the others chi2 %.1f for %d, p %.3g: %s\n", c.chi2, c.dof, c.p_value,
-                  c.consistent ? "agrees" : "DISAGREES");
-    } else {
-      std::printf("not compared (nothing of its own to compare)\n");
-    }
-  }
-  std::printf("determined only by the runs together: %s\n", Names(r.jointly_only).c_str());
-  std::printf("wrote %s\n", out_json.c_str());
-  if (!r.converged) {
-    std::fprintf(stderr, "triadcal: error: the joint fit did not converge: %s (exit %d)\n",
-                 r.termination.c_str(), kExitNotConverged);
-    return kExitNotConverged;
-  }
-  return 0;
+  opt.batch.progress = session.stage;
+  opt.batch.fraction = session.fraction;
+  JointFitOutcome out;
+  out.result = SolveJoint(in.runs, *in.layout, opt);
+  out.json = JointJson(*in.layout, in.runs, out.result, in.file);
+  return out;
 }
 
 }  // namespace triadcal

@@ -1,0 +1,33 @@
+#include "app/run_loading.h"
+
+#include <utility>
+
+#include "core/io/run_description_io.h"
+#include "core/io/run_io.h"
+#include "solvers/static/mounting_search.h"
+
+namespace triadcal {
+
+LoadedRun LoadRun(const std::string& run_yaml, Session* session) {
+  RunDescription description = LoadRunDescription(run_yaml);
+  session->provenance.RecordInput("run", run_yaml);
+  return LoadRun(std::move(description), session);
+}
+
+LoadedRun LoadRun(RunDescription description, Session* session) {
+  LoadedRun r;
+  r.description = std::move(description);
+  session->provenance.RecordSensor(r.description.sensor_serial, r.description.sensor_model);
+  RunWarnings warnings;
+  r.data = LoadRunData(r.description, &warnings);
+  r.warnings = std::move(warnings.lines);
+  const std::string mounting = MountingWarning(r.description, r.data);
+  if (!mounting.empty()) r.warnings.push_back(mounting);
+  if (session->warning) {
+    for (const std::string& w : r.warnings) session->warning(w);
+  }
+  session->provenance.RecordInput("data", r.description.data_path);
+  return r;
+}
+
+}  // namespace triadcal
