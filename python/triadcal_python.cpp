@@ -158,12 +158,18 @@ py::object Fit(const py::object& run_arg, const std::string& effects, double epo
   settings.free = free;
   settings.Validate();
   const RunDescription description = RunFrom(run_arg);
+  const bool from_file = py::isinstance<py::str>(run_arg);  // a dict has no file
   json out;
   {
     py::gil_scoped_release release;
     Session session;
+    // The provenance a written OUT carries (app/provenance.h): the tool, the
+    // call, and the run's and data's SHA-256, recorded as they are read.
+    session.provenance = Provenance(ToolVersion(), ToolGitCommit(), "python: triadcal.fit");
+    if (from_file) session.provenance.RecordInput("run", description.yaml_path);
     const LoadedRun run = LoadRun(description, &session);
     out = FitRun(settings, description.yaml_path, run, session).json;
+    out["provenance"] = session.provenance.Json();
   }
   return FromJson(out);
 }
@@ -270,8 +276,8 @@ PYBIND11_MODULE(triadcal, m) {
         "hold"_a = defaults.hold, "free"_a = defaults.free,
         "Batch least-squares fit of a run (run.yaml path or dict), as `triadcal fit` fits it "
         "(the same job); returns its OUT as a dict (parameters: {name: {value, sigma, unit, "
-        "...}}, sigma, residual_analysis, settings, ...), without the provenance a written "
-        "file carries.");
+        "...}}, sigma, residual_analysis, settings, ..., and the provenance a written file "
+        "carries: the tool, the call and the SHA-256 of the run and its data).");
   m.def("apply", &triadcal::Apply, "calibration"_a, "readings_mV"_a, "t_s"_a = py::none(),
         "temp_C"_a = py::none(),
         "Raw readings (N, 3) [mV, triad axes] -> specific force W (N, 3) [g] by the exact "
