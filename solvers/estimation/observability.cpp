@@ -75,7 +75,9 @@ Eigen::MatrixXd DataInformation(const RunProblem& p, const Eigen::VectorXd& thet
   const RunPass pass = EvaluatePass(p, theta, true, threads);
   Eigen::MatrixXd info = Reduce(p, pass, weights, p.noise_mV, threads).information;
   if (RunHasGyro(p)) {  // the gyro's increments at its noise (gyro_term.h)
-    info += ReduceGyroAtNoise(EvaluateGyroPass(p, theta, true, threads), p.gyro_noise_rad_s, 1.0)
+    // The information only: no gradient terms of the weights, no scores.
+    info += ReduceGyro(EvaluateGyroPass(p, theta, true, threads), p.gyro_noise_rad_s, 1.0,
+                       /*theta_part=*/true, /*with_scores=*/false)
                 .information;
   }
   return Symmetric(info);
