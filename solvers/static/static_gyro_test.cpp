@@ -53,7 +53,10 @@ FerrarisGyro FerrarisOnLabels(const RunDescription& run, const RunData& data,
   std::map<std::string, Eigen::Vector3d> sum;
   std::map<std::string, double> n;
   for (std::size_t k = 0; k < data.size(); ++k) {
-    sum[data.label[k]] += data.gyro(k) / kDegToRad;  // counts
+    // try_emplace with a zero: a map's default Eigen vector is uninitialised
+    // (a clean-clone CI run read 6e147 counts here).
+    sum.try_emplace(data.label[k], Eigen::Vector3d::Zero()).first->second +=
+        data.gyro(k) / kDegToRad;  // counts
     n[data.label[k]] += 1.0;
   }
   FerrarisGyro f;
