@@ -131,6 +131,18 @@ TEST_F(CliGyroInput, MonteCarloAndObservabilityCarryTheGyro) {
     EXPECT_EQ(p["rts"]["estimated"], false) << name;
     EXPECT_FALSE(p["rts"].contains("scatter")) << name;
   }
+  // Sharded and merged, the same (the merge makes the layout with the gyro).
+  for (const char* i : {"1", "2"}) {
+    const testing_fixtures::CliResult sh = Run("montecarlo " + sc + " -n 4 --shard " + i +
+                                               "/2 -o " + Path(std::string("mc") + i + ".json"));
+    ASSERT_EQ(sh.exit_code, 0) << sh.err;
+  }
+  const testing_fixtures::CliResult mg = Run("merge " + Path("mc1.json") + " " +
+                                             Path("mc2.json") + " -o " + Path("merged.json"));
+  ASSERT_EQ(mg.exit_code, 0) << mg.err;
+  const nlohmann::json merged = nlohmann::json::parse(ReadFile(Path("merged.json")));
+  EXPECT_EQ(merged["parameters"]["gyro.Kx"]["batch"], m["parameters"]["gyro.Kx"]["batch"]);
+  EXPECT_EQ(merged["parameters"]["gyro.Kx"]["rts"]["estimated"], false);
   const testing_fixtures::CliResult ob = Run("observability " + sc + " -o " + Path("obs.json"));
   ASSERT_EQ(ob.exit_code, 0) << ob.err;
   const nlohmann::json o = nlohmann::json::parse(ReadFile(Path("obs.json")));

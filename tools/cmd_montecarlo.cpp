@@ -127,6 +127,7 @@ int RunMonteCarloCommand(MonteCarloArgs a, Session& session) {
   whole.rate_hz = s.profile.rate_hz;
   whole.duration_s = s.profile.duration_s;
   whole.per_seed = a.per_seed;
+  whole.gyro = opt.layout.has_gyro();
   // A shard's own statistics describe its seeds only.
   MonteCarloSettings mine_settings = whole;
   mine_settings.runs = range.end - range.begin;

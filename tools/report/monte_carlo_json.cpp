@@ -12,7 +12,7 @@ nlohmann::json MonteCarloSettingsJson(const MonteCarloSettings& s) {
   return {{"scenario", s.scenario},   {"effects", s.effects},       {"estimators", s.estimators},
           {"runs", s.runs},           {"first_seed", s.first_seed}, {"epoch_s", s.epoch_s},
           {"tolerance", s.tolerance}, {"rate_hz", s.rate_hz},       {"duration_s", s.duration_s},
-          {"per_seed", s.per_seed}};
+          {"per_seed", s.per_seed},   {"gyro", s.gyro}};
 }
 
 MonteCarloSettings MonteCarloSettingsFromJson(const nlohmann::json& j, const std::string& where) {
@@ -28,6 +28,7 @@ MonteCarloSettings MonteCarloSettingsFromJson(const nlohmann::json& j, const std
     s.rate_hz = j.at("rate_hz").get<double>();
     s.duration_s = j.at("duration_s").get<double>();
     s.per_seed = j.at("per_seed").get<bool>();
+    s.gyro = j.value("gyro", false);  // absent in shards written before the gyro
   } catch (const nlohmann::json::exception& e) {
     throw InputError(where + ": settings: " + e.what());
   }

@@ -21,6 +21,7 @@ struct MonteCarloSettings {
   std::uint64_t first_seed = 1;
   double epoch_s = kDefaultEpoch_s, tolerance = 0.1, rate_hz = 0.0, duration_s = 0.0;
   bool per_seed = false;
+  bool gyro = false;  // the layout has the gyro block (the scenario has a gyro)
 };
 
 nlohmann::json MonteCarloSettingsJson(const MonteCarloSettings& s);

@@ -45,8 +45,8 @@ MergedMonteCarlo MergeMonteCarloShards(const std::vector<nlohmann::json>& shards
   const nlohmann::json& first = shards.at(0)["shard"];
   m.settings = MonteCarloSettingsFromJson(first["settings"], paths[0] + ": shard");
   const MonteCarloSettings& s = m.settings;
-  m.result.layout =
-      ParameterLayout(EffectsFromNames(s.effects, paths[0] + ": shard.settings.effects"));
+  m.result.layout = ParameterLayout(
+      EffectsFromNames(s.effects, paths[0] + ": shard.settings.effects"), s.gyro);
   const int n = m.result.layout.size();
   m.result.truth = ExactVector(first["truth_si"], n, paths[0] + ": shard.truth_si");
   m.result.crb = ExactVector(first["crb_si"], n, paths[0] + ": shard.crb_si");
