@@ -55,14 +55,14 @@ std::vector<MonteCarloRun> RunMonteCarloSeeds(const Scenario& s, const MonteCarl
     run.failure.assign(E, std::string());
     FilterResult fr;
     std::string filter_failure;
+    FilterOptions fo = opt.filter;
+    fo.progress = nullptr;
+    // The filter has no gyro measurement (method.md section 11): the gyro's
+    // parameters stay out of its state.
+    for (int i = 0; i < layout.size(); ++i) {
+      if (layout.is_gyro(i)) fo.held.push_back(layout.info(i).name);
+    }
     if (want_filter) {
-      FilterOptions fo = opt.filter;
-      fo.progress = nullptr;
-      // The filter has no gyro measurement (method.md section 11): the gyro's
-      // parameters stay out of its state.
-      for (int i = 0; i < layout.size(); ++i) {
-        if (layout.is_gyro(i)) fo.held.push_back(layout.info(i).name);
-      }
       try {
         fr = RunFilterSmoother(q.run, data, layout, fo);
       } catch (const std::exception& e) {
@@ -73,7 +73,9 @@ std::vector<MonteCarloRun> RunMonteCarloSeeds(const Scenario& s, const MonteCarl
       const std::string& name = opt.estimators[j];
       const Estimate* est = nullptr;
       BatchResult br;
-      std::vector<int> held_by_filter;  // not estimated by the filter: no error to judge
+      // What the estimator did not estimate (held; for batch also considered:
+      // at nominal with the prior's uncertainty): no error to judge against a sigma.
+      std::vector<std::string> not_estimated;
       if (name == "batch") {
         BatchOptions bo = opt.batch;
         bo.threads = 1;
@@ -81,30 +83,23 @@ std::vector<MonteCarloRun> RunMonteCarloSeeds(const Scenario& s, const MonteCarl
         try {
           br = SolveBatch(q.run, data, layout, bo);
           est = &br.estimate;
+          not_estimated = br.held;
+          not_estimated.insert(not_estimated.end(), br.consider.begin(), br.consider.end());
         } catch (const std::exception& e) {
           run.failure[j] = e.what();
         }
       } else if (filter_failure.empty()) {
         est = name == "ekf" ? &fr.ekf : &fr.rts;
-        for (int i = 0; i < layout.size(); ++i) {
-          if (layout.is_gyro(i)) held_by_filter.push_back(i);
-        }
+        not_estimated = fo.held;
       } else {
         run.failure[j] = filter_failure;
       }
       if (est) {
         run.error[j] = est->theta - run.truth;
         run.sigma[j] = est->cov.diagonal().cwiseMax(0.0).cwiseSqrt();
-        for (int i : held_by_filter) run.error[j][i] = std::nan("");
-        if (name == "batch") {
-          // Not estimated (held, or considered: at nominal with the prior's
-          // uncertainty): no error to judge against a sigma.
-          for (const auto* names : {&br.held, &br.consider}) {
-            for (const std::string& h : *names) {
-              const int i = layout.IndexOf(h);
-              if (i >= 0) run.error[j][i] = std::nan("");
-            }
-          }
+        for (const std::string& h : not_estimated) {
+          const int i = layout.IndexOf(h);
+          if (i >= 0) run.error[j][i] = std::nan("");
         }
       }
     }

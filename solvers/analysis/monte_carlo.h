@@ -61,9 +61,10 @@ struct EstimatorStats {
   std::string first_failure;
   Eigen::VectorXd mean_error, scatter, mean_sigma, rms_z, max_abs_z;  // SI (z unitless)
   double pooled_rms_z = 0.0;
-  // Runs in which the batch solver did not estimate the parameter (held or
-  // considered, BatchResult::held and ::consider: kept at its nominal
-  // value); they are left out of that parameter's statistics.
+  // Runs in which the estimator did not estimate the parameter (the batch
+  // solver's held or considered, BatchResult::held and ::consider; the
+  // filter's held, e.g. the gyro's: kept at its nominal value); they are left
+  // out of that parameter's statistics.
   Eigen::VectorXi held_runs;
 };
 
