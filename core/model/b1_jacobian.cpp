@@ -21,13 +21,17 @@ using SmallJet = ceres::Jet<double, kJetParams>;
 constexpr int kGeometryJet = 9;
 using GeoJet = ceres::Jet<double, kGeometryJet>;
 
+// Rows of theta derivatives, on the stack (one sample's work allocates nothing).
+using ThetaRow = Eigen::Matrix<double, 1, Eigen::Dynamic, Eigen::RowMajor, 1, kMaxParams>;
+using ThetaRows3 = Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::ColMajor, 3, kMaxParams>;
+
 // theta as Jets with only the listed entries seeded (derivative slot q for
 // entry idx[q]).
 template <typename J>
-std::array<J, kMaxParams> SeededTheta(const double* th, int n, const std::vector<int>& idx) {
+std::array<J, kMaxParams> SeededTheta(const double* th, int n, const int* idx, int count) {
   std::array<J, kMaxParams> t;
   for (int i = 0; i < n; ++i) t[i] = J(th[i]);
-  for (std::size_t q = 0; q < idx.size(); ++q) t[idx[q]].v[q] = 1.0;
+  for (int q = 0; q < count; ++q) t[idx[q]].v[q] = 1.0;
   return t;
 }
 
@@ -60,7 +64,7 @@ constexpr MisalignmentEntry kMisalignment[3][3] = {{{-1, 0.0}, {kAlphaY, -1.0}, 
 // by the sensor parameters times `weight`.
 double ReadingWithoutOffset(const ParameterLayout& layout, const double* th, int i,
                             const Vec3<double>& W, Eigen::RowVector3d* grad_W, double weight,
-                            Eigen::Ref<Eigen::RowVectorXd> row) {
+                            ThetaRow& row) {
   const Mat3<double> M = MisalignmentMatrix(th);
   const Mat3<double> K = NonlinearityMatrix(th);
   const int o_a = layout.offset(Effect::kScaleAsymmetry);
@@ -113,11 +117,10 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
   // of their six quantities (angle, rate, acceleration of each axis) by the
   // angle-stage parameters (Jets over those alone).
   BenchAngles<double> b = rec;
-  const std::vector<int> angle_params =
-      layout.has_stage(EffectStage::kAngle) ? layout.StageParams(EffectStage::kAngle) : std::vector<int>();
+  const std::vector<int>& angle_params = layout.StageParams(EffectStage::kAngle);
   Eigen::Matrix<double, 6, kJetParams> db = Eigen::Matrix<double, 6, kJetParams>::Zero();
   if (!angle_params.empty()) {
-    const std::array<SmallJet, kMaxParams> t = SeededTheta<SmallJet>(th, n, angle_params);
+    const std::array<SmallJet, kMaxParams> t = SeededTheta<SmallJet>(th, n, angle_params.data(), static_cast<int>(angle_params.size()));
     const BenchAngles<SmallJet> bj = BenchAnglesFromRecorded<SmallJet>(cfg, t.data(), rec);
     for (int i = 0; i < 2; ++i) {
       const AxisState<SmallJet>& a = bj.axis[i];
@@ -136,7 +139,8 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
   // every other parameter value, and only its columns by r remain:
   // dD_i/dr_i = grad R_i(W_O) dW/dp (ForceGradientByPoint).
   Eigen::Vector3d z = z_in;
-  Eigen::MatrixXd dD;  // 3 x n, empty without the size effect
+  ThetaRows3 dD;  // 3 x n, empty without the size effect or at r = 0
+  Eigen::Matrix3d dD_r = Eigen::Matrix3d::Zero();  // at r = 0: row i is dD_i/dr_i
   const int o_s = layout.offset(Effect::kSizeEffect);
   bool r_zero = o_s >= 0;
   for (int q = 0; q < 6 && r_zero; ++q) r_zero = th[o_s + q] == 0.0;
@@ -146,26 +150,26 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
         SpecificForce_g(cfg, m.C_L2, MotionOfPoint(m, SensingPoint_m(cfg, th, 0)).a_L);
     const Mat3<double> dW_dr =
         ForceGradientByPoint(m.C_L2, m.w1_L + m.w12_L, m.dw1_L + m.dw12_L, g);
-    dD = Eigen::MatrixXd::Zero(3, n);
-    Eigen::RowVectorXd scratch = Eigen::RowVectorXd::Zero(n);
+    ThetaRow scratch = ThetaRow::Zero(n);
     for (int i = 1; i < 3; ++i) {
       Eigen::RowVector3d grad_O;
       ReadingWithoutOffset(layout, th, i, W_O, &grad_O, 0.0, scratch);
-      dD.row(i).segment<3>(o_s + 3 * (i - 1)) = grad_O * dW_dr;
+      dD_r.row(i) = grad_O * dW_dr;
     }
   } else if (o_s >= 0) {
     // Jets over what the bench's motion depends on: dpsi, d, eps and the six
     // bench-angle quantities. The points' positions (O at R, accelerometer i
     // at R + r_i) enter their accelerations linearly, so the columns of R
     // and r are by ForceGradientByPoint.
-    std::vector<int> geo = {kDpsi};
+    std::array<int, 3> geo = {kDpsi, -1, -1};
+    int n_geo = 1;
     const int o_d = layout.offset(Effect::kAxisNonintersection);
-    if (o_d >= 0) geo.push_back(o_d);
+    if (o_d >= 0) geo[n_geo++] = o_d;
     const int o_e = layout.offset(Effect::kAxisNonperpendicularity);
-    if (o_e >= 0) geo.push_back(o_e);
-    const std::array<GeoJet, kMaxParams> t = SeededTheta<GeoJet>(th, n, geo);
+    if (o_e >= 0) geo[n_geo++] = o_e;
+    const std::array<GeoJet, kMaxParams> t = SeededTheta<GeoJet>(th, n, geo.data(), n_geo);
     BenchAngles<GeoJet> bj;
-    const int slot0 = static_cast<int>(geo.size());  // b's six quantities after the parameters
+    const int slot0 = n_geo;  // b's six quantities after the parameters
     for (int i = 0; i < 2; ++i) {
       bj.axis[i].angle = GeoJet(b.axis[i].angle, slot0 + 3 * i);
       bj.axis[i].rate = GeoJet(b.axis[i].rate, slot0 + 3 * i + 1);
@@ -178,25 +182,34 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
       for (int c = 0; c < 3; ++c) C_L2(r, c) = m.C_L2(r, c).a;
     const Mat3<double> dW_dp = ForceGradientByPoint(C_L2, value(m.w1_L) + value(m.w12_L),
                                                     value(m.dw1_L) + value(m.dw12_L), g);
-    // W at the point p (frame 2) and its derivatives by the Jet slots.
-    auto at = [&](const Vec3<double>& p, Vec3<double>* W_p,
-                  Eigen::Matrix<double, 3, kGeometryJet>* dW_p) {
-      const Vec3<GeoJet> pj(GeoJet(p.x()), GeoJet(p.y()), GeoJet(p.z()));
-      const Vec3<GeoJet> Wj = SpecificForce_g(cfg, m.C_L2, MotionOfPoint(m, pj).a_L);
+    // W at O by the motion; at accelerometer i, W_O + (w2' x r_i + w2 x (w2 x r_i)) / g
+    // with w2, w2' the rate of frame 2 and its derivative in frame 2 (rigid
+    // body: MotionOfPoint in frame 2; r_i = p_i - p_O fixed in it).
+    const Vec3<GeoJet> Wj_O =
+        SpecificForce_g(cfg, m.C_L2, MotionOfPoint(m, SensingPoint_m(cfg, t.data(), 0)).a_L);
+    const Vec3<GeoJet> w2 = m.C_L2.transpose() * (m.w1_L + m.w12_L);
+    const Vec3<GeoJet> dw2 = m.C_L2.transpose() * (m.dw1_L + m.dw12_L);
+    auto split = [](const Vec3<GeoJet>& Wj, Vec3<double>* W_p,
+                    Eigen::Matrix<double, 3, kGeometryJet>* dW_p) {
       for (int r = 0; r < 3; ++r) {
         (*W_p)[r] = Wj[r].a;
         dW_p->row(r) = Wj[r].v.transpose();
       }
     };
+    auto at = [&](int i, Vec3<double>* W_p, Eigen::Matrix<double, 3, kGeometryJet>* dW_p) {
+      const double* ri = th + o_s + 3 * (i - 1);
+      const Vec3<GeoJet> r{GeoJet(ri[0]), GeoJet(ri[1]), GeoJet(ri[2])};
+      split(Wj_O + (dw2.cross(r) + w2.cross(w2.cross(r))) / GeoJet(g), W_p, dW_p);
+    };
     Vec3<double> W_O;
     Eigen::Matrix<double, 3, kGeometryJet> dW_O;
-    at(SensingPoint_m(cfg, th, 0), &W_O, &dW_O);
-    dD = Eigen::MatrixXd::Zero(3, n);
-    Eigen::RowVectorXd drow(n);
+    split(Wj_O, &W_O, &dW_O);
+    dD = ThetaRows3::Zero(3, n);
+    ThetaRow drow(n);
     for (int i = 1; i < 3; ++i) {  // x senses at O: D_0 = 0
       Vec3<double> W_i;
       Eigen::Matrix<double, 3, kGeometryJet> dW_i;
-      at(SensingPoint_m(cfg, th, i), &W_i, &dW_i);
+      at(i, &W_i, &dW_i);
       drow.setZero();
       Eigen::RowVector3d grad_i, grad_O;
       const double d = ReadingWithoutOffset(layout, th, i, W_i, &grad_i, 1.0, drow) -
@@ -204,7 +217,7 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
       z[i] -= d;
       // By the Jet slots: grad R_i(W_i) dW_i - grad R_i(W_O) dW_O.
       const Eigen::Matrix<double, 1, kGeometryJet> dx = grad_i * dW_i - grad_O * dW_O;
-      for (std::size_t q = 0; q < geo.size(); ++q) drow[geo[q]] += dx[q];
+      for (int q = 0; q < n_geo; ++q) drow[geo[q]] += dx[q];
       // The bench angles enter as the sums l1 + dtheta_c and l2 + dlambda2.
       drow[kDthetaC] += dx[slot0];
       drow[kDlambda2] += dx[slot0 + 3];
@@ -297,6 +310,8 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
   // dF/dD_i = 1 / s_i e_i, so da/dD_i = T.col(i) / s_i.
   if (dD.size() > 0) {
     for (int i = 1; i < 3; ++i) J += (T.col(i) / s[i]) * dD.row(i);
+  } else if (r_zero) {
+    for (int i = 1; i < 3; ++i) J.middleCols<3>(o_s + 3 * (i - 1)) += (T.col(i) / s[i]) * dD_r.row(i);
   }
 }
 

@@ -68,6 +68,7 @@ ParameterLayout::ParameterLayout(const std::vector<Effect>& effects, bool gyro,
       zero_offset_terms_.push_back({offset_[static_cast<int>(e)], spec.zero_offset_signal});
     }
     for (const ParamSpec& p : spec.params) {
+      stage_params_[static_cast<int>(spec.stage)].push_back(static_cast<int>(info_.size()));
       info_.push_back(
           {spec.name + "." + p.name, InReadingsUnit(p.unit, readings_unit_), p.si_per_unit, e});
     }
@@ -77,16 +78,6 @@ ParameterLayout::ParameterLayout(const std::vector<Effect>& effects, bool gyro,
     for (const ParameterInfo& p : GyroParameterInfo()) info_.push_back(p);
   }
   for (int i = 0; i < size(); ++i) index_[info_[i].name] = i;
-}
-
-std::vector<int> ParameterLayout::StageParams(EffectStage stage) const {
-  std::vector<int> idx;
-  for (Effect e : effects_) {
-    const EffectSpec& s = GetEffectSpec(e);
-    if (s.stage != stage) continue;
-    for (std::size_t q = 0; q < s.params.size(); ++q) idx.push_back(offset(e) + static_cast<int>(q));
-  }
-  return idx;
 }
 
 int ParameterLayout::IndexOf(const std::string& name) const {

@@ -104,7 +104,9 @@ class ParameterLayout {
   // without effects).
   bool has_stage(EffectStage s) const { return has_stage_[static_cast<int>(s)]; }
   // The theta indices of the parameters of the effects of stage s, in layout order.
-  std::vector<int> StageParams(EffectStage s) const;
+  const std::vector<int>& StageParams(EffectStage s) const {
+    return stage_params_[static_cast<int>(s)];
+  }
   // The zero-offset terms (EffectSpec::zero_offset_signal) of the effects on:
   // theta[offset + i] multiplies the signal in W0_i, i = 0..2.
   struct ZeroOffsetTerm {
@@ -120,6 +122,7 @@ class ParameterLayout {
   int offset_[kNumEffects];
   int gyro_offset_ = -1;
   bool has_stage_[3] = {false, false, false};
+  std::vector<int> stage_params_[3];  // StageParams, made with the layout
   std::vector<ZeroOffsetTerm> zero_offset_terms_;
   std::map<std::string, int> index_;
 };
