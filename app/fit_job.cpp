@@ -154,6 +154,14 @@ FitOutcome FitRun(const FitSettings& a, const std::string& run_yaml, const Loade
   const ResidualReport rr = AnalyzeResiduals(run.description, run.data, f.layout, f.result);
   f.json["residual_analysis"] = ResidualReportJson(rr);
   f.json["residual_plot"] = ResidualPlotJson(rr);
+  if (f.result.gyro.present) {
+    // The gyro's own: its verdict, and the same analysis and plot of its
+    // increment residuals.
+    const ResidualReport gr = AnalyzeGyroResiduals(run.description, run.data, f.layout, f.result);
+    f.json["gyro"]["verdict"] = GyroVerdictJson(MakeGyroVerdict(f.layout, f.result, f.report, gr));
+    f.json["gyro"]["residual_analysis"] = ResidualReportJson(gr);
+    f.json["gyro"]["residual_plot"] = ResidualPlotJson(gr);
+  }
   return f;
 }
 

@@ -10,6 +10,28 @@
 #include "app/estimate_json.h"
 
 namespace triadcal {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
+
+// The gyro's rate noise per channel in the readings' unit [deg/s]: |gyro.K_i|
+// times the input-rate noise (r.gyro's are in rad/s of input rate).
+Eigen::Vector3d GyroReadingNoise_dps(const ParameterLayout& layout, const BatchResult& r,
+                                     const Eigen::Vector3d& noise_rad_s) {
+  const int go = layout.gyro_offset();
+  Eigen::Vector3d dps;
+  for (int i = 0; i < 3; ++i) {
+    dps[i] = noise_rad_s[i] * std::abs(r.estimate.theta[go + kGKx + i]) * kRadToDeg;
+  }
+  return dps;
+}
+
+bool IsGyroParameter(const ParameterLayout& layout, const std::string& name) {
+  const int i = layout.IndexOf(name);
+  return i >= 0 && layout.is_gyro(i);
+}
+
+}  // namespace
 
 FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
   FitReport rep;
@@ -268,14 +290,9 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
   if (r.gyro.present) {
     // The gyro triad's part (SPEC section 10): its noise in the readings'
     // unit (deg/s: |gyro.K_i| times the rate noise), the increment residuals.
-    constexpr double kDeg = 180.0 / 3.14159265358979323846;
-    const int go = layout.gyro_offset();
-    Eigen::Vector3d est_dps, decl_dps;
-    for (int i = 0; i < 3; ++i) {
-      const double k = std::abs(r.estimate.theta[go + kGKx + i]);
-      est_dps[i] = r.gyro.noise_rad_s[i] * k * kDeg;
-      decl_dps[i] = r.gyro.noise_declared_rad_s[i] * k * kDeg;
-    }
+    constexpr double kDeg = kRadToDeg;
+    const Eigen::Vector3d est_dps = GyroReadingNoise_dps(layout, r, r.gyro.noise_rad_s);
+    const Eigen::Vector3d decl_dps = GyroReadingNoise_dps(layout, r, r.gyro.noise_declared_rad_s);
     out["gyro"] = {{"noise", {{"estimated_dps", vec(est_dps)},
                               {"declared_dps", vec(decl_dps)},
                               {"unit", "deg/s"},
@@ -311,6 +328,107 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
                    {"covariance", r.covariance_seconds}};
   out["settings"] = {{"epochs", r.epochs}};
   return out;
+}
+
+GyroVerdict MakeGyroVerdict(const ParameterLayout& layout, const BatchResult& r,
+                            const FitReport& rep, const ResidualReport& gyro_residuals) {
+  GyroVerdict g;
+  double p_min = 1.0;
+  int tested = 0;
+  for (const ChannelReport& ch : gyro_residuals.channels) {
+    if (!ch.tested) continue;
+    p_min = std::min(p_min, ch.whiteness.p_value);
+    ++tested;
+  }
+  g.whiteness_p_value = std::min(1.0, tested * p_min);
+  g.residual_white = g.whiteness_p_value >= 0.01;
+  g.pass = r.converged && g.residual_white;
+  auto gyro_only = [&](const auto& names) {
+    std::vector<std::string> out;
+    for (const std::string& s : names) {
+      if (IsGyroParameter(layout, s)) out.push_back(s);
+    }
+    return out;
+  };
+  g.held = gyro_only(r.held);
+  g.not_determined = gyro_only(r.consider);
+  g.not_separable = gyro_only(ParametersIn(rep.weak));
+  std::vector<PriorExcursion> beyond;
+  for (const PriorExcursion& e : rep.beyond_prior) {
+    if (IsGyroParameter(layout, e.name)) {
+      beyond.push_back(e);
+      g.beyond_prior.push_back(e.name);
+    }
+  }
+
+  std::ostringstream v;
+  char buf[320];
+  if (!r.converged) v << "the fit did NOT CONVERGE; ";
+  const ChannelReport* worst = nullptr;
+  for (const ChannelReport& ch : gyro_residuals.channels) {
+    if (ch.tested && (!worst || ch.whiteness.p_value < worst->whiteness.p_value)) worst = &ch;
+  }
+  if (g.residual_white) {
+    std::snprintf(buf, sizeof(buf), "gyro increment residuals white (Ljung-Box p %.2g)",
+                  g.whiteness_p_value);
+  } else {
+    std::snprintf(buf, sizeof(buf),
+                  "gyro increment residuals NOT WHITE (Ljung-Box p %.2g, worst %s, lag-1 "
+                  "autocorrelation %.2f)",
+                  g.whiteness_p_value, worst ? worst->name.c_str() : "-",
+                  worst ? worst->whiteness.rho1 : 0.0);
+  }
+  v << buf;
+  std::snprintf(buf, sizeof(buf), ", whitened RMS %.3f (1 expected)", r.gyro.whitened_rms);
+  v << buf;
+  const Eigen::Vector3d est = GyroReadingNoise_dps(layout, r, r.gyro.noise_rad_s);
+  const Eigen::Vector3d decl = GyroReadingNoise_dps(layout, r, r.gyro.noise_declared_rad_s);
+  std::snprintf(buf, sizeof(buf), "; rate noise estimated %.3g %.3g %.3g deg/s", est[0], est[1],
+                est[2]);
+  v << buf;
+  if (r.gyro.noise_auto) {
+    v << " (noise_dps auto)";
+  } else {
+    std::snprintf(buf, sizeof(buf), " (declared %.3g %.3g %.3g deg/s)", decl[0], decl[1], decl[2]);
+    v << buf;
+  }
+  // The intervals' spacing as the samples make it (the analysis's).
+  std::snprintf(buf, sizeof(buf), "; %d intervals of %.3g s", r.gyro.intervals,
+                gyro_residuals.dt_s > 0.0 ? gyro_residuals.dt_s : r.gyro.interval_s);
+  v << buf;
+  if (r.gyro.intervals_clipped > 0) {
+    v << ", " << r.gyro.intervals_clipped
+      << " LEFT OUT (a gyro sample at the range's limit: saturated)";
+  }
+  if (!g.beyond_prior.empty()) {
+    v << "; BEYOND 3 PRIOR SIGMA (value - nominal in prior sigma): " << DescribeExcursions(beyond);
+  }
+  auto list = [&](const char* what, const std::vector<std::string>& names) {
+    if (names.empty()) return;
+    v << "; " << what << ":";
+    for (const std::string& s : names) v << " " << s;
+  };
+  list("gyro parameters NOT DETERMINED by this run (kept at nominal, prior uncertainty carried)",
+       g.not_determined);
+  list("held at nominal", g.held);
+  if (g.not_separable.empty()) {
+    v << "; every estimated gyro parameter determined";
+  } else {
+    list("NOT SEPARABLE in this run", g.not_separable);
+  }
+  g.sentence = v.str();
+  return g;
+}
+
+nlohmann::json GyroVerdictJson(const GyroVerdict& v) {
+  return {{"pass", v.pass},
+          {"residual_white", v.residual_white},
+          {"whiteness_p_value", v.whiteness_p_value},
+          {"held", v.held},
+          {"not_determined", v.not_determined},
+          {"not_separable", v.not_separable},
+          {"beyond_prior", v.beyond_prior},
+          {"sentence", v.sentence}};
 }
 
 }  // namespace triadcal

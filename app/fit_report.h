@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "solvers/diagnosis/residual_analysis.h"
 #include "solvers/estimation/batch_solver.h"
 #include "solvers/estimation/separability.h"
 
@@ -39,6 +40,24 @@ struct FitReport {
   bool noise_consistent = true;
   bool pass = true;
 };
+
+// The gyro triad's own verdict (SPEC section 10), from its increment
+// residuals (gyro_residuals: AnalyzeGyroResiduals of the same fit): white by
+// the accelerometer's rule (Ljung-Box of each whitened component, Bonferroni
+// over the 3, white when p >= 0.01); pass = converged and white. The gyro's
+// parameters held, not determined (considered), not separable and beyond 3
+// prior sigma are named; the sentence says all of it with the rate noise in
+// the readings' unit (deg/s).
+struct GyroVerdict {
+  bool residual_white = true;
+  double whiteness_p_value = 1.0;  // smallest component p-value x 3 (capped at 1)
+  bool pass = true;
+  std::vector<std::string> held, not_determined, not_separable, beyond_prior;
+  std::string sentence;
+};
+GyroVerdict MakeGyroVerdict(const ParameterLayout& layout, const BatchResult& r,
+                            const FitReport& rep, const ResidualReport& gyro_residuals);
+nlohmann::json GyroVerdictJson(const GyroVerdict& v);
 
 // Exit status of a fit that did not converge, and of a failed --require
 // check (bad input exits 2, an internal error 3).

@@ -34,12 +34,12 @@ int BucketSize(std::size_t size, int max_points) {
 
 nlohmann::json ResidualPlotJson(const ResidualReport& r, int max_points) {
   nlohmann::json j;
-  j["what"] = "process residual of each interval as a mean acceleration in the triad frame";
-  j["unit"] = "mg";
+  j["what"] = r.series_what;
+  j["unit"] = r.series_unit;
   j["bench_frequencies_hz"] = {r.f1_hz, r.f2_hz};
-  std::vector<const ChannelReport*> accel;
+  std::vector<const ChannelReport*> accel;  // the channels in the series' unit
   for (const ChannelReport& c : r.channels) {
-    if (c.unit == "mg" && c.series.size() == r.t_s.size()) accel.push_back(&c);
+    if (c.unit == r.series_unit && c.series.size() == r.t_s.size()) accel.push_back(&c);
   }
   const std::size_t n = r.t_s.size();
   if (accel.empty() || n < 4) return j;
@@ -93,7 +93,7 @@ nlohmann::json ResidualPlotJson(const ResidualReport& r, int max_points) {
     f.push_back(fb == 1 ? s[0].freq_hz[k] : s[0].freq_hz[best]);
   }
   spec["freq_hz"] = Rounded(f, 6);
-  spec["unit"] = "mg^2 (periodogram |X_k|^2 / N)";
+  spec["unit"] = r.series_unit + "^2 (periodogram |X_k|^2 / N)";
   spec["decimation"] = fb == 1 ? "none" : "max of every " + std::to_string(fb) + " bins";
   nlohmann::json sp = nlohmann::json::array();
   for (std::size_t c = 0; c < accel.size(); ++c) {

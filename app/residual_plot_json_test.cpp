@@ -11,6 +11,8 @@ namespace {
 // A long residual: a sine at 0.1 Hz in x, one spike in y, noise-free z.
 ResidualReport LongResidual(std::size_t n, double dt) {
   ResidualReport r;
+  r.series_what = "process residual of each interval as a mean acceleration in the triad frame";
+  r.series_unit = "mg";
   r.dt_s = dt;
   r.f1_hz = 1.0 / 30.0;
   r.f2_hz = 1.0 / 12.0;

@@ -102,6 +102,55 @@ TEST_F(CliGyroInput, GyroColumnsWithoutAGyroBlockWarnOnce) {
   EXPECT_TRUE(std::filesystem::exists(Path("out.json")));
 }
 
+// The fit's OUT carries the gyro's own verdict, residual analysis and plot
+// (the HTML report's gyro section); the accelerometer's keys as before. A
+// gyro whose scale differs with the rate's sign (1 %, not in the model)
+// fails the verdict: its increment residuals are not white.
+TEST_F(CliGyroInput, FitOutCarriesTheGyrosVerdictResidualAndSpectrum) {
+  const testing_fixtures::CliResult r = Run(Fit("data: gyro.csv\ngyro: {}\n"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json out = nlohmann::json::parse(ReadFile(Path("out.json")));
+  EXPECT_EQ(out["residual_plot"]["unit"], "mg");
+  EXPECT_EQ(out["residual_plot"]["spectrum"]["unit"], "mg^2 (periodogram |X_k|^2 / N)");
+  EXPECT_EQ(out["residual_analysis"]["channels"].size(), 9u);
+  const nlohmann::json& g = out["gyro"];
+  const nlohmann::json& v = g["verdict"];
+  EXPECT_EQ(v["pass"], true) << v.dump();
+  EXPECT_EQ(v["residual_white"], true) << v.dump();
+  EXPECT_EQ(v["sentence"].get<std::string>().rfind("gyro increment residuals white", 0), 0u)
+      << v["sentence"];
+  const nlohmann::json& plot = g["residual_plot"];
+  EXPECT_EQ(plot["unit"], "arcsec");
+  EXPECT_EQ(plot["spectrum"]["unit"], "arcsec^2 (periodogram |X_k|^2 / N)");
+  ASSERT_EQ(plot["channels"].size(), 3u);
+  EXPECT_EQ(plot["channels"][0]["name"], "gyro increment residual inner");
+  EXPECT_EQ(plot["channels"][2]["values"].size(), plot["t_s"].size());
+  EXPECT_GT(plot["t_s"].size(), 100u);  // 20 s in intervals of 0.1 s
+  EXPECT_GT(plot["spectrum"]["freq_hz"].size(), 50u);
+  // The channels' RMS are those OUT gave before, per component.
+  EXPECT_NEAR(plot["channels"][1]["rms"].get<double>(),
+              g["residual_rms_arcsec"]["outer"].get<double>(), 1e-9);
+  const nlohmann::json& ra = g["residual_analysis"];
+  ASSERT_EQ(ra["channels"].size(), 6u);
+  EXPECT_EQ(ra["channels"][3]["channel"], "whitened gyro increment inner");
+  EXPECT_EQ(ra["channels"][3]["in_whiteness_test"], true);
+  EXPECT_NEAR(ra["channels"][3]["rms"].get<double>(), 1.0, 0.15);
+
+  RunData d = gyro_run_;
+  for (auto& ch : d.gyro_rad_s) {
+    for (double& w : ch) w += 0.01 * std::abs(w);
+  }
+  WriteRunCsv(d, Path("gyro.csv"), "");
+  const testing_fixtures::CliResult a = Run(Fit("data: gyro.csv\ngyro: {}\n"));
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  const nlohmann::json asym = nlohmann::json::parse(ReadFile(Path("out.json")));
+  const nlohmann::json& va = asym["gyro"]["verdict"];
+  EXPECT_EQ(va["pass"], false) << va.dump();
+  EXPECT_EQ(va["residual_white"], false) << va.dump();
+  EXPECT_NE(va["sentence"].get<std::string>().find("NOT WHITE"), std::string::npos)
+      << va["sentence"];
+}
+
 // A scenario with a gyro block: montecarlo and observability carry the
 // gyro's parameters (batch estimates them against their Cramer-Rao bound;
 // the filter has no gyro measurement and says it did not estimate them,

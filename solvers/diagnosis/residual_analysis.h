@@ -7,7 +7,9 @@
 // the trajectory) expressed as a mean acceleration in the triad frame,
 //   a_res = C_L2(mid)^T r_V / T / g        [mg]
 // (this is where a missing sensor or angle effect shows), and the whitened
-// process residuals in L (for whiteness against the declared noise).
+// process residuals in L (for whiteness against the declared noise). With a
+// gyro triad, the same analysis of its attitude increment residuals
+// (AnalyzeGyroResiduals).
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -40,6 +42,9 @@ struct ChannelReport {
 };
 
 struct ResidualReport {
+  // What the channels' series are (the plot's title) and their unit: the
+  // channels in this unit are plotted (residual_plot_json.h).
+  std::string series_what, series_unit;
   std::vector<ChannelReport> channels;
   double chi2_per_dof = 0.0;
   int degrees_of_freedom = 0;
@@ -55,6 +60,14 @@ struct ResidualReport {
 
 ResidualReport AnalyzeResiduals(const RunDescription& run, const RunData& data,
                                 const ParameterLayout& layout, const BatchResult& fit);
+
+// The gyro triad's increment residuals (gyro_term.h; fit.gyro), the same
+// analysis: channels "gyro increment residual inner|outer|normal" [arcsec]
+// with spectrum and correlations, and the innovations whitened [1], which
+// decide whiteness (Ljung-Box, no autocorrelation expected); chi2/dof the
+// whitened RMS squared. Empty (no channels) without a gyro.
+ResidualReport AnalyzeGyroResiduals(const RunDescription& run, const RunData& data,
+                                    const ParameterLayout& layout, const BatchResult& fit);
 
 nlohmann::json ResidualReportJson(const ResidualReport& r);
 

@@ -521,6 +521,7 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
     res.gyro.present = true;
     res.gyro.noise_rad_s = g.noise_rad_s;
     res.gyro.noise_declared_rad_s = run.gyro ? run.gyro->noise_rad_s : p.gyro_noise_rad_s;
+    res.gyro.noise_auto = run.gyro && run.gyro->noise_auto;
     res.gyro.degrees_of_freedom = g.degrees_of_freedom;
     res.gyro.neg_log_likelihood = g.neg_log_l;
     const GyroPass& gp = *pt.gyro_passes[0];
@@ -530,6 +531,9 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
       if (!gp.valid[k]) continue;
       ss += gp.r[k].cwiseAbs2();
       ++used;
+      res.gyro.mid_samples.push_back((p.gyro_epochs[k] + p.gyro_epochs[k + 1]) / 2);
+      res.gyro.residual_rad.push_back(gp.r[k]);
+      res.gyro.whitened.push_back(g.whitened[k]);
     }
     res.gyro.residual_rms_rad = (ss / std::max<std::size_t>(1, used)).cwiseSqrt();
     res.gyro.intervals = static_cast<int>(gp.r.size());

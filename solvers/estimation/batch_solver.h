@@ -276,6 +276,13 @@ struct BatchResult {
     int intervals = 0;          // of interval_s
     double interval_s = 0.0;    // min(epoch, kGyroEpoch_s)
     int intervals_clipped = 0;  // left out: a gyro sample at the range's limit
+    bool noise_auto = false;    // run.yaml gyro.noise_dps: auto (declared is the start)
+    // Per interval used (the clipped ones left out), in time order: the
+    // sample index of its midpoint, its increment residual (inner, outer,
+    // normal) [rad] and its innovation whitened (unit white when the model
+    // holds), for the residual's analysis and plot.
+    std::vector<std::size_t> mid_samples;
+    std::vector<Eigen::Vector3d> residual_rad, whitened;
   } gyro;
 };
 
