@@ -4,6 +4,8 @@
 // pixels of each canvas and records the result in #triadcal-status). The
 // failure cases prove the check can fail: a console error, a script error and
 // a blank chart (a residual series without values) each make it fail.
+// A fit with a gyro triad shows the gyro's own section (verdict, parameters
+// with units, residual and spectrum); without one, none.
 // Skipped when chromium is absent (TRIADCAL_CHROMIUM names another browser
 // binary; set empty, it skips too). A screenshot is kept in
 // build/test-artifacts/report.png.
@@ -68,7 +70,28 @@ struct BrowserResult {
   std::string status;                // data-status of #triadcal-status
   nlohmann::json result;             // its data-result: {charts, blank, errors}
   std::vector<std::string> console;  // console lines chromium logged
+  std::string dom;                   // the page as drawn (--dump-dom)
 };
+
+// The drawn report: the <main> element (without the embedded OUT data and
+// the inlined scripts, which hold every word).
+std::string MainOf(const std::string& dom) {
+  const std::size_t a = dom.find("<main id=\"report\">");
+  const std::size_t b = dom.find("</main>", a);
+  return a == std::string::npos || b == std::string::npos ? "" : dom.substr(a, b - a);
+}
+
+// The table row whose first cell is `first` ("" when none).
+std::string RowOf(const std::string& html, const std::string& first) {
+  const std::size_t a = html.find("<tr><td>" + first + "</td>");
+  return a == std::string::npos ? "" : html.substr(a, html.find("</tr>", a) - a);
+}
+
+std::size_t Count(const std::string& s, const std::string& what) {
+  std::size_t n = 0;
+  for (std::size_t p = s.find(what); p != std::string::npos; p = s.find(what, p + 1)) ++n;
+  return n;
+}
 
 class ReportBrowserTest : public testing_fixtures::TempDirTest {
  protected:
@@ -103,6 +126,7 @@ class ReportBrowserTest : public testing_fixtures::TempDirTest {
                                Path("dom" + tag + ".html") + " 2> " + Path("chrome" + tag + ".err"))
                                   .c_str());
     const std::string dom = Slurp(Path("dom" + tag + ".html"));
+    r.dom = dom;
     const std::size_t div = dom.find("<div id=\"triadcal-status\"");
     if (div != std::string::npos) {
       const std::string tagtext = dom.substr(div, dom.find('>', div) - div);
@@ -123,10 +147,17 @@ class ReportBrowserTest : public testing_fixtures::TempDirTest {
     return r;
   }
 
-  // A fit of a small simulated run with its report.
-  void MakeFitReport(const std::string& name, int seed) {
+  // A fit of a small simulated run with its report; with_gyro, the run has
+  // a gyro triad (SPEC section 10).
+  void MakeFitReport(const std::string& name, int seed, bool with_gyro = false) {
     std::string scen = kScenario;
     scen.replace(scen.find("seed: 7"), 7, "seed: " + std::to_string(seed));
+    if (with_gyro) {
+      scen.replace(scen.find("dz2: 4}"), 7,
+                   "dz2: 4, gyro.Kx: 1.004, gyro.W0y: -0.5, gyro.Gxy: 0.05}");
+      scen.replace(scen.find("angle_arcsec: 15}"), 17, "angle_arcsec: 15, gyro_dps: 0.05}");
+      scen.replace(scen.find("  constraints:"), 0, "  gyro: {noise_dps: 0.05}\n");
+    }
     WriteText(name + ".yaml", scen);
     ASSERT_EQ(Run("simulate " + Path(name + ".yaml") + " -o " + Path(name)), 0) << Err();
     ASSERT_EQ(Run("fit " + Path(name + "/run.yaml") + " -o " + Path(name + ".json") +
@@ -161,6 +192,9 @@ TEST_F(ReportBrowserTest, FitReportLoadsWithEveryChartDrawnAndNoConsoleMessage) 
   EXPECT_TRUE(r.result["blank"].empty()) << r.result.dump();
   EXPECT_TRUE(r.result["errors"].empty()) << r.result.dump();
   EXPECT_TRUE(r.console.empty()) << Joined(r.console);
+  // No gyro, no gyro section.
+  ASSERT_FALSE(MainOf(r.dom).empty());
+  EXPECT_EQ(MainOf(r.dom).find("Gyro"), std::string::npos);
   // `fit --report` carries the provenance the OUT has.
   const nlohmann::json fit = nlohmann::json::parse(Slurp(Path("fit.json")));
   EXPECT_NE(Slurp(Path("fit.html")).find(fit["provenance"]["version"].get<std::string>()),
@@ -270,6 +304,53 @@ TEST_F(ReportBrowserTest, WhatAPersonFilesIsOnThePage) {
   EXPECT_NE(dom.find("Units of "), std::string::npos);
   EXPECT_NE(dom.find("MISSING"), std::string::npos);
   EXPECT_NE(dom.find("2 units: 1 pass, 0 fail, 1 error"), std::string::npos);
+}
+
+// A fit with a gyro: its own section with the verdict sentence OUT gives,
+// each gyro parameter once (there, not in the accelerometer's table) with
+// the unit OUT gives, the gyro's residual and spectrum drawn; no word of a
+// broken page.
+TEST_F(ReportBrowserTest, GyroFitShowsItsOwnVerdictParametersAndResidual) {
+  if (chromium_.empty()) GTEST_SKIP() << "chromium is not installed (setup.sh installs it)";
+  MakeFitReport("gyro", 7, /*with_gyro=*/true);
+  const nlohmann::json fit = nlohmann::json::parse(Slurp(Path("gyro.json")));
+  ASSERT_TRUE(fit.contains("gyro")) << "the fit has no gyro block";
+  const nlohmann::json& gyro = fit["gyro"];
+  ASSERT_TRUE(gyro["verdict"]["sentence"].is_string()) << gyro.dump();
+  ASSERT_FALSE(gyro["residual_plot"]["channels"].empty());
+  EXPECT_EQ(gyro["residual_plot"]["unit"], "arcsec");
+
+  const BrowserResult r = Load(Path("gyro.html"));
+  EXPECT_EQ(r.status, "ok") << r.result.dump();
+  EXPECT_TRUE(r.console.empty()) << Joined(r.console);
+  // The accelerometer's residual and spectrum, and the gyro's.
+  EXPECT_EQ(r.result["charts"].get<int>(), 4) << r.result.dump();
+  const std::string page = MainOf(r.dom);
+  ASSERT_FALSE(page.empty());
+  for (const char* bad : {"[object Object]", "undefined", "NaN"}) {
+    EXPECT_EQ(page.find(bad), std::string::npos) << bad;
+  }
+  EXPECT_NE(page.find("Gyro triad"), std::string::npos);
+  EXPECT_NE(page.find(gyro["verdict"]["sentence"].get<std::string>()), std::string::npos)
+      << gyro["verdict"]["sentence"];
+  EXPECT_NE(page.find("Residual time series (gyro)"), std::string::npos);
+  EXPECT_NE(page.find("Residual spectrum (gyro)"), std::string::npos);
+  // SPEC section 10's units, as OUT gives them, on the parameter's row.
+  for (const auto& [name, unit] : {std::pair<const char*, const char*>{"gyro.Kx", "1"},
+                                   {"gyro.W0y", "deg/s"},
+                                   {"gyro.beta_z", "arcmin"},
+                                   {"gyro.Gxy", "(deg/s)/g"}}) {
+    EXPECT_EQ(fit["parameters"][name]["unit"], unit) << name;
+    EXPECT_EQ(Count(page, "<tr><td>" + std::string(name) + "</td>"), 1u) << name;
+    EXPECT_NE(RowOf(page, name).find("<td>" + std::string(unit) + "</td>"), std::string::npos)
+        << RowOf(page, name);
+  }
+  // The gyro's noise with its unit.
+  EXPECT_NE(RowOf(page, "gx").find("<td>" + gyro["noise"]["unit"].get<std::string>() + "</td>"),
+            std::string::npos)
+      << RowOf(page, "gx");
+  // The accelerometer's table is still there, without the gyro's rows.
+  EXPECT_NE(RowOf(page, "Kx").find("<td>"), std::string::npos);
 }
 
 // The check fails when it should: a console error, a script error, or a

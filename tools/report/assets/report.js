@@ -191,10 +191,25 @@
   }
 
   // ---------------------------------------------------------- shared parts
-  // SPEC section 3 order; effect parameters ("effect.param") after, as given.
+  // SPEC section 3 order, then the gyro's (section 10); effect parameters
+  // ("effect.param") after, as given.
+  var GYRO = 'gyro.';
   var ORDER = ['Kx', 'Ky', 'Kz', 'W0x', 'W0y', 'W0z', 'alpha_x', 'alpha_y', 'beta_x', 'beta_z',
                'gamma_y', 'gamma_z', 'Kxx', 'Kxy', 'Kxz', 'Kyx', 'Kyy', 'Kyz', 'Kzx', 'Kzy', 'Kzz',
-               'dpsi', 'dtheta_c', 'dlambda2', 'dx2', 'dy2', 'dz2'];
+               'dpsi', 'dtheta_c', 'dlambda2', 'dx2', 'dy2', 'dz2'].concat(
+      ['Kx', 'Ky', 'Kz', 'W0x', 'W0y', 'W0z', 'alpha_x', 'alpha_y', 'beta_x', 'beta_z', 'gamma_y',
+       'gamma_z', 'Gxx', 'Gxy', 'Gxz', 'Gyx', 'Gyy', 'Gyz', 'Gzx', 'Gzy', 'Gzz'].map(function (n) {
+        return GYRO + n;
+      }));
+  function isGyro(name) { return name.indexOf(GYRO) === 0; }
+  // The parameters whose name passes keep(name), or null when none does.
+  function pick(params, keep) {
+    var o = null;
+    Object.keys(params || {}).forEach(function (n) {
+      if (keep(n)) { o = o || {}; o[n] = params[n]; }
+    });
+    return o;
+  }
   function ordered(names) {
     var known = ORDER.filter(function (n) { return names.indexOf(n) >= 0; });
     return known.concat(names.filter(function (n) { return ORDER.indexOf(n) < 0; }));
@@ -240,9 +255,10 @@
     if (isNum(f1) && isNum(f2) && f1 > 0 && f2 > 0) m.push({x: f1 + f2, label: 'f1+f2'});
     return m;
   }
-  function residualCharts(parent, rp, label) {
+  // heading: the section's title (default "Residual" and the label).
+  function residualCharts(parent, rp, label, heading) {
     if (!rp || !rp.t_s || !rp.channels) return;
-    var s = section(parent, 'Residual' + (label ? ' ' + label : ''),
+    var s = section(parent, heading || 'Residual' + (label ? ' ' + label : ''),
                     rp.what + ' [' + rp.unit + ']; decimation: ' + rp.decimation + '.');
     chart(s, {title: 'Residual time series' + (label ? ' (' + label + ')' : ''),
               xLabel: 't [s]', yLabel: rp.unit, x: rp.t_s,
@@ -253,7 +269,8 @@
     if (sp && sp.freq_hz && sp.freq_hz.length > 1) {
       chart(s, {title: 'Residual spectrum' + (label ? ' (' + label + ')' : '') +
                        ', bench frequencies marked',
-                xLabel: 'frequency [Hz]', yLabel: 'power [mg\u00b2]', xLog: true, yLog: true,
+                xLabel: 'frequency [Hz]', yLabel: 'power [' + rp.unit + '\u00b2]',
+                xLog: true, yLog: true,
                 x: sp.freq_hz,
                 marks: marksFor(rp.bench_frequencies_hz),
                 series: sp.channels.map(function (c) {
@@ -266,14 +283,16 @@
   }
   // noiseConsistent: the verdict's noise_consistent (false: the residual
   // holds another noise than the declared one, whatever its structure).
-  function residualStats(parent, ra, title, noiseConsistent) {
+  // cleanNote: what to say when neither (default: consistent with the
+  // declared noise).
+  function residualStats(parent, ra, title, noiseConsistent, cleanNote) {
     if (!ra || !ra.channels) return;
     var s = section(parent, title || 'Residual statistics',
                     ra.structure ? 'STRUCTURE: ' + ra.structure_summary :
                     noiseConsistent === false ?
                         'No structure found in the residual, but its noise is NOT the declared ' +
                         'one (the verdict gives both figures).' :
-                        'The residual is consistent with the declared noise.');
+                        cleanNote || 'The residual is consistent with the declared noise.');
     s.appendChild(table(['channel', 'RMS', 'unit', 'Ljung-Box p', 'lag-1 autocorr.', 'strongest peak'],
         ra.channels.map(function (c) {
           var pk = c.spectrum_peaks && c.spectrum_peaks.length ?
@@ -305,6 +324,8 @@
         if (out.verdict && out.verdict.noise_consistent === false) {
           r.push('the reading noise in the residuals is not the declared one');
         }
+        var gv = out.gyro && out.gyro.verdict;
+        if (gv && gv.pass === false) r.push(gv.sentence);  // it names the gyro
         return {state: r.length ? 'fail' : 'pass', reasons: r};
       case 'batch':
         if (out.fail) r.push(out.fail + ' unit(s) outside their limits');
@@ -378,10 +399,37 @@
 
   // ------------------------------------------------------ per command
   function renderFit(p, out) {
-    paramTable(p, out.parameters, fitFlags(out), null, out.sigma_method);
+    var gyro = out.gyro && out.gyro.verdict ? out.gyro : null;
+    // With the gyro, its parameters are shown in its own section.
+    var accel = gyro ? pick(out.parameters, function (n) { return !isGyro(n); }) : out.parameters;
+    paramTable(p, accel, fitFlags(out), null, out.sigma_method);
     residualCharts(p, out.residual_plot);
     residualStats(p, out.residual_analysis, null, (out.verdict || {}).noise_consistent);
+    if (gyro) renderGyro(p, out, gyro);
     correlationSection(p, out.correlation);
+  }
+  // The gyro triad (SPEC section 10): its verdict, parameters, rate noise,
+  // and its increment residual with spectrum and statistics.
+  function renderGyro(p, out, gyro) {
+    var v = gyro.verdict;
+    var state = v.pass ? 'pass' : 'fail';
+    var s = section(p, 'Gyro triad');
+    s.appendChild(el('p', {cls: 'verdict-text'},
+                      [badge(state, v.pass ? 'PASS' : 'CHECK'), ' ' + v.sentence]));
+    var n = gyro.noise;
+    if (n && n.estimated_dps) {
+      var axes = ['x', 'y', 'z'];
+      s.appendChild(table(['channel', 'rate noise estimated', 'declared', 'unit'],
+          axes.map(function (a, i) {
+            return ['g' + a, g(n.estimated_dps[i], 3),
+                    n.declared_dps ? g(n.declared_dps[i], 3) : '-', n.unit];
+          })));
+    }
+    paramTable(p, pick(out.parameters, isGyro), fitFlags(out), 'Gyro parameters',
+               out.sigma_method);
+    residualCharts(p, gyro.residual_plot, 'gyro', 'Gyro residual');
+    residualStats(p, gyro.residual_analysis, 'Gyro residual statistics', undefined,
+                  'No structure found in the gyro residual.');
   }
   function renderDiagnose(p, out) {
     var s = section(p, 'Candidate effects (round 1)', out.selection_rule);
