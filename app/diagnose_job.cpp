@@ -11,7 +11,7 @@
 namespace triadcal {
 namespace {
 
-nlohmann::json StateJson(const ParameterLayout& layout, const BatchResult& r,
+nlohmann::json StateJson(const LoadedRun& run, const ParameterLayout& layout, const BatchResult& r,
                          const ResidualReport& rr, const std::map<std::string, double>* truth) {
   const FitReport rep = MakeFitReport(layout, r);
   nlohmann::json j;
@@ -32,6 +32,10 @@ nlohmann::json StateJson(const ParameterLayout& layout, const BatchResult& r,
   }
   j["residual_rms"] = rms;
   j["whiteness_p"] = white;
+  if (r.gyro.present) {
+    j["gyro"] = GyroJson(layout, r);
+    AddGyroAnalysis(run.description, run.data, layout, r, rep, &j["gyro"]);
+  }
   if (truth) {
     nlohmann::json err = nlohmann::json::object();
     double sum2 = 0.0;
@@ -92,7 +96,8 @@ nlohmann::json CouldHideJson(const std::vector<HideCase>& could_hide) {
   return hide;
 }
 
-nlohmann::json DiagnoseJson(const std::string& run_yaml, double alpha, const DiagnosisResult& d,
+nlohmann::json DiagnoseJson(const std::string& run_yaml, const LoadedRun& run, double alpha,
+                            const DiagnosisResult& d,
                             const std::map<std::string, double>* tp) {
   nlohmann::json out;
   out["command"] = "diagnose";
@@ -155,8 +160,8 @@ nlohmann::json DiagnoseJson(const std::string& run_yaml, double alpha, const Dia
       "p-value (against the refit's reported covariance) are both < alpha / (candidates in "
       "the round), alpha = " +
       std::to_string(alpha);
-  out["before"] = StateJson(d.before_layout, d.before, d.before_residuals, tp);
-  out["after"] = StateJson(d.after_layout, d.after, d.after_residuals, tp);
+  out["before"] = StateJson(run, d.before_layout, d.before, d.before_residuals, tp);
+  out["after"] = StateJson(run, d.after_layout, d.after, d.after_residuals, tp);
   out["parameters"] = out["after"]["parameters"];
   out["score_rule"] =
       "every candidate is scored from the current fit (score test); refitted for the "
@@ -195,7 +200,7 @@ DiagnoseOutcome DiagnoseRun(const DiagnoseSettings& s, const std::string& run_ya
   opt.fraction = session.fraction;
   DiagnoseOutcome out;
   out.result = Diagnose(run.description, run.data, opt);
-  out.json = DiagnoseJson(run_yaml, s.alpha, out.result, truth);
+  out.json = DiagnoseJson(run_yaml, run, s.alpha, out.result, truth);
   return out;
 }
 

@@ -13,9 +13,9 @@
 
 namespace triadcal {
 
-// OUT.json of `diagnose`; `truth` (file units by parameter name) may be null.
-nlohmann::json DiagnoseJson(const std::string& run_yaml, double alpha, const DiagnosisResult& d,
-                            const std::map<std::string, double>* truth);
+// OUT.json of `diagnose` on `run`; `truth` (file units by parameter name) may be null.
+nlohmann::json DiagnoseJson(const std::string& run_yaml, const LoadedRun& run, double alpha,
+                            const DiagnosisResult& d, const std::map<std::string, double>* truth);
 
 // The "could_hide" array of OUT (docs/file-formats.md), also written by
 // `observability --could-hide`.

@@ -157,10 +157,7 @@ FitOutcome FitRun(const FitSettings& a, const std::string& run_yaml, const Loade
   if (f.result.gyro.present) {
     // The gyro's own: its verdict, and the same analysis and plot of its
     // increment residuals.
-    const ResidualReport gr = AnalyzeGyroResiduals(run.description, run.data, f.layout, f.result);
-    f.json["gyro"]["verdict"] = GyroVerdictJson(MakeGyroVerdict(f.layout, f.result, f.report, gr));
-    f.json["gyro"]["residual_analysis"] = ResidualReportJson(gr);
-    f.json["gyro"]["residual_plot"] = ResidualPlotJson(gr);
+    AddGyroAnalysis(run.description, run.data, f.layout, f.result, f.report, &f.json["gyro"]);
   }
   return f;
 }

@@ -8,6 +8,7 @@
 #include "core/io/file_util.h"
 #include "solvers/estimation/observability.h"
 #include "app/estimate_json.h"
+#include "app/residual_plot_json.h"
 
 namespace triadcal {
 namespace {
@@ -199,6 +200,38 @@ void AddConsiderJson(const ParameterLayout& layout, const BatchResult& r, nlohma
   (*out)["consider"] = consider;
 }
 
+nlohmann::json GyroJson(const ParameterLayout& layout, const BatchResult& r) {
+  // The gyro triad's part (SPEC section 10): its noise in the readings'
+  // unit (deg/s: |gyro.K_i| times the rate noise), the increment residuals.
+  constexpr double kDeg = kRadToDeg;
+  auto vec = [](const Eigen::Vector3d& v) { return std::vector<double>{v[0], v[1], v[2]}; };
+  const Eigen::Vector3d est_dps = GyroReadingNoise_dps(layout, r, r.gyro.noise_rad_s);
+  const Eigen::Vector3d decl_dps = GyroReadingNoise_dps(layout, r, r.gyro.noise_declared_rad_s);
+  return {{"noise", {{"estimated_dps", vec(est_dps)},
+                     {"declared_dps", vec(decl_dps)},
+                     {"unit", "deg/s"},
+                     {"source", "estimated"}}},
+          {"residual_rms_arcsec",
+           {{"inner", r.gyro.residual_rms_rad[0] * kDeg * 3600.0},
+            {"outer", r.gyro.residual_rms_rad[1] * kDeg * 3600.0},
+            {"normal", r.gyro.residual_rms_rad[2] * kDeg * 3600.0}}},
+          {"residual", "attitude increments between epochs: gyro integrated "
+                       "against the angle sensors (outer-axis frame)"},
+          {"whitened_rms", r.gyro.whitened_rms},
+          {"intervals", r.gyro.intervals},
+          {"interval_s", r.gyro.interval_s},
+          {"intervals_left_out_clipped", r.gyro.intervals_clipped},
+          {"degrees_of_freedom", r.gyro.degrees_of_freedom}};
+}
+
+void AddGyroAnalysis(const RunDescription& run, const RunData& data, const ParameterLayout& layout,
+                     const BatchResult& r, const FitReport& rep, nlohmann::json* gyro) {
+  const ResidualReport gr = AnalyzeGyroResiduals(run, data, layout, r);
+  (*gyro)["verdict"] = GyroVerdictJson(MakeGyroVerdict(layout, r, rep, gr));
+  (*gyro)["residual_analysis"] = ResidualReportJson(gr);
+  (*gyro)["residual_plot"] = ResidualPlotJson(gr);
+}
+
 nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, const FitReport& rep,
                        bool correlations) {
   nlohmann::json out;
@@ -287,28 +320,7 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
                   {"source", r.noise_source},
                   {"residual_lag1", std::vector<double>(r.noise_check.lag1.data(),
                                                         r.noise_check.lag1.data() + 6)}};
-  if (r.gyro.present) {
-    // The gyro triad's part (SPEC section 10): its noise in the readings'
-    // unit (deg/s: |gyro.K_i| times the rate noise), the increment residuals.
-    constexpr double kDeg = kRadToDeg;
-    const Eigen::Vector3d est_dps = GyroReadingNoise_dps(layout, r, r.gyro.noise_rad_s);
-    const Eigen::Vector3d decl_dps = GyroReadingNoise_dps(layout, r, r.gyro.noise_declared_rad_s);
-    out["gyro"] = {{"noise", {{"estimated_dps", vec(est_dps)},
-                              {"declared_dps", vec(decl_dps)},
-                              {"unit", "deg/s"},
-                              {"source", "estimated"}}},
-                   {"residual_rms_arcsec",
-                    {{"inner", r.gyro.residual_rms_rad[0] * kDeg * 3600.0},
-                     {"outer", r.gyro.residual_rms_rad[1] * kDeg * 3600.0},
-                     {"normal", r.gyro.residual_rms_rad[2] * kDeg * 3600.0}}},
-                   {"residual", "attitude increments between epochs: gyro integrated "
-                                "against the angle sensors (outer-axis frame)"},
-                   {"whitened_rms", r.gyro.whitened_rms},
-                   {"intervals", r.gyro.intervals},
-                   {"interval_s", r.gyro.interval_s},
-                   {"intervals_left_out_clipped", r.gyro.intervals_clipped},
-                   {"degrees_of_freedom", r.gyro.degrees_of_freedom}};
-  }
+  if (r.gyro.present) out["gyro"] = GyroJson(layout, r);
   out["final_cost"] = r.final_cost;
   out["residual_count"] = r.residual_count;
   out["iterations"] = {{"steps", r.iterations}, {"passes", r.passes}};

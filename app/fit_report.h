@@ -59,6 +59,14 @@ GyroVerdict MakeGyroVerdict(const ParameterLayout& layout, const BatchResult& r,
                             const FitReport& rep, const ResidualReport& gyro_residuals);
 nlohmann::json GyroVerdictJson(const GyroVerdict& v);
 
+// The gyro's part of a fit's OUT (r.gyro.present): its noise in deg/s, the
+// increment residuals' RMS, intervals and degrees of freedom; and, added to
+// it from the run, its verdict, residual analysis and plot (what `fit` and
+// each state of `diagnose` write under "gyro").
+nlohmann::json GyroJson(const ParameterLayout& layout, const BatchResult& r);
+void AddGyroAnalysis(const RunDescription& run, const RunData& data, const ParameterLayout& layout,
+                     const BatchResult& r, const FitReport& rep, nlohmann::json* gyro);
+
 // Exit status of a fit that did not converge, and of a failed --require
 // check (bad input exits 2, an internal error 3).
 constexpr int kExitNotConverged = 4;

@@ -422,7 +422,10 @@ void Loop::FitDeclaredModel() {
   Say("fitting the declared model");
   // Units named for the readings (mV/g, counts/g, mg/g): every layout below
   // is made from this one.
-  res_.before_layout = ParameterLayout({}, /*gyro=*/false, ReadingsUnit(run_));
+  // The gyro block with them when the run has a gyro (SPEC section 10): every
+  // fit of the loop estimates it beside the accelerometer's parameters.
+  res_.before_layout =
+      ParameterLayout({}, run_.gyro.has_value() && data_.has_gyro(), ReadingsUnit(run_));
   res_.before = SolveBatch(run_, data_, res_.before_layout, fit_opt_);
   res_.before_residuals = AnalyzeResiduals(run_, data_, res_.before_layout, res_.before);
   layout_ = res_.before_layout;

@@ -148,9 +148,14 @@ EffectInformation AnalyseCandidates(const RunDescription& run, const RunData& da
   // The fit's held and considered parameters are not base parameters of the
   // tests below (the tests hold them), only of the check that an effect does
   // not ride on them (LooseConditional): free here, under their priors.
+  // (The gyro's parameters are not in these layouts: the tests are on the
+  // accelerometer's part, which they do not enter.)
   std::vector<int> held;
-  for (const std::string& h : fit.held) held.push_back(full.IndexOf(h));
-  for (const std::string& h : fit.consider) held.push_back(full.IndexOf(h));
+  for (const std::vector<std::string>* names : {&fit.held, &fit.consider}) {
+    for (const std::string& h : *names) {
+      if (full.IndexOf(h) >= 0) held.push_back(full.IndexOf(h));
+    }
+  }
   std::sort(held.begin(), held.end());
   const int nf = full.size();
   // Every parameter free: information and gradient of the data, the priors

@@ -274,7 +274,7 @@ struct BatchResult {
     int degrees_of_freedom = 0;
     double neg_log_likelihood = 0.0;
     int intervals = 0;          // of interval_s
-    double interval_s = 0.0;    // min(epoch, kGyroEpoch_s)
+    double interval_s = 0.0;    // their mean length (about min(epoch, kGyroEpoch_s))
     int intervals_clipped = 0;  // left out: a gyro sample at the range's limit
     bool noise_auto = false;    // run.yaml gyro.noise_dps: auto (declared is the start)
     // Per interval used (the clipped ones left out), in time order: the
