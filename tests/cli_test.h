@@ -9,6 +9,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,15 @@ struct CliResult {
   int exit_code = -1;
   std::string err;
 };
+
+// An OUT as a test compares it: through its text (as written), without
+// what changes from run to run (the provenance, the time taken).
+inline nlohmann::json Comparable(const nlohmann::json& out) {
+  nlohmann::json j = nlohmann::json::parse(out.dump());
+  j.erase("provenance");
+  j.erase("time_s");
+  return j;
+}
 
 class CliTest : public TempDirTest {
  protected:
@@ -44,6 +54,11 @@ class CliTest : public TempDirTest {
     r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     r.err = ReadFile(err);
     return r;
+  }
+
+  // The OUT a command wrote into this test's folder, Comparable.
+  nlohmann::json Out(const std::string& name) const {
+    return Comparable(nlohmann::json::parse(ReadFile(Path(name))));
   }
 
   // `triadcal ARGS` must fail with exit 2 and exactly "triadcal: error: WHAT\n",

@@ -24,7 +24,7 @@
 #include "core/model/effects.h"
 #include "core/model/gyro_model.h"
 #include "core/model/units.h"
-#include "tools/report/calibration_export.h"
+#include "app/calibration_export.h"
 #include "tests/command_runner.h"
 #include "tests/temp_dir_test.h"
 

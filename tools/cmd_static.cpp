@@ -11,15 +11,13 @@
 #include <set>
 #include <sstream>
 
+#include "app/output_guard.h"
+#include "app/static_job.h"
 #include "core/io/column_mapping.h"
 #include "core/model/errors.h"
 #include "core/model/units.h"
-#include "solvers/static/static_gyro.h"
-#include "solvers/static/static_method.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
-#include "app/output_guard.h"
-#include "app/estimate_json.h"
 #include "tools/report/result_plausibility.h"
 #include "tools/report/value_format.h"
 
@@ -27,172 +25,10 @@ namespace triadcal {
 namespace {
 
 struct StaticArgs {
-  std::string run_yaml, out_json, report_html, reference = "auto", fix;
-  double placement_sigma_deg = 0.0;
-  StaticOptions options;
+  std::string run_yaml, out_json, report_html, fix;
+  std::string reference = StaticReferenceName(StaticSettings().reference);
+  StaticSettings settings;  // the numbers, filled by CLI11 directly
 };
-
-nlohmann::json Vec(const Eigen::Vector3d& v) { return {v[0], v[1], v[2]}; }
-
-nlohmann::json StillJson(const StaticResult& r, const StillOptions& o) {
-  nlohmann::json j;
-  const bool rates = r.still.test == StillTest::kAngleRates;
-  j["test"] = rates ? "angle rates" : "reading variance";
-  j["threshold"] = r.still.threshold;
-  j["threshold_unit"] = rates ? "deg/s" : "mV (moving standard deviation)";
-  if (!rates) j["window_samples"] = r.still.window_samples;
-  j["count"] = r.still.intervals.size();
-  nlohmann::json d = nlohmann::json::array();
-  double total = 0.0;
-  for (const StillInterval& iv : r.still.intervals) {
-    d.push_back(iv.duration_s());
-    total += iv.duration_s();
-  }
-  j["durations_s"] = d;
-  j["total_s"] = total;
-  j["dropped_short"] = r.still.dropped_short;
-  j["options"] = {{"min_still_s", o.min_still_s},   {"edge_s", o.edge_s},
-                  {"merge_gap_s", o.merge_gap_s},   {"window_s", o.window_s},
-                  {"noise_factor", o.noise_factor}, {"still_rate_deg_s", o.rate_threshold_deg_s}};
-  return j;
-}
-
-nlohmann::json PositionsJson(const StaticResult& r) {
-  nlohmann::json out = nlohmann::json::array();
-  for (const StaticPosition& p : r.positions) {
-    nlohmann::json j;
-    j["name"] = p.name;
-    j["samples"] = p.samples;
-    j["duration_s"] = p.duration_s;
-    j["t_begin_s"] = p.intervals.front().t_begin_s;
-    j["t_end_s"] = p.intervals.back().t_end_s;
-    j["intervals"] = p.intervals.size();
-    j["mean_mV"] = Vec(p.mean_mV);
-    j["std_mV"] = Vec(p.std_mV);
-    j["W_g"] = Vec(p.W_g);
-    j["norm_residual_mg"] = p.norm_residual_mg;
-    if (r.reference == StaticReference::kAngles) {
-      j["lambda_deg"] = {p.lambda_rad[0] / kDegToRad, p.lambda_rad[1] / kDegToRad};
-    }
-    if (r.reference == StaticReference::kLabels) j["up"] = Vec(p.up);
-    if (r.reference != StaticReference::kNone) {
-      j["predicted_mV"] = Vec(p.predicted_mV);
-      j["residual_mV"] = Vec(p.residual_mV);
-      j["residual_mg"] = Vec(p.residual_mg);
-    }
-    out.push_back(j);
-  }
-  return out;
-}
-
-nlohmann::json StaticJson(const StaticArgs& a, const StaticResult& r, std::size_t samples) {
-  const ParameterLayout& layout = r.layout;
-  std::set<std::string> not_estimable(r.not_separable.begin(), r.not_separable.end());
-  for (const HeldParameter& h : r.held) not_estimable.insert(h.name);
-  nlohmann::json params = ParametersJson(layout, r.theta, r.cov, not_estimable);
-  const double scatter = r.dof >= 0.5 ? std::sqrt(r.chi2_per_dof) : 0.0;
-  for (int i = 0; i < layout.size(); ++i) {
-    const ParameterInfo& info = layout.info(i);
-    nlohmann::json& p = params[info.name];
-    const double declared = std::sqrt(std::max(0.0, r.cov_declared(i, i))) / info.si_per_unit;
-    p["sigma_declared"] = declared;
-    if (r.dof >= 0.5) p["sigma_scatter"] = declared * scatter;
-    for (const HeldParameter& h : r.held) {
-      if (h.name == info.name) p["held"] = h.reason;
-    }
-  }
-  nlohmann::json out;
-  out["command"] = "static";
-  out["run"] = a.run_yaml;
-  out["samples"] = samples;
-  out["reference"] = ReferenceName(r.reference);
-  out["model"] =
-      "readings_i = K_i (sum_j M_ij W_j + W_i sum_j K_ij W_j) + W0_i (paper eq. 1), W in g in the "
-      "triad frame; at rest W is gravity: from the bench angles (C_L2^T e_up), from the "
-      "position label, or only |W| = 1 (gravity-norm fit)";
-  out["parameters"] = params;
-  nlohmann::json held = nlohmann::json::object();
-  for (const HeldParameter& h : r.held) held[h.name] = h.reason;
-  out["held"] = held;
-  out["unobservable"] = WeakDirectionsJson(r.weak);
-  out["not_estimable"] = std::vector<std::string>(not_estimable.begin(), not_estimable.end());
-  out["constraints_used"] = r.constraints_used;
-  out["constraints_ignored"] = r.constraints_ignored;
-  out["sigma"] = {{"source", r.sigma_source},
-                  {"scale", r.sigma_scale},
-                  {"chi2", r.chi2},
-                  {"dof", r.dof},
-                  {"chi2_per_dof", r.chi2_per_dof},
-                  {"data_residuals", r.data_residuals},
-                  {"effective_parameters", r.effective_parameters},
-                  {"rule",
-                   "sigma = sigma_declared x max(1, sqrt(chi2/dof)): the larger of the declared "
-                   "noise and the residual scatter"}};
-  out["still_intervals"] = StillJson(r, a.options.still);
-  out["positions"] = PositionsJson(r);
-  out["residual_rms_mg"] = r.residual_rms_mg;
-  out["converged"] = r.converged;
-  out["iterations"] = r.iterations;
-  out["settings"] = {{"reference_requested", a.reference},
-                     {"fix", a.fix},
-                     {"placement_sigma_deg", a.placement_sigma_deg}};
-  return out;
-}
-
-// The gyro part (static_gyro.h): its 21 parameters beside the accelerometer's,
-// and what they come from.
-void AddGyroJson(const StaticGyroResult& g, nlohmann::json* out) {
-  const std::vector<ParameterInfo>& info = GyroParameterInfo();
-  nlohmann::json& params = (*out)["parameters"];
-  for (int i = 0; i < kNumGyroParams; ++i) {
-    const double f = info[i].si_per_unit;
-    nlohmann::json p;
-    p["value"] = g.theta[i] / f;
-    if (std::isfinite(g.sigma[i])) {
-      p["sigma"] = g.sigma[i] / f;
-    } else {
-      p["sigma"] = nullptr;
-      p["sigma_noise"] = g.sigma_noise[i] / f;
-    }
-    p["unit"] = info[i].unit;
-    p["estimable"] = true;
-    params[info[i].name] = p;
-  }
-  nlohmann::json j;
-  j["method"] =
-      "Ferraris et al. 1995: W0 and G from the still positions (least squares on the "
-      "accelerometer's specific force), diag(K) Mg from the corrected readings integrated over "
-      "the three turns";
-  j["sigma"] = {{"source", g.sigma_source},
-                {"scale", g.sigma_scale},
-                {"chi2", g.chi2},
-                {"dof", g.dof},
-                {"rule",
-                 "W0, G: declared noise x max(1, sqrt(chi2/dof)) of the positions; K and the "
-                 "angles: exactly determined by the three turns, no sigma from the data "
-                 "(sigma_noise: white noise and the W0, G uncertainty only, not the turn's "
-                 "angle error)"}};
-  nlohmann::json pos = nlohmann::json::array();
-  for (const StaticGyroPosition& p : g.positions) {
-    pos.push_back({{"name", p.name},
-                   {"samples", p.samples},
-                   {"mean_dps", Vec(p.mean_rad_s / kDegToRad)},
-                   {"W_g", Vec(p.W_g)},
-                   {"residual_dps", Vec(p.residual_rad_s / kDegToRad)}});
-  }
-  j["positions"] = pos;
-  nlohmann::json turns = nlohmann::json::array();
-  for (const StaticGyroTurnResult& t : g.turns) {
-    turns.push_back({{"label", t.label},
-                     {"samples", t.samples},
-                     {"duration_s", t.duration_s},
-                     {"sense", t.sense},
-                     {"integral_deg", Vec(t.integral_rad / kDegToRad)},
-                     {"mean_W_g", Vec(t.mean_W_g)}});
-  }
-  j["turns"] = turns;
-  (*out)["gyro_static"] = j;
-}
 
 void PrintGyroReport(const StaticGyroResult& g) {
   std::printf("gyro: %zu positions, %zu turns; W0, G sigma: %s (chi2/dof = %.3g on %.0f dof)\n",
@@ -285,65 +121,23 @@ void PrintReport(const LoadedRun& run, const StaticResult& r) {
   std::printf("residual RMS over positions: %.3g mg\n", r.residual_rms_mg);
 }
 
-// The flags of the StaticOptions / StillOptions settings, for errors found below.
-const std::map<std::string, std::string>& StaticFlags() {
-  static const std::map<std::string, std::string> flags = {
-      {"reference", "--reference"},
-      {"fixed", "--fix"},
-      {"min_still_s", "--min-still-s"},
-      {"edge_s", "--edge-s"},
-      {"merge_gap_s", "--merge-gap-s"},
-      {"window_s", "--window-s"},
-      {"noise_factor", "--noise-factor"},
-      {"rate_threshold_deg_s", "--still-rate-deg-s"},
-      {"rate_half_window_s", "--rate-window-s"}};
-  return flags;
-}
-
-// --reference: a run that lacks what the reference needs is an error of the
-// run file, said after the flag that asked for it.
-StaticReference Reference(const StaticArgs& a, const LoadedRun& run) {
-  try {
-    return ChooseReference(run.description, run.data, a.reference);
-  } catch (const OptionError&) {
-    throw;
-  } catch (const InputError& e) {
-    throw InputError("--reference " + a.reference + ": " + e.what());
-  }
-}
-
-int RunStatic(const StaticArgs& a, Session& session) {
+int RunStatic(StaticArgs a, Session& session) {
   if (!a.report_html.empty()) CheckOutputPath(a.report_html, "--report");
   CheckOutputPath(a.out_json);
-  StaticOptions opt = a.options;
-  opt.fixed = SplitList(a.fix);
-  if (!(a.placement_sigma_deg >= 0.0)) throw InputError("--placement-sigma-deg: must be >= 0");
-  if (!(a.placement_sigma_deg <= 45.0)) {
-    throw InputError("--placement-sigma-deg: must be at most 45");
-  }
-  opt.placement_sigma_rad = a.placement_sigma_deg * kDegToRad;
+  StaticSettings& s = a.settings;
+  s.reference = ParseStaticReference(a.reference);
+  s.fix = SplitList(a.fix);
+  s.Validate();
   const LoadedRun run = LoadRun(a.run_yaml, &session);
   CheckOverwrite(a.out_json, session);  // before the long work
-  const StaticResult r = WithFlags(StaticFlags(), [&] {
-    return SolveStatic(run.description, run.data, Reference(a, run), opt);
-  });
-  nlohmann::json out = StaticJson(a, r, run.data.size());
-  std::optional<StaticGyroResult> gyro;
-  if (run.description.gyro && run.data.has_gyro()) {
-    try {
-      gyro = SolveStaticGyro(run.description, run.data, r, StaticGyroOptions());
-      AddGyroJson(*gyro, &out);
-    } catch (const InputError& e) {
-      std::fprintf(stderr, "triadcal: warning: the gyro is not calibrated: %s\n", e.what());
-    }
-  }
-  for (const std::string& w : ImplausibleResultWarnings(out["parameters"], a.out_json)) {
+  const StaticOutcome o = StaticRun(s, a.run_yaml, run, session);
+  for (const std::string& w : ImplausibleResultWarnings(o.json["parameters"], a.out_json)) {
     std::fprintf(stderr, "triadcal: warning: %s\n", OneLine(w).c_str());
   }
-  WriteJson(out, a.out_json, session);
-  WriteReportIfAsked(a.report_html, out, a.out_json, session);
-  PrintReport(run, r);
-  if (gyro) PrintGyroReport(*gyro);
+  WriteJson(o.json, a.out_json, session);
+  WriteReportIfAsked(a.report_html, o.json, a.out_json, session);
+  PrintReport(run, o.result);
+  if (o.gyro) PrintGyroReport(*o.gyro);
   std::printf("wrote %s\n", a.out_json.c_str());
   return 0;
 }
@@ -366,11 +160,11 @@ Command AddStaticCommand(CLI::App& app) {
   c.app->add_option("--fix", a->fix,
                     "parameters held at their nominal value, e.g. Kxy,Kyx or K_ij (all nine)");
   c.app
-      ->add_option("--placement-sigma-deg", a->placement_sigma_deg,
+      ->add_option("--placement-sigma-deg", a->settings.placement_sigma_deg,
                    "1 sigma orientation error of each position that does not average out "
                    "(hand placement, table tilt, bench positioning) [deg], 0 to 45; angles, labels")
       ->capture_default_str();
-  StillOptions& s = a->options.still;
+  StillOptions& s = a->settings.still;
   c.app
       ->add_option("--min-still-s", s.min_still_s,
                    "shortest still interval kept [s], > 0 and at most 3600")

@@ -407,6 +407,15 @@ bool IsEstimated(const BatchResult& r, const std::string& name) {
          std::find(r.consider.begin(), r.consider.end(), name) == r.consider.end();
 }
 
+HoldDecision DecideHeldParameters(const RunDescription& run, const RunData& data,
+                                  const ParameterLayout& layout, const BatchOptions& opt) {
+  RunDescription at_start = run;
+  at_start.noise_auto = false;
+  at_start.noise_channel_mV = StartNoise(run, data, opt);
+  return ChooseHeldParameters(at_start, data, layout, opt.holding, opt.epoch_s, opt.derivatives,
+                              opt.init_decimation_hz, opt.threads);
+}
+
 BatchResult SolveBatch(const RunDescription& run, const RunData& data,
                        const ParameterLayout& layout, const BatchOptions& opt) {
   const auto t_start = std::chrono::steady_clock::now();
@@ -441,17 +450,13 @@ BatchResult SolveBatch(const RunDescription& run, const RunData& data,
   // offsets fitted) and the declared noise (or the readings' own with
   // noise_mV: auto): decided before the fit, so that no misfit can move
   // what the run does not determine.
-  RunDescription at_start = run;
-  at_start.noise_auto = false;
-  at_start.noise_channel_mV = noise0;
   HoldDecision decision;
   if (opt.decision) {
     decision = *opt.decision;
   } else {
     say("choosing the parameters this run determines");
     if (opt.fraction) opt.fraction(0.0);
-    decision = ChooseHeldParameters(at_start, data, layout, opt.holding, opt.epoch_s,
-                                    opt.derivatives, opt.init_decimation_hz, threads);
+    decision = DecideHeldParameters(run, data, layout, opt);
   }
   std::vector<std::string> not_estimated = decision.held;
   not_estimated.insert(not_estimated.end(), decision.consider.begin(), decision.consider.end());

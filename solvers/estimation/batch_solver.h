@@ -289,6 +289,13 @@ struct BatchResult {
 BatchResult SolveBatch(const RunDescription& run, const RunData& data,
                        const ParameterLayout& layout, const BatchOptions& options);
 
+// Step 1 of SolveBatch on its own: ChooseHeldParameters with options.holding
+// at the noise the fit starts from (the declared noise, the readings' own
+// with noise_mV: auto, or options.noise_override). The filter and `compare`
+// hold what this decides, so that every estimator leaves out the same.
+HoldDecision DecideHeldParameters(const RunDescription& run, const RunData& data,
+                                  const ParameterLayout& layout, const BatchOptions& options);
+
 // Whether r estimates parameter `name` (neither held nor considered).
 bool IsEstimated(const BatchResult& r, const std::string& name);
 

@@ -20,8 +20,33 @@ double MedianInterval_s(const std::vector<double>& t) {
   return dt[dt.size() / 2];
 }
 
+// Moving standard deviation over the centred window of w samples (shorter at
+// the ends), from prefix sums of x - x[0] (no cancellation at count levels).
+std::vector<double> MovingStd(const std::vector<double>& x, std::size_t w) {
+  const std::size_t n = x.size();
+  std::vector<double> s1(n + 1, 0.0), s2(n + 1, 0.0);
+  for (std::size_t k = 0; k < n; ++k) {
+    const double d = x[k] - x[0];
+    s1[k + 1] = s1[k] + d;
+    s2[k + 1] = s2[k] + d * d;
+  }
+  std::vector<double> out(n);
+  const std::size_t half = w / 2;
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t lo = k >= half ? k - half : 0;
+    const std::size_t hi = std::min(n, lo + w);
+    const double m = static_cast<double>(hi - lo);
+    const double mean = (s1[hi] - s1[lo]) / m;
+    const double var = (s2[hi] - s2[lo]) / m - mean * mean;
+    out[k] = std::sqrt(std::max(0.0, var * m / std::max(1.0, m - 1.0)));
+  }
+  return out;
+}
+
+}  // namespace
+
 // Bad settings name the StillOptions field (OptionError); the command adds its flag.
-void CheckOptions(const StillOptions& o) {
+void CheckStillOptions(const StillOptions& o) {
   auto require = [](bool ok, const char* option, const char* problem) {
     if (!ok) throw OptionError(option, problem);
   };
@@ -51,35 +76,10 @@ void CheckOptions(const StillOptions& o) {
   }
 }
 
-// Moving standard deviation over the centred window of w samples (shorter at
-// the ends), from prefix sums of x - x[0] (no cancellation at count levels).
-std::vector<double> MovingStd(const std::vector<double>& x, std::size_t w) {
-  const std::size_t n = x.size();
-  std::vector<double> s1(n + 1, 0.0), s2(n + 1, 0.0);
-  for (std::size_t k = 0; k < n; ++k) {
-    const double d = x[k] - x[0];
-    s1[k + 1] = s1[k] + d;
-    s2[k + 1] = s2[k] + d * d;
-  }
-  std::vector<double> out(n);
-  const std::size_t half = w / 2;
-  for (std::size_t k = 0; k < n; ++k) {
-    const std::size_t lo = k >= half ? k - half : 0;
-    const std::size_t hi = std::min(n, lo + w);
-    const double m = static_cast<double>(hi - lo);
-    const double mean = (s1[hi] - s1[lo]) / m;
-    const double var = (s2[hi] - s2[lo]) / m - mean * mean;
-    out[k] = std::sqrt(std::max(0.0, var * m / std::max(1.0, m - 1.0)));
-  }
-  return out;
-}
-
-}  // namespace
-
 StillResult FindStillIntervals(const RunData& data, StillTest test, double noise_mV,
                                double angle_noise_rad, const std::set<std::string>& position_labels,
                                const StillOptions& o) {
-  CheckOptions(o);
+  CheckStillOptions(o);
   StillResult r;
   r.test = test;
   const std::size_t n = data.size();

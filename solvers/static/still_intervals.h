@@ -50,6 +50,10 @@ struct StillOptions {
   static constexpr double kMaxRateThreshold_deg_s = 3600.0;
 };
 
+// Throws OptionError naming the StillOptions field of a setting out of range
+// (the command adds its flag).
+void CheckStillOptions(const StillOptions& options);
+
 struct StillInterval {
   std::size_t begin = 0, end = 0;  // samples [begin, end)
   double t_begin_s = 0.0, t_end_s = 0.0;  // first and last sample

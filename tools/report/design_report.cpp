@@ -15,102 +15,6 @@ std::string PairText(double a, double b) {
   return t;
 }
 
-nlohmann::json SettingsJson(const Scenario& s, const DesignStudy& r,
-                            const DesignReportSettings& settings) {
-  nlohmann::json j = {{"rate_hz", s.profile.rate_hz},
-                      {"declared_noise_mV", s.run.noise_mV},
-                      {"declared_angle_noise_arcsec", s.run.angle_noise_rad / kArcsecToRad},
-                      {"epoch_s", settings.epoch_s},
-                      {"design_duration_s", r.design_duration_s},
-                      {"static_duration_s", r.static_duration_s},
-                      {"static_positions", settings.static_positions},
-                      {"effects", settings.effects}};
-  nlohmann::json pos = nlohmann::json::array();
-  for (const auto& p : r.positions) pos.push_back({p[0] / kDegToRad, p[1] / kDegToRad});
-  j["static_positions_deg"] = pos;
-  return j;
-}
-
-nlohmann::json SigmaSeriesJson(const ParameterLayout& layout, const DesignStudy& r,
-                               const std::vector<DesignPoint>& pts) {
-  nlohmann::json sig = nlohmann::json::object(), slope = nlohmann::json::object();
-  for (int i = 0; i < layout.size(); ++i) {
-    std::vector<double> v;
-    for (const DesignPoint& d : pts) {
-      v.push_back(Undetermined(d, layout.info(i).name) ? std::nan("")
-                                                       : d.sigma[i] / layout.info(i).si_per_unit);
-    }
-    sig[layout.info(i).name] = v;
-    const double sl = LogSlope(r.durations_s, v, 60.0);
-    slope[layout.info(i).name] = std::isfinite(sl) ? nlohmann::json(sl) : nlohmann::json();
-  }
-  nlohmann::json unobs = nlohmann::json::array();
-  for (const DesignPoint& d : pts) unobs.push_back(d.unobservable);
-  return nlohmann::json{{"sigma", sig}, {"slope_log_log_from_60s", slope}, {"unobservable", unobs}};
-}
-
-nlohmann::json GridJson(const ParameterLayout& layout, const DesignStudy& r) {
-  nlohmann::json jgrid = nlohmann::json::array();
-  for (const DesignGridPoint& g : r.grid) {
-    nlohmann::json sig = nlohmann::json::object(), worst = nlohmann::json::object();
-    for (int i = 0; i < layout.size(); ++i) {
-      sig[layout.info(i).name] = g.d.sigma[i] / layout.info(i).si_per_unit;
-    }
-    for (const ParameterGroup& grp : ParameterGroups()) {
-      worst[grp.name] = WorstSigma(g.d, grp.members) / layout.info(grp.members[0]).si_per_unit;
-    }
-    jgrid.push_back({{"period_s", g.period_s},
-                     {"amplitude_deg", g.amplitude_deg},
-                     {"duration_s", r.design_duration_s},
-                     {"sigma", sig},
-                     {"worst_in_group", worst},
-                     {"unobservable", g.d.unobservable}});
-  }
-  return jgrid;
-}
-
-nlohmann::json TargetsJson(const ParameterLayout& layout, const DesignStudyOptions& o,
-                           const DesignStudy& r) {
-  nlohmann::json jt = nlohmann::json::array();
-  for (std::size_t k = 0; k < o.targets.size(); ++k) {
-    const DesignTarget& t = o.targets[k];
-    const TargetResult& tr = r.targets[k];
-    const double f = layout.info(t.indices[0]).si_per_unit;
-    jt.push_back({{"target", t.key},
-                  {"sigma", t.sigma_file},
-                  {"unit", layout.info(t.indices[0]).unit},
-                  {"reached", tr.reached},
-                  {"duration_s", tr.duration_s},
-                  {"sigma_at_duration", tr.sigma_at_duration / f},
-                  {"searched_s", {r.target_min_s, r.target_max_s}},
-                  {"evaluations", tr.evaluations}});
-  }
-  return jt;
-}
-
-nlohmann::json ComparisonJson(const ParameterLayout& layout, const DesignStudy& r,
-                              const DesignReportSettings& settings) {
-  nlohmann::json rows = nlohmann::json::object();
-  for (int i = 0; i < layout.size(); ++i) {
-    const double f = layout.info(i).si_per_unit;
-    const std::string& name = layout.info(i).name;
-    rows[name] = {{"unit", layout.info(i).unit},
-                  {"quasi_harmonic", r.qh_design.sigma[i] / f},
-                  {"static", r.static_long.sigma[i] / f},
-                  {"static_same_duration", r.static_design.sigma[i] / f},
-                  {"ratio_static_over_quasi_harmonic",
-                   Undetermined(r.static_long, name) || Undetermined(r.qh_design, name)
-                       ? nlohmann::json()
-                       : nlohmann::json(r.static_long.sigma[i] / r.qh_design.sigma[i])}};
-  }
-  return {{"quasi_harmonic_duration_s", r.design_duration_s},
-          {"static_duration_s", r.static_duration_s},
-          {"static_positions", settings.static_positions},
-          {"rows", rows},
-          {"quasi_harmonic_not_determined", r.qh_design.unobservable},
-          {"static_not_determined", r.static_long.unobservable}};
-}
-
 void PrintDurationTable(const ParameterLayout& layout, const DesignStudy& r, const char* what,
                         const std::vector<DesignPoint>& pts) {
   std::printf("\n%s: sigma against run duration [s] (* not determined: the prior's)\n", what);
@@ -177,7 +81,7 @@ void PrintTargets(const ParameterLayout& layout, const DesignStudyOptions& o,
 }
 
 void PrintComparison(const ParameterLayout& layout, const DesignStudy& r,
-                     const DesignReportSettings& settings) {
+                     const DesignSettings& settings) {
   const double Td = r.design_duration_s, Ts = r.static_duration_s;
   std::printf(
       "\nquasi-harmonic %g s against the static %d-position method, %g s (* not determined)\n", Td,
@@ -205,45 +109,13 @@ void PrintComparison(const ParameterLayout& layout, const DesignStudy& r,
 
 }  // namespace
 
-nlohmann::json DesignJson(const Scenario& s, const ParameterLayout& layout,
-                          const DesignStudyOptions& options, const DesignStudy& r,
-                          const DesignReportSettings& settings) {
-  nlohmann::json out;
-  out["command"] = "design";
-  out["scenario"] = settings.scenario_path;
-  nlohmann::json units = nlohmann::json::object();
-  for (int i = 0; i < layout.size(); ++i) units[layout.info(i).name] = layout.info(i).unit;
-  out["units"] = units;
-  out["settings"] = SettingsJson(s, r, settings);
-  out["duration"] = {{"durations_s", r.durations_s},
-                     {"quasi_harmonic", SigmaSeriesJson(layout, r, r.quasi_harmonic)},
-                     {"static", SigmaSeriesJson(layout, r, r.static_test)}};
-  out["profiles"] = GridJson(layout, r);
-  out["targets"] = TargetsJson(layout, options, r);
-  out["comparison"] = ComparisonJson(layout, r, settings);
-  // What the HTML report draws (--report, or `triadcal report`): per group
-  // the worst and best sigma of both methods against duration, from
-  // "duration" above (null where the method does not determine a member).
-  nlohmann::json groups = nlohmann::json::array();
-  for (const ParameterGroup& g : ParameterGroups()) {
-    std::vector<std::string> members;
-    for (int i : g.members) members.push_back(layout.info(i).name);
-    groups.push_back({{"name", g.name},
-                      {"label", g.label},
-                      {"unit", layout.info(g.members[0]).unit},
-                      {"members", members}});
-  }
-  out["duration"]["groups"] = groups;
-  out["duration"]["static_positions"] = settings.static_positions;
-  return out;
-}
-
-
-void PrintDesign(const Scenario& s, const ParameterLayout& layout,
-                 const DesignStudyOptions& options, const DesignStudy& r,
-                 const DesignReportSettings& settings) {
+void PrintDesign(const Scenario& s, const std::string& scenario_path,
+                 const DesignSettings& settings, const DesignOutcome& o) {
+  const ParameterLayout& layout = o.layout;
+  const DesignStudyOptions& options = o.options;
+  const DesignStudy& r = o.study;
   std::printf("design: %s, %g Hz, declared noise %g mV, %g arcsec; static test: %d positions\n",
-              settings.scenario_path.c_str(), s.profile.rate_hz, s.run.noise_mV,
+              scenario_path.c_str(), s.profile.rate_hz, s.run.noise_mV,
               s.run.angle_noise_rad / kArcsecToRad, settings.static_positions);
   PrintDurationTable(layout, r, "quasi-harmonic profile", r.quasi_harmonic);
   PrintDurationTable(layout, r, "static multi-position test", r.static_test);

@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <set>
 
-#include "app/estimate_json.h"
+#include "app/observability_job.h"
 
 namespace triadcal {
 namespace {
@@ -15,77 +15,7 @@ std::string Fmt(double x) {
   return b;
 }
 
-std::set<std::string> UnobservableNames(const ObservabilityVariant& v) {
-  std::vector<WeakDirection> dirs;
-  for (const Direction& d : v.unobservable) dirs.push_back(d.named);
-  const std::vector<std::string> names = ParametersIn(dirs);
-  return {names.begin(), names.end()};
-}
-
 }  // namespace
-
-nlohmann::json DirectionJson(const ParameterLayout& layout, const Direction& d) {
-  nlohmann::json j = WeakDirectionsJson({d.named})[0];
-  if (d.data_sigma.size() > 0) {
-    nlohmann::json s = nlohmann::json::object();
-    for (const auto& [name, w] : d.named.weights) {
-      const int i = layout.IndexOf(name);
-      s[name] = d.data_sigma[i] / layout.info(i).si_per_unit;
-    }
-    j["data_sigma"] = s;
-  }
-  return j;
-}
-
-nlohmann::json VariantJson(const ParameterLayout& layout, const ObservabilityVariant& v) {
-  nlohmann::json j;
-  j["constraints"] = v.constraints;
-  nlohmann::json crb = nlohmann::json::object();
-  for (int i = 0; i < layout.size(); ++i) {
-    crb[layout.info(i).name] = std::sqrt(std::max(0.0, v.cov(i, i))) / layout.info(i).si_per_unit;
-  }
-  j["crb"] = crb;
-  j["unobservable"] = nlohmann::json::array();
-  for (const Direction& d : v.unobservable) j["unobservable"].push_back(DirectionJson(layout, d));
-  j["weakly_observable"] = nlohmann::json::array();
-  for (const Direction& d : v.weak) j["weakly_observable"].push_back(DirectionJson(layout, d));
-  const std::set<std::string> held = UnobservableNames(v);
-  j["not_estimable"] = std::vector<std::string>(held.begin(), held.end());
-  j["information_eigenvalues_prior_units"] =
-      std::vector<double>(v.eigenvalues.data(), v.eigenvalues.data() + v.eigenvalues.size());
-  return j;
-}
-
-nlohmann::json ObservabilityJson(const ObservabilityResult& r) {
-  const ParameterLayout& L = r.layout;
-  nlohmann::json out;
-  const nlohmann::json with = VariantJson(L, r.with_constraints);
-  out["crb"] = with["crb"];
-  nlohmann::json units = nlohmann::json::object();
-  for (int i = 0; i < L.size(); ++i) units[L.info(i).name] = L.info(i).unit;
-  out["units"] = units;
-  out["constraints"] = r.with_constraints.constraints;
-  out["unobservable"] = with["unobservable"];
-  out["weakly_observable"] = with["weakly_observable"];
-  out["not_estimable"] = with["not_estimable"];
-  out["correlation"] = CorrelationJson(L, r.with_constraints.cov);
-  const std::set<std::string> held = UnobservableNames(r.with_constraints);
-  // the OUT form of docs/file-formats.md: value = the point of evaluation, sigma = the CRB.
-  out["parameters"] = ParametersJson(L, r.theta, r.with_constraints.cov, held);
-  nlohmann::json prior = nlohmann::json::object();
-  for (int i = 0; i < L.size(); ++i) prior[L.info(i).name] = r.prior.sigma[i] / L.info(i).si_per_unit;
-  out["prior_sigma"] = prior;
-  out["with_constraints"] = with;
-  out["without_constraints"] = VariantJson(L, r.without_constraints);
-  nlohmann::json each = nlohmann::json::object();
-  for (std::size_t j = 0; j < r.without_each.size(); ++j) {
-    each[r.without_each[j].dropped] = VariantJson(L, r.without_each[j]);  // key: the one dropped
-  }
-  out["without_each_constraint"] = each;
-  out["run"] = {{"samples", r.samples}, {"epochs", r.epochs}, {"duration_s", r.duration_s}};
-  out["time_s"] = r.seconds;
-  return out;
-}
 
 std::string DirectionLine(const ParameterLayout& layout, const Direction& d, bool observable) {
   std::string s = observable ? "weakly observable: " : "UNOBSERVABLE: ";

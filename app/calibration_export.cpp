@@ -1,4 +1,4 @@
-#include "tools/report/calibration_export.h"
+#include "app/calibration_export.h"
 
 #include <Eigen/LU>
 #include <cctype>

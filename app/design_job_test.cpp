@@ -1,0 +1,88 @@
+// The design job (app/design_job.h): the text forms both ways, one Validate
+// naming the option, and the same OUT as `triadcal design`.
+#include "app/design_job.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "core/model/errors.h"
+#include "tests/cli_test.h"
+
+namespace triadcal {
+namespace {
+
+using testing_fixtures::Comparable;
+
+template <typename F>
+std::string ErrorOf(F&& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(DesignSettings, TextBothWays) {
+  const DesignSettings d;
+  EXPECT_EQ(ListText(d.durations_s), "15,30,60,90,300,600,2400");
+  EXPECT_EQ(TargetsText(d.targets), "K=0.5");
+  EXPECT_EQ(ParsePositiveList(ListText(d.durations_s), "--durations"), d.durations_s);
+  const std::vector<DesignTarget> t = ParseDesignTargets("K=0.5, W0=2");
+  ASSERT_EQ(t.size(), 2u);
+  EXPECT_EQ(TargetsText(t), "K=0.5,W0=2");
+  EXPECT_EQ(ParsePairs("30:12,60:24", "--periods")[1][1], 24.0);
+  EXPECT_EQ(ErrorOf([] { ParsePairs("30", "--periods"); }),
+            "--periods: expected OUTER:INNER pairs such as 30:12, got '30'");
+  EXPECT_EQ(ErrorOf([] { ParseDesignTargets("K"); }),
+            "--target: expected NAME=SIGMA (file units) such as K=0.5, got 'K'");
+  EXPECT_EQ(ErrorOf([] { ParsePositiveList("15,-1", "--durations"); }),
+            "--durations: expected a positive number, got '-1'");
+}
+
+TEST(DesignSettings, ValidateNamesTheOption) {
+  EXPECT_EQ(ErrorOf([] { DesignSettings().Validate(); }), "");
+  DesignSettings s;
+  s.static_positions = 7;
+  EXPECT_EQ(ErrorOf([&] { s.Validate(); }), "--static-positions: expected 6, 12 or 18, got 7");
+  s = DesignSettings();
+  s.targets = ParseDesignTargets("K=2,Q=1");
+  EXPECT_EQ(ErrorOf([&] { s.Validate(); }),
+            "--target: unknown parameter or group 'Q' (a parameter name or K, W0, angles, K_ij, "
+            "bench, dR)");
+  s = DesignSettings();
+  s.durations_s = {};
+  EXPECT_EQ(ErrorOf([&] { s.Validate(); }),
+            "--durations: expected a comma-separated list, got nothing");
+}
+
+class DesignJob : public testing_fixtures::CliTest {};
+
+TEST_F(DesignJob, SameOutAsTheCommandLine) {
+  const std::string scenario = WriteText(
+      "scenario.yaml",
+      "profile: {amplitude_deg: [360, 90], period_s: [30, 12], duration_s: 20, rate_hz: 25}\n"
+      "truth: {Kx: 171.5, W0x: 1504.2}\n"
+      "noise: {accel_mV: 2, angle_arcsec: 15}\n");
+  const testing_fixtures::CliResult cli =
+      Run("design " + scenario +
+          " --durations 20,10 --periods 30:12 --amplitudes 360:90 "
+          "--static-duration 60 --static-positions 6 --target K=2 --design-duration 20 -o " +
+          Path("out.json"));
+  ASSERT_EQ(cli.exit_code, 0) << cli.err;
+  DesignSettings s;
+  s.durations_s = {20, 10};
+  s.periods_s = {{30, 12}};
+  s.amplitudes_deg = {{360, 90}};
+  s.static_duration_s = 60;
+  s.static_positions = 6;
+  s.targets = ParseDesignTargets("K=2");
+  s.design_duration_s = 20;
+  const DesignOutcome o = DesignRun(s, scenario, LoadScenario(scenario), Session());
+  EXPECT_EQ(o.options.durations_s, (std::vector<double>{10, 20}));
+  EXPECT_EQ(Comparable(o.json), Out("out.json"));
+}
+
+}  // namespace
+}  // namespace triadcal

@@ -1,0 +1,171 @@
+#include "app/filter_job.h"
+
+#include <algorithm>
+#include <chrono>
+#include <sstream>
+
+#include "app/estimate_json.h"
+#include "app/option_lists.h"
+#include "core/io/column_mapping.h"
+#include "core/io/file_util.h"
+#include "core/model/errors.h"
+#include "core/model/priors.h"
+#include "core/model/units.h"
+#include "solvers/estimation/observability.h"
+
+namespace triadcal {
+
+void FilterSettings::Validate() const {
+  if (iterations < 1 || iterations > kMaxFilterIterations) {
+    throw InputError("--iterations: Value " + std::to_string(iterations) + " not in range 1 to " +
+                     std::to_string(kMaxFilterIterations));
+  }
+  CheckHoldFree(hold, free, ParameterLayout(ParseEffectList(effects)));
+  AngleDerivativeOptions window;
+  window.half_window_s = rate_window_s;
+  WithFlags({{"half_window_s", "--rate-window-s"}}, [&] { window.Check(); });
+}
+
+std::string FilterSeriesCsv(const ParameterLayout& layout, const FilterResult& r) {
+  std::ostringstream s;
+  s << "# triadcal filter: forward-pass estimates with 1-sigma, and innovations\n";
+  s << "# units: t s; parameters in the units of docs/file-formats.md (";
+  for (int i = 0; i < layout.size(); ++i) {
+    s << (i ? ", " : "") << layout.info(i).name << " " << layout.info(i).unit;
+  }
+  s << "); innov_v* m/s, innov_s* m\n";
+  s << "t";
+  for (int i = 0; i < layout.size(); ++i) {
+    s << "," << layout.info(i).name << "," << layout.info(i).name << "_sigma";
+  }
+  const char* ch[6] = {"v_x", "v_y", "v_z", "s_x", "s_y", "s_z"};
+  for (const char* c : ch) s << ",innov_" << c;
+  for (const char* c : ch) s << ",innov_" << c << "_sigma";
+  s << "\n";
+  for (const FilterSeriesRow& row : r.series) {
+    s << FormatDouble(row.t_s);
+    for (int i = 0; i < layout.size(); ++i) {
+      const double f = layout.info(i).si_per_unit;
+      s << "," << FormatDouble(row.theta[i] / f) << "," << FormatDouble(row.sigma[i] / f);
+    }
+    for (int c = 0; c < 6; ++c) s << "," << FormatDouble(row.innovation[c]);
+    for (int c = 0; c < 6; ++c) s << "," << FormatDouble(row.innovation_sigma[c]);
+    s << "\n";
+  }
+  return s.str();
+}
+
+namespace {
+
+nlohmann::json FilterJson(const FilterSettings& s, const std::string& run_yaml,
+                          const LoadedRun& run, const FilterOutcome& f) {
+  const ParameterLayout& layout = f.layout;
+  const FilterResult& r = f.result;
+  const HoldDecision& hd = f.decision;
+  nlohmann::json out;
+  out["command"] = "filter";
+  out["run"] = run_yaml;
+  out["ekf"] = {{"parameters", ParametersJson(layout, r.ekf.theta, r.ekf.cov, f.not_estimable)}};
+  out["rts"] = {{"parameters", ParametersJson(layout, r.rts.theta, r.rts.cov, f.not_estimable)}};
+  MarkRelative(hd.relative_to, &out["ekf"]["parameters"]);
+  MarkRelative(hd.relative_to, &out["rts"]["parameters"]);
+  if (s.correlations) out["rts"]["correlation"] = CorrelationJson(layout, r.rts.cov);
+  // The weak directions, and the structural nulls a held parameter stands in.
+  const std::set<std::string> pinned(f.pinned.begin(), f.pinned.end());
+  std::vector<WeakDirection> unobservable = f.weak;
+  for (const WeakDirection& d : hd.unsupported) {
+    for (const auto& [name, w] : d.weights) {
+      if (pinned.count(name)) {
+        unobservable.push_back(d);
+        break;
+      }
+    }
+  }
+  // Not estimable: the weak directions' parameters, the held ones, the
+  // relative ones (in this order, as OUT has always listed them).
+  std::vector<std::string> not_estimable = ParametersIn(f.weak);
+  not_estimable.insert(not_estimable.end(), f.pinned.begin(), f.pinned.end());
+  for (const auto& [name, anchors] : hd.relative_to) not_estimable.push_back(name);
+  out["unobservable"] = WeakDirectionsJson(unobservable);
+  out["not_estimable"] = not_estimable;
+  out["held"] = hd.held;
+  out["not_determined"] = hd.consider;
+  out["unobservable_at_nominal"] = WeakDirectionsJson(hd.unsupported);
+  out["settings"] = {{"epoch_s", s.epoch_s},
+                     {"epochs", r.epochs},
+                     {"passes", r.passes},
+                     {"rate_source", run.data.has_rates() ? "rate columns" : "local cubic fit"},
+                     {"rate_window_half_s", s.rate_window_s},
+                     {"rate_noise_deg_s", r.rate_noise_rad_s / kDegToRad},
+                     {"effects", s.effects}};
+  out["innovations"] = {
+      {"rms_v_mps", {r.innovation_rms[0], r.innovation_rms[1], r.innovation_rms[2]}},
+      {"rms_s_m", {r.innovation_rms[3], r.innovation_rms[4], r.innovation_rms[5]}},
+      {"mean_nis", r.mean_nis},
+      {"mean_nis_expected", 6}};
+  out["samples"] = run.data.size();
+  out["time_s"] = f.seconds;
+  return out;
+}
+
+}  // namespace
+
+FilterOutcome FilterRun(const FilterSettings& s, const std::string& run_yaml, const LoadedRun& run,
+                        const Session& session) {
+  s.Validate();
+  const auto t0 = std::chrono::steady_clock::now();
+  FilterOutcome f;
+  f.layout = ParameterLayout(ParseEffectList(s.effects, run.data), /*gyro=*/false,
+                             ReadingsUnit(run.description));
+  FilterOptions opt;
+  opt.epoch_s = s.epoch_s;
+  opt.derivatives.half_window_s = s.rate_window_s;
+  opt.smoother_iterations = s.iterations;
+  opt.keep_series = s.keep_series;
+  opt.progress = [&session, passes = s.iterations, shown = 0](int pass, double x) mutable {
+    if (session.stage && pass != shown) {
+      session.stage("pass " + std::to_string(pass) + "/" + std::to_string(passes));
+    }
+    if (session.fraction) session.fraction((pass - 1 + x) / passes);
+    shown = pass;
+  };
+  // The fit job's decision of what the run determines (held as a structural
+  // null, or kept at nominal and considered in fit), all held here at their
+  // nominal values (removed from the filter's state), so that the filter does
+  // not wander along flat directions; its sigma of the others are conditional
+  // on the held values. The filter runs at the declared reading noise (with
+  // noise_mV: auto its declared start: the filter estimates no noise), and
+  // decides at it.
+  RunDescription declared = run.description;
+  declared.noise_auto = false;
+  BatchOptions holding;
+  holding.epoch_s = s.epoch_s;
+  holding.derivatives = opt.derivatives;
+  holding.holding.auto_hold = s.auto_hold;
+  holding.holding.hold = s.hold;
+  holding.holding.free = s.free;
+  f.decision = DecideHeldParameters(declared, run.data, f.layout, holding);
+  f.pinned = f.decision.held;
+  f.pinned.insert(f.pinned.end(), f.decision.consider.begin(), f.decision.consider.end());
+  opt.held = f.pinned;
+  f.result = RunFilterSmoother(declared, run.data, f.layout, opt);
+  if (!f.result.ekf.theta.allFinite() || !f.result.rts.theta.allFinite()) {
+    // No number to write: a diverged filter's estimate is not a result.
+    f.error = run_yaml +
+              ": the filter diverged (its estimate is not finite): the readings are far from "
+              "the nominal model (check triad.bias_mV, triad.scale_mV_per_g and the readings' "
+              "unit)";
+    return f;
+  }
+  f.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // Against the run's own prior: held parameters come out determined there.
+  f.weak =
+      UnsupportedDirections(f.layout, f.result.rts.cov, MakePrior(run.description, f.layout).sigma);
+  f.not_estimable.insert(f.pinned.begin(), f.pinned.end());
+  for (const std::string& name : ParametersIn(f.weak)) f.not_estimable.insert(name);
+  for (const auto& [name, anchors] : f.decision.relative_to) f.not_estimable.insert(name);
+  f.json = FilterJson(s, run_yaml, run, f);
+  return f;
+}
+
+}  // namespace triadcal

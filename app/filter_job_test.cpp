@@ -1,0 +1,80 @@
+// The filter job (app/filter_job.h): one Validate naming the option, the
+// same OUT as `triadcal filter`, and the fit job's hold decision.
+#include "app/filter_job.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "app/fit_job.h"
+#include "core/model/errors.h"
+#include "tests/cli_test.h"
+
+namespace triadcal {
+namespace {
+
+using testing_fixtures::Comparable;
+
+std::string ErrorOf(const FilterSettings& s) {
+  try {
+    s.Validate();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(FilterSettings, ValidateNamesTheOption) {
+  EXPECT_EQ(ErrorOf(FilterSettings()), "");
+  FilterSettings s;
+  s.iterations = 0;
+  EXPECT_EQ(ErrorOf(s), "--iterations: Value 0 not in range 1 to 20");
+  s = FilterSettings();
+  s.hold = {"dpsi"};
+  s.free = {"dpsi"};
+  EXPECT_EQ(ErrorOf(s), "--hold/--free: 'dpsi' given to both: hold it or free it");
+  s = FilterSettings();
+  s.effects = "thermal_drift,nonsense";
+  EXPECT_EQ(ErrorOf(s).rfind("--effects: unknown effect 'nonsense' (known: ", 0), 0u) << ErrorOf(s);
+  s = FilterSettings();
+  s.rate_window_s = 0.0;
+  EXPECT_EQ(ErrorOf(s).rfind("--rate-window-s: ", 0), 0u) << ErrorOf(s);
+}
+
+class FilterJob : public testing_fixtures::CliTest {};
+
+TEST_F(FilterJob, SameOutAsTheCommandLine) {
+  const std::string run_yaml = Path("run.yaml");
+  const testing_fixtures::CliResult cli =
+      Run("filter " + run_yaml + " --iterations 1 -o " + Path("out.json"));
+  ASSERT_EQ(cli.exit_code, 0) << cli.err;
+  Session session;
+  const LoadedRun run = LoadRun(run_yaml, &session);
+  FilterSettings s;
+  s.iterations = 1;
+  const FilterOutcome f = FilterRun(s, run_yaml, run, session);
+  ASSERT_EQ(f.error, "");
+  EXPECT_EQ(Comparable(f.json), Out("out.json"));
+}
+
+// The filter holds (at nominal) what the fit job holds or considers: on a
+// roll about the outer axis alone, which leaves parameters undetermined.
+TEST_F(FilterJob, HoldsWhatTheFitHolds) {
+  Scenario roll = testing_fixtures::PaperScenario(50.0, 20.0, 2.0, 15.0, 3);
+  roll.profile.amplitude_rad[1] = 0.0;
+  WriteRunCsv(Simulate(roll), Path("roll.csv"), "");
+  const std::string run_yaml = WriteText("roll.yaml", "data: roll.csv\n");
+  Session session;
+  const LoadedRun run = LoadRun(run_yaml, &session);
+  FilterSettings s;
+  s.iterations = 1;
+  const FilterOutcome f = FilterRun(s, run_yaml, run, session);
+  const FitOutcome fit = FitRun(FitSettings(), run_yaml, run, session);
+  EXPECT_FALSE(fit.result.held.empty() && fit.result.consider.empty());
+  EXPECT_EQ(f.decision.held, fit.result.held);
+  EXPECT_EQ(f.decision.consider, fit.result.consider);
+  EXPECT_EQ(f.pinned.size(), fit.result.held.size() + fit.result.consider.size());
+}
+
+}  // namespace
+}  // namespace triadcal
