@@ -10,6 +10,7 @@
 #include "core/io/file_util.h"
 #include "core/model/errors.h"
 #include "core/model/priors.h"
+#include "core/model/sample_noise.h"
 #include "core/model/units.h"
 #include "solvers/estimation/observability.h"
 
@@ -97,6 +98,9 @@ nlohmann::json FilterJson(const FilterSettings& s, const std::string& run_yaml,
                      {"rate_source", run.data.has_rates() ? "rate columns" : "local cubic fit"},
                      {"rate_window_half_s", s.rate_window_s},
                      {"rate_noise_deg_s", r.rate_noise_rad_s / kDegToRad},
+                     {"noise", {{"used", {f.noise[0], f.noise[1], f.noise[2]}},
+                                {"unit", layout.readings_unit()},
+                                {"auto", run.description.noise_auto}}},
                      {"effects", s.effects}};
   out["innovations"] = {
       {"rms_v_mps", {r.innovation_rms[0], r.innovation_rms[1], r.innovation_rms[2]}},
@@ -133,11 +137,11 @@ FilterOutcome FilterRun(const FilterSettings& s, const std::string& run_yaml, co
   // null, or kept at nominal and considered in fit), all held here at their
   // nominal values (removed from the filter's state), so that the filter does
   // not wander along flat directions; its sigma of the others are conditional
-  // on the held values. The filter runs at the declared reading noise (with
-  // noise_mV: auto its declared start: the filter estimates no noise), and
-  // decides at it.
-  RunDescription declared = run.description;
-  declared.noise_auto = false;
+  // on the held values. The filter estimates no noise: it runs at the
+  // declared reading noise, with noise_mV: auto at the readings' own white
+  // noise per channel (what fit starts from and decides at), and decides at it.
+  const RunDescription declared = WithReadingNoise(run.description, run.data);
+  f.noise = RunReadingNoise_mV(declared, run.data);
   BatchOptions holding;
   holding.epoch_s = s.epoch_s;
   holding.derivatives = opt.derivatives;

@@ -50,6 +50,9 @@ struct FilterOutcome {
   std::vector<std::string> pinned;      // held at nominal: decision.held + decision.consider
   std::vector<WeakDirection> weak;      // directions the run leaves to the prior
   std::set<std::string> not_estimable;  // prior values: weak, pinned and relative ones
+  // The reading noise it ran at, per channel, in the readings' unit: the
+  // declared one, or with noise_mV: auto the readings' own (RunReadingNoise_mV).
+  Eigen::Vector3d noise = Eigen::Vector3d::Zero();
   double seconds = 0.0;                 // the decision and the filter
   // Not empty when the filter diverged (its estimate not finite): the reason,
   // one sentence; then there is no OUT (json is null).

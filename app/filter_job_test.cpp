@@ -76,5 +76,34 @@ TEST_F(FilterJob, HoldsWhatTheFitHolds) {
   EXPECT_EQ(f.pinned.size(), fit.result.held.size() + fit.result.consider.size());
 }
 
+// noise_mV: auto: the filter runs and decides at the readings' own white
+// noise per channel, as fit starts from (before, at the declared start: a run
+// with 6 mV of noise was filtered at the default figure, and the filter held
+// other parameters than fit); a declared figure is used as it is.
+TEST_F(FilterJob, AutoNoiseIsTheReadingsOwn) {
+  Scenario roll = testing_fixtures::PaperScenario(50.0, 20.0, 6.0, 15.0, 4);
+  roll.profile.amplitude_rad[1] = 0.0;
+  WriteRunCsv(Simulate(roll), Path("roll.csv"), "");
+  Session session;
+  FilterSettings s;
+  s.iterations = 1;
+  const std::string auto_yaml = WriteText("auto.yaml", "data: roll.csv\ntriad: {noise_mV: auto}\n");
+  const LoadedRun run = LoadRun(auto_yaml, &session);
+  const FilterOutcome f = FilterRun(s, auto_yaml, run, session);
+  ASSERT_EQ(f.error, "");
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(f.noise[i], 6.0, 0.6) << i;
+  EXPECT_EQ(f.json["settings"]["noise"]["auto"], true);
+  EXPECT_EQ(f.json["settings"]["noise"]["unit"], "mV");
+  const FitOutcome fit = FitRun(FitSettings(), auto_yaml, run, session);
+  EXPECT_EQ(f.decision.held, fit.result.held);
+  EXPECT_EQ(f.decision.consider, fit.result.consider);
+
+  const std::string declared_yaml =
+      WriteText("declared.yaml", "data: roll.csv\ntriad: {noise_mV: 1.5}\n");
+  const FilterOutcome d = FilterRun(s, declared_yaml, LoadRun(declared_yaml, &session), session);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(d.noise[i], 1.5) << i;
+  EXPECT_EQ(d.json["settings"]["noise"]["auto"], false);
+}
+
 }  // namespace
 }  // namespace triadcal
