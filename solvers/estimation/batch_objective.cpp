@@ -61,7 +61,8 @@ BatchObjective::Point BatchObjective::Evaluate(const Eigen::VectorXd& phi,
     pt.gyro_passes[r] = std::make_shared<const GyroPass>(
         EvaluateGyroPass(p, ThetaOf(r, phi), with_jacobian, threads_));
     const int fitted = p.cfg.layout.has_gyro() ? kNumGyroParams : 0;
-    pt.gyro[r] = ReduceGyroAtBestNoise(*pt.gyro_passes[r], gyro_noise_hint_[r], fitted, true);
+    pt.gyro[r] =
+        ReduceGyroAtBestNoise(*pt.gyro_passes[r], gyro_noise_hint_[r], fitted, true, threads_);
     if (pt.gyro[r].noise_rad_s.allFinite()) gyro_noise_hint_[r] = pt.gyro[r].noise_rad_s;
   }
   Reweight(&pt, noise, theta_part);
@@ -93,7 +94,8 @@ BatchObjective::Point BatchObjective::AtNoise(const Point& pt,
 void BatchObjective::ReweightGyro(Point* pt, const Point& other) const {
   for (int r = 0; r < runs(); ++r) {
     if (!HasGyroPart(*pt, r) || !HasGyroPart(other, r)) continue;
-    pt->gyro[r] = ReduceGyroAtNoise(*pt->gyro_passes[r], other.gyro[r].noise_rad_s, pt->gyro[r].rho);
+    pt->gyro[r] = ReduceGyroAtNoise(*pt->gyro_passes[r], other.gyro[r].noise_rad_s,
+                                    pt->gyro[r].rho, threads_);
   }
   Assemble(pt);
 }

@@ -405,40 +405,55 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
 }
 
 GyroReduction ReduceGyroAtBestNoise(const GyroPass& pass, const Eigen::Vector3d& start,
-                                    int fitted_parameters, bool theta_part) {
+                                    int fitted_parameters, bool theta_part, int threads) {
   double dof = 0.0;
   for (char v : pass.valid) dof += v ? 3.0 : 0.0;
   dof = std::max(dof, 1.0);
   const double rho = std::max(0.1, 1.0 - fitted_parameters / dof);
   // -log L in s = log sigma, by Newton's method on its central differences
-  // (each a reduction without the Jacobian, O(E); 19 per step): quadratic
-  // convergence, so the profile is a smooth function of theta to rounding.
-  auto f = [&](const Eigen::Vector3d& s) {
-    return ReduceGyro(pass, s.array().exp(), rho, false).neg_log_l;
-  };
+  // (each a reduction without the Jacobian, O(E); 19 per step, independent:
+  // on `threads`): quadratic convergence, so the profile is a smooth function
+  // of theta to rounding.
   Eigen::Vector3d s = start.array().max(1e-12).log();
   const double h = 1e-3;
+  // The 19 points of a step: s, s +- h e_i (i = 0..2), s +- h e_i +- h e_j (i < j).
+  std::vector<Eigen::Vector3d> points(19);
+  std::vector<double> f(19);
   for (int it = 0; it < 30; ++it) {
-    const double f0 = f(s);
-    Eigen::Vector3d g, fp, fm;
-    Eigen::Matrix3d H;
+    points[0] = s;
+    int k = 1;
     for (int i = 0; i < 3; ++i) {
-      Eigen::Vector3d a = s, b = s;
-      a[i] += h;
-      b[i] -= h;
-      fp[i] = f(a);
-      fm[i] = f(b);
-      g[i] = (fp[i] - fm[i]) / (2.0 * h);
-      H(i, i) = (fp[i] - 2.0 * f0 + fm[i]) / (h * h);
+      for (double d : {h, -h}) {
+        points[k] = s;
+        points[k++][i] += d;
+      }
     }
     for (int i = 0; i < 3; ++i) {
       for (int j = i + 1; j < 3; ++j) {
-        Eigen::Vector3d pp = s, pm = s, mp = s, mm = s;
-        pp[i] += h, pp[j] += h;
-        pm[i] += h, pm[j] -= h;
-        mp[i] -= h, mp[j] += h;
-        mm[i] -= h, mm[j] -= h;
-        H(i, j) = H(j, i) = (f(pp) - f(pm) - f(mp) + f(mm)) / (4.0 * h * h);
+        for (double di : {h, -h}) {
+          for (double dj : {h, -h}) {
+            points[k] = s;
+            points[k][i] += di;
+            points[k++][j] += dj;
+          }
+        }
+      }
+    }
+    ParallelFor(points.size(), threads, [&](std::size_t q) {
+      f[q] = ReduceGyro(pass, points[q].array().exp(), rho, false).neg_log_l;
+    });
+    const double f0 = f[0];
+    Eigen::Vector3d g;
+    Eigen::Matrix3d H;
+    for (int i = 0; i < 3; ++i) {
+      const double fp = f[1 + 2 * i], fm = f[2 + 2 * i];
+      g[i] = (fp - fm) / (2.0 * h);
+      H(i, i) = (fp - 2.0 * f0 + fm) / (h * h);
+    }
+    k = 7;
+    for (int i = 0; i < 3; ++i) {
+      for (int j = i + 1; j < 3; ++j, k += 4) {  // ++, +-, -+, --
+        H(i, j) = H(j, i) = (f[k] - f[k + 1] - f[k + 2] + f[k + 3]) / (4.0 * h * h);
       }
     }
     const Eigen::LDLT<Eigen::Matrix3d> ldlt(H);
@@ -455,37 +470,42 @@ GyroReduction ReduceGyroAtBestNoise(const GyroPass& pass, const Eigen::Vector3d&
     if (-g.dot(step) < 1e-12) break;
   }
   if (!theta_part) return ReduceGyro(pass, s.array().exp(), rho, false);
-  return ReduceGyroAtNoise(pass, s.array().exp(), rho);
+  return ReduceGyroAtNoise(pass, s.array().exp(), rho, threads);
 }
 
 GyroReduction ReduceGyroAtNoise(const GyroPass& pass, const Eigen::Vector3d& noise_rad_s,
-                                double rho) {
+                                double rho, int threads) {
   GyroReduction out = ReduceGyro(pass, noise_rad_s, rho, true);
   if (out.gradient.size() == 0) return out;
   const int go = static_cast<int>(pass.theta.size()) - kNumGyroParams;
   const Eigen::Vector3d s = noise_rad_s.array().log();
-  const double h = 1e-3;
-  // The weights' derivatives. By K_i: d cost / d K_i = q_i / K_i,
-  // q_i = -d cost / d log sigma_i.
+  const double h = 1e-3, ha = 1e-6;
+  // The weights' derivatives, each a pair of costs (18 reductions, independent:
+  // on `threads`). By K_i (q = 0..2): d cost / d K_i = q_i / K_i, q_i = -d cost /
+  // d log sigma_i. By the angles (q = 3..8): the cost with the weights' Mg^-1
+  // moved, the residual kept.
+  std::vector<double> plus(9), minus(9);
+  ParallelFor(18, threads, [&](std::size_t k) {
+    const int q = static_cast<int>(k / 2);
+    const double sign = k % 2 == 0 ? 1.0 : -1.0;
+    double cost;
+    if (q < 3) {
+      Eigen::Vector3d a = s;
+      a[q] += sign * h;
+      cost = ReduceGyro(pass, a.array().exp(), rho, false).cost;
+    } else {
+      Eigen::VectorXd t = pass.theta;
+      t[go + kGAlphaX + q - 3] += sign * ha;
+      const Eigen::Matrix3d M = GyroMisalignmentMatrix(t.data() + go).inverse();
+      cost = ReduceGyro(pass, noise_rad_s, rho, false, false, &M).cost;
+    }
+    (sign > 0.0 ? plus : minus)[q] = cost;
+  });
   for (int i = 0; i < 3; ++i) {
-    Eigen::Vector3d a = s, b = s;
-    a[i] += h;
-    b[i] -= h;
-    const double q = -(ReduceGyro(pass, a.array().exp(), rho, false).cost -
-                       ReduceGyro(pass, b.array().exp(), rho, false).cost) / (2.0 * h);
-    out.gradient[go + kGKx + i] += q / pass.K[i];
+    out.gradient[go + kGKx + i] += -(plus[i] - minus[i]) / (2.0 * h) / pass.K[i];
   }
-  // By the angles: the cost with the weights' Mg^-1 moved, the residual kept.
   for (int a = 0; a < 6; ++a) {
-    const double ha = 1e-6;
-    Eigen::VectorXd tp = pass.theta, tm = pass.theta;
-    tp[go + kGAlphaX + a] += ha;
-    tm[go + kGAlphaX + a] -= ha;
-    const Eigen::Matrix3d Mp = GyroMisalignmentMatrix(tp.data() + go).inverse();
-    const Eigen::Matrix3d Mm = GyroMisalignmentMatrix(tm.data() + go).inverse();
-    out.gradient[go + kGAlphaX + a] +=
-        (ReduceGyro(pass, noise_rad_s, rho, false, false, &Mp).cost -
-         ReduceGyro(pass, noise_rad_s, rho, false, false, &Mm).cost) / (2.0 * ha);
+    out.gradient[go + kGAlphaX + a] += (plus[3 + a] - minus[3 + a]) / (2.0 * ha);
   }
   return out;
 }

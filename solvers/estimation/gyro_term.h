@@ -133,11 +133,13 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
 // At a given noise, with the theta part and the weights' derivatives in the
 // gradient (what a change of the gradient at fixed noise is measured with).
 GyroReduction ReduceGyroAtNoise(const GyroPass& pass, const Eigen::Vector3d& noise_rad_s,
-                                double rho);
+                                double rho, int threads = 1);
 
 // The noise at the maximum of the restricted likelihood (from `start`),
-// reduced there (ReduceGyroAtNoise with theta_part).
+// reduced there (ReduceGyroAtNoise with theta_part). Both take their
+// independent reductions (the central differences) on `threads`; the
+// result does not depend on it.
 GyroReduction ReduceGyroAtBestNoise(const GyroPass& pass, const Eigen::Vector3d& start,
-                                    int fitted_parameters, bool theta_part);
+                                    int fitted_parameters, bool theta_part, int threads = 1);
 
 }  // namespace triadcal
