@@ -353,6 +353,35 @@ TEST_F(ReportBrowserTest, GyroFitShowsItsOwnVerdictParametersAndResidual) {
   EXPECT_NE(RowOf(page, "Kx").find("<td>"), std::string::npos);
 }
 
+// diagnose on a run with a gyro: the report shows the gyro's verdict before
+// and after the loop, and its residual before and after.
+TEST_F(ReportBrowserTest, GyroDiagnoseShowsTheGyroBeforeAndAfter) {
+  if (chromium_.empty()) GTEST_SKIP() << "chromium is not installed (setup.sh installs it)";
+  MakeFitReport("gyro", 7, /*with_gyro=*/true);
+  ASSERT_EQ(Run("diagnose " + Path("gyro/run.yaml") + " -o " + Path("diag.json") +
+                " --candidates angle_latency,thermal_drift --report " + Path("diag.html")),
+            0)
+      << Err();
+  const nlohmann::json diag = nlohmann::json::parse(Slurp(Path("diag.json")));
+  ASSERT_TRUE(diag["after"]["gyro"]["verdict"]["sentence"].is_string()) << diag["after"].dump();
+  const BrowserResult r = Load(Path("diag.html"));
+  EXPECT_EQ(r.status, "ok") << r.result.dump();
+  EXPECT_TRUE(r.console.empty()) << Joined(r.console);
+  const std::string page = MainOf(r.dom);
+  ASSERT_FALSE(page.empty());
+  for (const char* bad : {"[object Object]", "undefined", "NaN"}) {
+    EXPECT_EQ(page.find(bad), std::string::npos) << bad;
+  }
+  EXPECT_NE(page.find("Gyro triad, before and after"), std::string::npos);
+  for (const char* state : {"before", "after"}) {
+    const std::string sentence = diag[state]["gyro"]["verdict"]["sentence"].get<std::string>();
+    EXPECT_NE(page.find(std::string(state) + ": " + sentence), std::string::npos) << sentence;
+  }
+  EXPECT_NE(page.find("Residual time series (gyro, after)"), std::string::npos);
+  EXPECT_NE(page.find("Residual time series (gyro, before)"), std::string::npos);
+  EXPECT_EQ(Count(page, "<tr><td>gyro.W0y</td>"), 1u);
+}
+
 // The check fails when it should: a console error, a script error, or a
 // chart with nothing drawn.
 TEST_F(ReportBrowserTest, CheckFailsOnConsoleErrorScriptErrorAndBlankChart) {

@@ -507,6 +507,22 @@
     residualCharts(p, b.residual_plot, 'before');
     residualCharts(p, a.residual_plot, 'after');
     residualStats(p, a.residual, 'Residual statistics after');
+    if (a.gyro && a.gyro.verdict) renderGyroBeforeAfter(p, b.gyro, a.gyro);
+  }
+  // With a gyro (SPEC section 10), every fit of the loop estimated it: its
+  // verdict before and after, and its increment residual before and after
+  // (its parameters are in the table above).
+  function renderGyroBeforeAfter(p, before, after) {
+    var s = section(p, 'Gyro triad, before and after');
+    [['before', before], ['after', after]].forEach(function (st) {
+      var v = st[1] && st[1].verdict;
+      if (!v) return;
+      s.appendChild(el('p', {cls: 'verdict-text'},
+                        [badge(v.pass ? 'pass' : 'fail', v.pass ? 'PASS' : 'CHECK'),
+                         ' ' + st[0] + ': ' + v.sentence]));
+    });
+    residualCharts(p, before && before.residual_plot, 'gyro, before', 'Gyro residual before');
+    residualCharts(p, after.residual_plot, 'gyro, after', 'Gyro residual after');
   }
   function renderFilter(p, out) {
     ['ekf', 'rts'].forEach(function (k) {
