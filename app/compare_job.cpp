@@ -33,6 +33,7 @@ nlohmann::json CompareJson(const std::string& run_yaml, const CompareOutcome& c)
       {"verdict", rep.verdict},
       {"chi2_per_dof", br.chi2_per_dof}};
   out["not_estimable"] = std::vector<std::string>(ParametersIn(rep.weak));
+  if (c.filter.gyro_left_out) out["gyro"] = FilterGyroJson();
   out["time_s"] = {{"filter", c.filter_s}, {"fit_from_rts", c.fit_s}};
   nlohmann::json diff = nlohmann::json::object();
   double max_abs = 0.0;

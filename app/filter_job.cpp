@@ -56,6 +56,8 @@ std::string FilterSeriesCsv(const ParameterLayout& layout, const FilterResult& r
   return s.str();
 }
 
+nlohmann::json FilterGyroJson() { return {{"estimated", false}, {"why", kFilterLeavesTheGyro}}; }
+
 namespace {
 
 nlohmann::json FilterJson(const FilterSettings& s, const std::string& run_yaml,
@@ -107,6 +109,7 @@ nlohmann::json FilterJson(const FilterSettings& s, const std::string& run_yaml,
       {"rms_s_m", {r.innovation_rms[3], r.innovation_rms[4], r.innovation_rms[5]}},
       {"mean_nis", r.mean_nis},
       {"mean_nis_expected", 6}};
+  if (f.gyro_left_out) out["gyro"] = FilterGyroJson();
   out["samples"] = run.data.size();
   out["time_s"] = f.seconds;
   return out;
@@ -119,6 +122,8 @@ FilterOutcome FilterRun(const FilterSettings& s, const std::string& run_yaml, co
   s.Validate();
   const auto t0 = std::chrono::steady_clock::now();
   FilterOutcome f;
+  f.gyro_left_out = run.description.gyro.has_value() && run.data.has_gyro();
+  if (f.gyro_left_out && session.warning) session.warning(kFilterLeavesTheGyro);
   f.layout = ParameterLayout(ParseEffectList(s.effects, run.data), /*gyro=*/false,
                              ReadingsUnit(run.description));
   FilterOptions opt;

@@ -41,6 +41,13 @@ struct FilterSettings {
   void Validate() const;
 };
 
+// Why the filter (and compare) leave a run's gyro out.
+inline constexpr const char* kFilterLeavesTheGyro =
+    "the gyro triad is left out: the filter has no gyro measurement (fit and diagnose "
+    "calibrate it)";
+// OUT's "gyro" of a filter that left it out.
+nlohmann::json FilterGyroJson();
+
 struct FilterOutcome {
   ParameterLayout layout;
   FilterResult result;
@@ -50,6 +57,10 @@ struct FilterOutcome {
   std::vector<std::string> pinned;      // held at nominal: decision.held + decision.consider
   std::vector<WeakDirection> weak;      // directions the run leaves to the prior
   std::set<std::string> not_estimable;  // prior values: weak, pinned and relative ones
+  // The run has a gyro (block and columns) the filter leaves out: it has no
+  // gyro measurement (fit and diagnose calibrate the gyro). Said as a warning
+  // and in OUT ("gyro": {"estimated": false, "why": ...}).
+  bool gyro_left_out = false;
   // The reading noise it ran at, per channel, in the readings' unit: the
   // declared one, or with noise_mV: auto the readings' own (RunReadingNoise_mV).
   Eigen::Vector3d noise = Eigen::Vector3d::Zero();

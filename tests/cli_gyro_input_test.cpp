@@ -251,5 +251,28 @@ TEST_F(CliGyroInput, DiagnoseCarriesTheGyroAndFindsTheSharedLatency) {
   EXPECT_GE(judged, 15);
 }
 
+// filter and compare on a run with a gyro say that they leave it out (one
+// warning line, and OUT's "gyro"), never silently.
+TEST_F(CliGyroInput, FilterAndCompareSayTheyLeaveTheGyroOut) {
+  for (const char* command : {"filter", "compare"}) {
+    const testing_fixtures::CliResult r =
+        Run(std::string(command) + " " + WriteText("g.yaml", "data: gyro.csv\ngyro: {}\n") +
+            " -o " + Path("out.json"));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.err.find("triadcal: warning: the gyro triad is left out: the filter has no gyro "
+                         "measurement"),
+              std::string::npos)
+        << command << ": " << r.err;
+    const nlohmann::json out = nlohmann::json::parse(ReadFile(Path("out.json")));
+    EXPECT_EQ(out["gyro"]["estimated"], false) << command;
+  }
+  // Without a gyro, nothing is said.
+  const testing_fixtures::CliResult plain = Run("filter " + Path("run.yaml") + " -o " +
+                                                Path("plain.json"));
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  EXPECT_EQ(plain.err.find("gyro"), std::string::npos) << plain.err;
+  EXPECT_FALSE(nlohmann::json::parse(ReadFile(Path("plain.json"))).contains("gyro"));
+}
+
 }  // namespace
 }  // namespace triadcal
