@@ -160,4 +160,20 @@ void CheckSimulationFolder(const std::string& dir, const Session& session) {
   }
 }
 
+std::string StampedJson(const nlohmann::json& j, const Session& session) {
+  nlohmann::ordered_json stamped = nlohmann::ordered_json::object();
+  stamped["provenance"] = nlohmann::ordered_json::parse(session.provenance.Json().dump());
+  if (j.is_object()) {
+    for (const auto& [key, value] : j.items()) {
+      if (key != "provenance") stamped[key] = nlohmann::ordered_json::parse(value.dump());
+    }
+  }
+  return stamped.dump(2) + "\n";
+}
+
+void WriteJsonFile(const nlohmann::json& j, const std::string& path, const Session& session) {
+  CheckOverwrite(path, session);
+  WriteFileAtomically(path, StampedJson(j, session));
+}
+
 }  // namespace triadcal

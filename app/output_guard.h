@@ -3,6 +3,7 @@
 // (app/provenance.h) tells what it was made from.
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "app/session.h"
@@ -18,6 +19,15 @@ namespace triadcal {
 // stored provenance is looked for in the first and last megabyte of OUT only
 // (the writers put it first).
 void CheckOverwrite(const std::string& out_path, const Session& session);
+
+// OUT as written: the session's "provenance" first, then the other keys in
+// their (sorted) order (the guard reads only the start of an existing
+// output), 2-space indentation, a final newline.
+std::string StampedJson(const nlohmann::json& j, const Session& session);
+
+// CheckOverwrite, then StampedJson written atomically to `path`: how every
+// job that files its outputs itself (batch) writes them.
+void WriteJsonFile(const nlohmann::json& j, const std::string& path, const Session& session);
 
 // The same for simulate's folder: a non-empty DIR holding results (run.csv,
 // run.yaml, truth.json, or any JSON with a provenance) that do not come from

@@ -2,6 +2,8 @@
 // dicts (python/README in docs/library.md).
 //
 //   triadcal.fit(run, **options) -> dict         the OUT of `triadcal fit` (its job)
+//   triadcal.filter(run, **options) -> dict      the OUT of `triadcal filter`
+//   triadcal.diagnose(run, **options) -> dict    the OUT of `triadcal diagnose`
 //   triadcal.apply(calibration, readings_mV, t_s=None, temp_C=None) -> (N, 3)
 //   triadcal.apply_gyro(calibration, gyro_dps, W_g) -> (N, 3)     [deg/s]
 //   triadcal.simulate(scenario, seed=None, out_dir=None) -> dict of arrays
@@ -28,6 +30,8 @@
 #include "core/model/errors.h"
 #include "core/model/units.h"
 #include "core/simulation/simulator.h"
+#include "app/diagnose_job.h"
+#include "app/filter_job.h"
 #include "app/fit_job.h"
 #include "app/run_loading.h"
 #include "app/session.h"
@@ -139,6 +143,27 @@ py::dict RunDataDict(const RunData& d) {
   return out;
 }
 
+// A job on a run: `job(run_yaml, run, session)` in a session whose provenance
+// is what a written OUT carries (app/provenance.h): the tool, the call, and
+// the run's and data's SHA-256, recorded as they are read. Returns the job's
+// OUT with that provenance. The GIL is released while the job runs.
+template <typename Job>
+py::object RunJob(const py::object& run_arg, const std::string& call, const Job& job) {
+  const RunDescription description = RunFrom(run_arg);
+  const bool from_file = py::isinstance<py::str>(run_arg);  // a dict has no file
+  json out;
+  {
+    py::gil_scoped_release release;
+    Session session;
+    session.provenance = Provenance(ToolVersion(), ToolGitCommit(), "python: triadcal." + call);
+    if (from_file) session.provenance.RecordInput("run", description.yaml_path);
+    const LoadedRun run = LoadRun(description, &session);
+    out = job(description.yaml_path, run, session);
+    out["provenance"] = session.provenance.Json();
+  }
+  return FromJson(out);
+}
+
 // `triadcal fit` through its job (app/fit_job.h): the same settings (their
 // defaults those of the command line), the same OUT.
 py::object Fit(const py::object& run_arg, const std::string& effects, double epoch_s,
@@ -157,21 +182,49 @@ py::object Fit(const py::object& run_arg, const std::string& effects, double epo
   settings.hold = hold;
   settings.free = free;
   settings.Validate();
-  const RunDescription description = RunFrom(run_arg);
-  const bool from_file = py::isinstance<py::str>(run_arg);  // a dict has no file
-  json out;
-  {
-    py::gil_scoped_release release;
-    Session session;
-    // The provenance a written OUT carries (app/provenance.h): the tool, the
-    // call, and the run's and data's SHA-256, recorded as they are read.
-    session.provenance = Provenance(ToolVersion(), ToolGitCommit(), "python: triadcal.fit");
-    if (from_file) session.provenance.RecordInput("run", description.yaml_path);
-    const LoadedRun run = LoadRun(description, &session);
-    out = FitRun(settings, description.yaml_path, run, session).json;
-    out["provenance"] = session.provenance.Json();
-  }
-  return FromJson(out);
+  return RunJob(run_arg, "fit", [&](const std::string& yaml, const LoadedRun& run,
+                                    const Session& session) {
+    return FitRun(settings, yaml, run, session).json;
+  });
+}
+
+// `triadcal filter` through its job (app/filter_job.h). A diverged filter
+// raises InputError with the command's sentence.
+py::object FilterOut(const py::object& run_arg, const std::string& effects, double epoch_s,
+                  double rate_window_s, int iterations, bool correlations, bool auto_hold,
+                  const std::vector<std::string>& hold, const std::vector<std::string>& free) {
+  FilterSettings settings;
+  settings.effects = effects;
+  settings.epoch_s = epoch_s;
+  settings.rate_window_s = rate_window_s;
+  settings.iterations = iterations;
+  settings.correlations = correlations;
+  settings.auto_hold = auto_hold;
+  settings.hold = hold;
+  settings.free = free;
+  settings.Validate();
+  return RunJob(run_arg, "filter", [&](const std::string& yaml, const LoadedRun& run,
+                                       const Session& session) {
+    FilterOutcome f = FilterRun(settings, yaml, run, session);
+    if (!f.error.empty()) throw InputError(f.error);
+    return f.json;
+  });
+}
+
+// `triadcal diagnose` through its job (app/diagnose_job.h).
+py::object DiagnoseOut(const py::object& run_arg, const std::string& candidates, double alpha,
+                    int max_effects, double epoch_s, int threads) {
+  DiagnoseSettings settings;
+  settings.candidates = candidates;
+  settings.alpha = alpha;
+  settings.max_effects = max_effects;
+  settings.epoch_s = epoch_s;
+  settings.threads = threads;
+  settings.Validate();
+  return RunJob(run_arg, "diagnose", [&](const std::string& yaml, const LoadedRun& run,
+                                         const Session& session) {
+    return DiagnoseRun(settings, yaml, run, nullptr, session).json;
+  });
 }
 
 py::array_t<double> Apply(const py::object& cal_arg,
@@ -278,6 +331,22 @@ PYBIND11_MODULE(triadcal, m) {
         "(the same job); returns its OUT as a dict (parameters: {name: {value, sigma, unit, "
         "...}}, sigma, residual_analysis, settings, ..., and the provenance a written file "
         "carries: the tool, the call and the SHA-256 of the run and its data).");
+  const triadcal::FilterSettings filtering;  // those of `triadcal filter`
+  m.def("filter", &triadcal::FilterOut, "run"_a, py::kw_only(), "effects"_a = filtering.effects,
+        "epoch_s"_a = filtering.epoch_s, "rate_window_s"_a = filtering.rate_window_s,
+        "iterations"_a = filtering.iterations, "correlations"_a = filtering.correlations,
+        "auto_hold"_a = filtering.auto_hold, "hold"_a = filtering.hold, "free"_a = filtering.free,
+        "The paper's EKF + RTS smoother on a run (run.yaml path or dict), as `triadcal filter` "
+        "runs it (the same job); returns its OUT as a dict (ekf, rts, innovations, held, ...) "
+        "with the provenance a written file carries.");
+  const triadcal::DiagnoseSettings diagnosing;  // those of `triadcal diagnose`
+  m.def("diagnose", &triadcal::DiagnoseOut, "run"_a, py::kw_only(),
+        "candidates"_a = diagnosing.candidates, "alpha"_a = diagnosing.alpha,
+        "max_effects"_a = diagnosing.max_effects, "epoch_s"_a = diagnosing.epoch_s,
+        "threads"_a = diagnosing.threads,
+        "The closed loop of SPEC section 8 on a run (run.yaml path or dict), as `triadcal "
+        "diagnose` runs it (the same job); returns its OUT as a dict (selected, could_hide, "
+        "states, ...) with the provenance a written file carries.");
   m.def("apply", &triadcal::Apply, "calibration"_a, "readings_mV"_a, "t_s"_a = py::none(),
         "temp_C"_a = py::none(),
         "Raw readings (N, 3) [mV, triad axes] -> specific force W (N, 3) [g] by the exact "

@@ -1,7 +1,7 @@
 // `triadcal merge SHARD.json... -o OUT.json`: the outputs of the N shards of
 // one `montecarlo --shard I/N` or `batch --shard I/N` job as the one output
 // the whole job would have written (tools/report/monte_carlo_shard.h,
-// tools/batch/batch_summary.h). A batch merge also writes OUT.csv beside
+// app/batch_summary.h). A batch merge also writes OUT.csv beside
 // OUT.json.
 #include <cstdio>
 #include <memory>
@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
+#include "app/batch_summary.h"
 #include "core/io/file_util.h"
 #include "core/model/errors.h"
-#include "tools/batch/batch_summary.h"
 #include "tools/command_util.h"
 #include "tools/commands.h"
 #include "tools/report/monte_carlo_shard.h"

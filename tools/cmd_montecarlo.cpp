@@ -3,7 +3,7 @@
 // scatter against their own sigma and against the Cramer-Rao bound
 // (solvers/analysis/monte_carlo.h), in parallel over the cores, over the ranks
 // of `mpirun -n R` and over Slurm shards (`--shard I/N`, merged by `triadcal
-// merge`); see tools/distribution/work_split.h for who does which seed.
+// merge`); see app/work_split.h for who does which seed.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -23,8 +23,8 @@
 #include "solvers/estimation/run_problem.h"
 #include "tools/commands.h"
 #include "app/output_guard.h"
+#include "app/work_split.h"
 #include "tools/distribution/mpi_context.h"
-#include "tools/distribution/work_split.h"
 #include "tools/report/monte_carlo_json.h"
 #include "tools/report/monte_carlo_shard.h"
 

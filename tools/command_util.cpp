@@ -158,17 +158,11 @@ void WriteOutput(const std::string& path, const std::string& content) {
 }
 
 void WriteJson(const nlohmann::json& j, const std::string& path, const Session& session) {
-  if (!IsStdout(path)) CheckOverwrite(path, session);
-  // "provenance" first, the other keys in their (sorted) order: the output
-  // guard reads only the start of an existing output (app/output_guard.h).
-  nlohmann::ordered_json stamped = nlohmann::ordered_json::object();
-  stamped["provenance"] = nlohmann::ordered_json::parse(session.provenance.Json().dump());
-  if (j.is_object()) {
-    for (const auto& [key, value] : j.items()) {
-      if (key != "provenance") stamped[key] = nlohmann::ordered_json::parse(value.dump());
-    }
+  if (IsStdout(path)) {
+    WriteOutput(path, StampedJson(j, session));
+  } else {
+    WriteJsonFile(j, path, session);
   }
-  WriteOutput(path, stamped.dump(2) + "\n");
 }
 
 void WriteReportIfAsked(const std::string& report_html, const nlohmann::json& out,

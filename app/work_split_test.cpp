@@ -1,4 +1,4 @@
-#include "tools/distribution/work_split.h"
+#include "app/work_split.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "tools/batch/manifest.h"
+#include "app/manifest.h"
 
 #include <gtest/gtest.h>
 

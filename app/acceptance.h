@@ -1,13 +1,15 @@
 // Acceptance of one calibration against the manifest's limits: each limit on
-// a parameter's value (min, max) or on its sigma (sigma_max), in file units,
-// read from the "parameters" object of the calibration (SPEC section 7).
+// a parameter's value (min, max) or on its sigma (sigma_max), read from the
+// "parameters" object of the calibration (SPEC section 7) in the unit that
+// object gives the parameter: the fit's, which follows the readings (counts/g
+// for readings in counts, mV/g for mV), never an assumed mV.
 #pragma once
 
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
-#include "tools/batch/manifest.h"
+#include "app/manifest.h"
 
 namespace triadcal {
 
@@ -23,6 +25,10 @@ struct LimitViolation {
 
 std::vector<LimitViolation> CheckLimits(const std::vector<ParameterLimit>& limits,
                                         const nlohmann::json& parameters);
+
+// The limits as unit.json lists them: [{"parameter", "min", "max", "sigma_max"}]
+// (only the limits given).
+nlohmann::json LimitsJson(const std::vector<ParameterLimit>& limits);
 
 nlohmann::json ViolationJson(const LimitViolation& v);
 LimitViolation ViolationFromJson(const nlohmann::json& j);

@@ -16,8 +16,9 @@
 //     - {serial: A001, run: A001/run.yaml}
 //     - {serial: A002, run: A002/run.yaml, diagnose: true, limits: {Kx: {max: 180}}}
 //
-// Limits are in the file units of SPEC section 3 (mV/g, mV, arcmin, 1/g, mm,
-// effect parameters by their `effect.param` name). `run` paths are relative to
+// Limits are in the units the fit gives each parameter (SPEC section 3: mV/g,
+// mV, arcmin, 1/g, mm for readings in mV; counts/g, counts for readings in
+// counts: the readings' unit; effect parameters by their `effect.param` name). `run` paths are relative to
 // the manifest (or `shared:`, core/io/file_util.h). A serial becomes a folder
 // name: letters, digits, '.', '_' and '-' only.
 #pragma once
@@ -30,7 +31,7 @@ namespace triadcal {
 
 struct ParameterLimit {
   std::string parameter;
-  std::optional<double> min, max, sigma_max;  // file units
+  std::optional<double> min, max, sigma_max;  // in the unit the fit gives the parameter
 };
 
 struct ManifestEntry {

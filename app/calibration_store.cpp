@@ -1,4 +1,4 @@
-#include "tools/batch/calibration_store.h"
+#include "app/calibration_store.h"
 
 #include <cmath>
 #include <cstdio>

@@ -1,4 +1,4 @@
-#include "tools/batch/acceptance.h"
+#include "app/acceptance.h"
 
 #include <cstdio>
 
@@ -39,6 +39,18 @@ std::vector<LimitViolation> CheckLimits(const std::vector<ParameterLimit>& limit
     if (l.sigma_max && sigma > *l.sigma_max) {
       out.push_back({l.parameter, "sigma_max", sigma, *l.sigma_max, unit});
     }
+  }
+  return out;
+}
+
+nlohmann::json LimitsJson(const std::vector<ParameterLimit>& limits) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const ParameterLimit& l : limits) {
+    nlohmann::json jl = {{"parameter", l.parameter}};
+    if (l.min) jl["min"] = *l.min;
+    if (l.max) jl["max"] = *l.max;
+    if (l.sigma_max) jl["sigma_max"] = *l.sigma_max;
+    out.push_back(jl);
   }
   return out;
 }

@@ -1,4 +1,4 @@
-#include "tools/batch/batch_summary.h"
+#include "app/batch_summary.h"
 
 #include <cstdio>
 #include <sstream>

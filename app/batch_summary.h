@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "tools/batch/acceptance.h"
+#include "app/acceptance.h"
 
 namespace triadcal {
 

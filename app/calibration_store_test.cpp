@@ -1,13 +1,13 @@
-#include "tools/batch/calibration_store.h"
+#include "app/calibration_store.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <filesystem>
 
+#include "app/acceptance.h"
 #include "core/model/errors.h"
 #include "tests/temp_dir_test.h"
-#include "tools/batch/acceptance.h"
 
 namespace triadcal {
 namespace {
