@@ -12,6 +12,13 @@
 namespace triadcal {
 namespace testing_fixtures {
 
+// A folder of this process's own under the temporary folder (name and pid):
+// two test runs at once (two checkouts, a sanitizer build) never share it.
+inline std::filesystem::path OwnTempDir(const std::string& name) {
+  return std::filesystem::temp_directory_path() /
+         ("triadcal_" + name + "_" + std::to_string(::getpid()));
+}
+
 class TempDirTest : public ::testing::Test {
  protected:
   void SetUp() override {

@@ -13,6 +13,7 @@
 #include "solvers/diagnosis/effect_discovery.h"
 #include "solvers/statistics/statistics.h"
 #include "tests/sim_fixtures.h"
+#include "tests/temp_dir_test.h"
 
 namespace triadcal {
 namespace {
@@ -288,7 +289,7 @@ TEST(Diagnose, SaysWhenNoCandidateExplainsTheResidual) {
 
 TEST(DiagnoseCommand, BadTruthFileFailsBeforeAnyOutput) {
   namespace fs = std::filesystem;
-  const fs::path dir = fs::path(testing::TempDir()) / "diag_cmd";
+  const fs::path dir = testing_fixtures::OwnTempDir("diag_cmd");
   fs::remove_all(dir);
   fs::create_directories(dir);
   const std::string bin = TRIADCAL_BIN;

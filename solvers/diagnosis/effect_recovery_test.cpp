@@ -21,6 +21,7 @@
 #include "solvers/estimation/batch_solver.h"
 #include "solvers/statistics/statistics.h"
 #include "tests/sim_fixtures.h"
+#include "tests/temp_dir_test.h"
 
 namespace triadcal {
 namespace {
@@ -90,7 +91,7 @@ TEST(EffectRecovery, EveryRegisteredEffectIsRecoveredWithinItsSigma) {
 // line, exit 2 and no output.
 TEST(EffectNeeds, FitRefusesAnEffectWhoseDataTheRunLacks) {
   namespace fs = std::filesystem;
-  const fs::path dir = fs::path(testing::TempDir()) / "effect_needs";
+  const fs::path dir = testing_fixtures::OwnTempDir("effect_needs");
   fs::remove_all(dir);
   fs::create_directories(dir);
   const std::string bin = TRIADCAL_BIN;

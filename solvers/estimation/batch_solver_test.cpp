@@ -17,6 +17,7 @@
 #include "solvers/estimation/observability.h"
 #include "solvers/estimation/run_evaluation.h"
 #include "tests/sim_fixtures.h"
+#include "tests/temp_dir_test.h"
 
 namespace triadcal {
 namespace {
@@ -384,7 +385,7 @@ TEST(BatchSolver, VerticalShaftScaleFactorsStayAtNominalAndAreNotDetermined) {
 
 TEST(FitCommand, FitAndCompareWriteTheirOutputs) {
   namespace fs = std::filesystem;
-  const fs::path dir = fs::path(testing::TempDir()) / "fit_cmd";
+  const fs::path dir = testing_fixtures::OwnTempDir("fit_cmd");
   fs::remove_all(dir);
   fs::create_directories(dir);
   const std::string bin = TRIADCAL_BIN;
@@ -467,7 +468,7 @@ TEST(BatchSolver, ConsideredParameterCarriesItsUncertainty) {
 // A missing output folder is reported before any work, in one line.
 TEST(FitCommand, MissingOutputFolderFailsFirst) {
   namespace fs = std::filesystem;
-  const fs::path dir = fs::path(testing::TempDir()) / "fit_outdir";
+  const fs::path dir = testing_fixtures::OwnTempDir("fit_outdir");
   fs::remove_all(dir);
   fs::create_directories(dir);
   const std::string bin = TRIADCAL_BIN;

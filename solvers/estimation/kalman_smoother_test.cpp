@@ -11,6 +11,7 @@
 #include "solvers/estimation/kalman_smoother.h"
 #include "solvers/estimation/separability.h"
 #include "tests/sim_fixtures.h"
+#include "tests/temp_dir_test.h"
 
 namespace triadcal {
 namespace {
@@ -105,7 +106,8 @@ TEST(KalmanSmoother, EpochsFollowEpochInterval) {
 }
 
 int RunCommand(const std::string& args, std::string* err) {
-  const std::string errfile = testing::TempDir() + "filter_err.txt";
+  const std::string errfile = (testing_fixtures::OwnTempDir("filter_cmd") / "err.txt").string();
+  std::filesystem::create_directories(testing_fixtures::OwnTempDir("filter_cmd"));
   const int rc = std::system((std::string(TRIADCAL_BIN) + " " + args + " 2> " + errfile +
                               " > /dev/null").c_str());
   std::ifstream in(errfile);
@@ -115,7 +117,7 @@ int RunCommand(const std::string& args, std::string* err) {
 
 TEST(FilterCommand, BadRunFileGivesOneLineAndNoOutput) {
   namespace fs = std::filesystem;
-  const fs::path dir = fs::path(testing::TempDir()) / "filter_bad";
+  const fs::path dir = testing_fixtures::OwnTempDir("filter_bad");
   fs::create_directories(dir);
   const fs::path yaml = dir / "run.yaml";
   std::ofstream(yaml) << "data: missing.csv\n";
@@ -143,7 +145,7 @@ namespace {
 // dlambda2 and names the direction; without holding it names all three.
 TEST(FilterCommand, NamesTheInnerAxisRotationWithoutTheConstraint) {
   namespace fs = std::filesystem;
-  const fs::path dir = fs::path(testing::TempDir()) / "filter_nc";
+  const fs::path dir = testing_fixtures::OwnTempDir("filter_nc");
   fs::remove_all(dir);
   const std::string bin = TRIADCAL_BIN;
   const std::string scen = std::string(TRIADCAL_SOURCE_DIR) + "/examples/paper-experiment3/scenario.yaml";

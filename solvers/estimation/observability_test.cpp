@@ -21,6 +21,7 @@
 #include "solvers/estimation/observability.h"
 #include "tests/sim_fixtures.h"
 #include "core/io/run_description_io.h"
+#include "tests/temp_dir_test.h"
 
 namespace triadcal {
 namespace {
@@ -382,7 +383,7 @@ run:
 
 struct Cli {
   fs::path dir;
-  explicit Cli(const std::string& name) : dir(fs::path(testing::TempDir()) / name) {
+  explicit Cli(const std::string& name) : dir(testing_fixtures::OwnTempDir(name)) {
     fs::remove_all(dir);
     fs::create_directories(dir);
     std::ofstream(dir / "scen.yaml") << kSmallScenario;
