@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <set>
 #include <stdexcept>
 
@@ -416,253 +417,329 @@ HoldDecision DecideHeldParameters(const RunDescription& run, const RunData& data
                               opt.init_decimation_hz, opt.threads);
 }
 
-BatchResult SolveBatch(const RunDescription& run, const RunData& data,
-                       const ParameterLayout& layout, const BatchOptions& opt) {
-  const auto t_start = std::chrono::steady_clock::now();
-  const int threads = opt.threads > 0 ? opt.threads : DefaultThreads();
-  if (opt.sigma != "auto" && opt.sigma != "white" && opt.sigma != "hac") {
-    throw OptionError("sigma", "unknown '" + opt.sigma + "' (auto, white, hac)");
+namespace {
+
+// One fit, step by step (SolveBatch): the state in members, each step named.
+class BatchSolve {
+ public:
+  BatchSolve(const RunDescription& run, const RunData& data, const ParameterLayout& layout,
+             const BatchOptions& opt)
+      : run_(run), data_(data), layout_(layout), opt_(opt) {}
+
+  BatchResult Run() {
+    SetUp();
+    Decide();
+    Start();
+    if (!Minimise()) return RefitAtTheDeclaredNoise();
+    RecordGyro();
+    Residuals();
+    res_.estimate.cov = Eigen::MatrixXd::Zero(p_.n, p_.n);
+    if (opt_.compute_covariance && !est_.empty()) {
+      Covariance();
+    } else {
+      const WhitenessSummary w = ProcessWhiteness(res_.process_whitened, {});
+      res_.whiteness_p_value = w.p_value;
+      res_.residual_white = w.white;
+    }
+    Fraction(1.0);
+    return std::move(res_);
   }
-  auto say = [&](const std::string& s) {
-    if (opt.progress) opt.progress(s);
-  };
-  RunProblem p = BuildRunProblem(run, data, layout, opt.epoch_s, opt.derivatives);
-  const int n = p.n;
-  const std::size_t E = p.epochs.size();
-  BatchResult res;
-  res.prior = p.prior;
-  res.epochs = static_cast<int>(E);
-  res.noise_declared_mV = run.ChannelNoise_mV();
-  res.noise_auto = run.noise_auto;
-  const Eigen::Vector3d noise0 = StartNoise(run, data, opt);
-  res.noise_start_mV = noise0;
-  p.noise_mV = noise0;
-  if (run.noise_auto) {
-    char line[160];
-    std::snprintf(line, sizeof(line),
-                  "noise_mV auto: starting from the readings' own white noise %.3g %.3g %.3g "
-                  "(second differences)",
-                  noise0[0], noise0[1], noise0[2]);
-    say(line);
+
+ private:
+  void Say(const std::string& s) const {
+    if (opt_.progress) opt_.progress(s);
+  }
+  void Fraction(double f) const {
+    if (opt_.fraction) opt_.fraction(f);
+  }
+
+  // The run problem and the noise to start from.
+  void SetUp() {
+    t_start_ = std::chrono::steady_clock::now();
+    threads_ = opt_.threads > 0 ? opt_.threads : DefaultThreads();
+    if (opt_.sigma != "auto" && opt_.sigma != "white" && opt_.sigma != "hac") {
+      throw OptionError("sigma", "unknown '" + opt_.sigma + "' (auto, white, hac)");
+    }
+    p_ = BuildRunProblem(run_, data_, layout_, opt_.epoch_s, opt_.derivatives);
+    res_.prior = p_.prior;
+    res_.epochs = static_cast<int>(p_.epochs.size());
+    res_.noise_declared_mV = run_.ChannelNoise_mV();
+    res_.noise_auto = run_.noise_auto;
+    noise0_ = StartNoise(run_, data_, opt_);
+    res_.noise_start_mV = noise0_;
+    p_.noise_mV = noise0_;
+    if (run_.noise_auto) {
+      char line[160];
+      std::snprintf(line, sizeof(line),
+                    "noise_mV auto: starting from the readings' own white noise %.3g %.3g %.3g "
+                    "(second differences)",
+                    noise0_[0], noise0_[1], noise0_[2]);
+      Say(line);
+    }
   }
 
   // 1. What the run determines, at the nominal values (scale factors and
   // offsets fitted) and the declared noise (or the readings' own with
   // noise_mV: auto): decided before the fit, so that no misfit can move
   // what the run does not determine.
-  HoldDecision decision;
-  if (opt.decision) {
-    decision = *opt.decision;
-  } else {
-    say("choosing the parameters this run determines");
-    if (opt.fraction) opt.fraction(0.0);
-    decision = DecideHeldParameters(run, data, layout, opt);
-  }
-  std::vector<std::string> not_estimated = decision.held;
-  not_estimated.insert(not_estimated.end(), decision.consider.begin(), decision.consider.end());
-
-  // 2. The start.
-  say("initialising (" +
-      std::string(opt.init == BatchInit::kRts       ? "RTS smoother"
-                  : opt.init == BatchInit::kNominal ? "nominal values, scale and offset fitted"
-                                                    : "given") +
-      ")");
-  if (opt.fraction) opt.fraction(0.1);
-  res.initial = Initialise(run, data, layout, p, opt, not_estimated, noise0);
-  if (opt.init == BatchInit::kNominal && decision.theta.size() == n) {
-    res.initial.theta = decision.theta;  // the nominal values, scale and offset fitted
-  }
-  res.init_seconds = Seconds(t_start);
-  res.held = decision.held;
-  res.consider = decision.consider;
-  res.relative_to = decision.relative_to;
-  res.min_information = opt.holding.min_information;
-  res.unsupported_at_start = decision.unsupported;
-  res.information_at_start = decision.information;
-  res.conditional_information = decision.conditional_information;
-  const std::vector<int> held = Indices(layout, decision.held);
-  const std::vector<int> consider = Indices(layout, decision.consider);
-  std::vector<int> est;
-  for (int i = 0; i < n; ++i) {
-    if (!std::binary_search(held.begin(), held.end(), i) &&
-        !std::binary_search(consider.begin(), consider.end(), i)) {
-      est.push_back(i);
+  void Decide() {
+    if (opt_.decision) {
+      decision_ = *opt_.decision;
+    } else {
+      Say("choosing the parameters this run determines");
+      Fraction(0.0);
+      decision_ = DecideHeldParameters(run_, data_, layout_, opt_);
+    }
+    res_.held = decision_.held;
+    res_.consider = decision_.consider;
+    res_.relative_to = decision_.relative_to;
+    res_.min_information = opt_.holding.min_information;
+    res_.unsupported_at_start = decision_.unsupported;
+    res_.information_at_start = decision_.information;
+    res_.conditional_information = decision_.conditional_information;
+    held_ = Indices(layout_, decision_.held);
+    consider_ = Indices(layout_, decision_.consider);
+    for (int i = 0; i < p_.n; ++i) {
+      if (!std::binary_search(held_.begin(), held_.end(), i) &&
+          !std::binary_search(consider_.begin(), consider_.end(), i)) {
+        est_.push_back(i);
+      }
     }
   }
-  Eigen::VectorXd theta0 = res.initial.theta;
-  for (int i : held) theta0[i] = p.prior.mean[i];
-  for (int i : consider) theta0[i] = p.prior.mean[i];
 
-  // 3. The minimum.
-  const auto t_solve = std::chrono::steady_clock::now();
-  Eigen::MatrixXd A;
-  Eigen::VectorXd b;
-  PriorAndConstraintRows(p, &A, &b);
-  const BatchObjective objective({LinkedRun{&p, {}, {}}}, A, b, p.prior.mean, threads);
-  MinimizerOptions mo;
-  mo.max_iterations = opt.max_iterations;
-  mo.tolerance = opt.tolerance;
-  mo.estimate_noise = {opt.estimate_noise};
-  mo.progress = say;
-  if (opt.fraction) mo.fraction = [&](double f) { opt.fraction(0.15 + 0.75 * f); };
-  BatchMinimizer minimizer(objective, est, mo);
-  MinimizerSummary summary;
-  BatchObjective::Point pt = minimizer.Minimize(theta0, {noise0}, &summary);
-  const RunPass& pass = *pt.passes[0];
-  const RunReduction& red = pt.reductions[0];
-  const int fitted = static_cast<int>(est.size());
-  res.converged = summary.converged;
-  res.termination = summary.termination;
-  res.iterations = summary.iterations;
-  res.passes = summary.passes;
-  say(summary.termination);
-  res.final_cost = pt.cost - pt.gyro_cost;
-  if (opt.cost_at_noise.minCoeff() > 0.0) {
-    const BatchObjective::Point at = objective.AtNoise(pt, {opt.cost_at_noise}, ThetaPart::kNone);
-    res.cost_at_noise = at.cost - at.gyro_cost;
+  // 2. The start; what is not estimated at its nominal value.
+  void Start() {
+    Say("initialising (" +
+        std::string(opt_.init == BatchInit::kRts       ? "RTS smoother"
+                    : opt_.init == BatchInit::kNominal ? "nominal values, scale and offset fitted"
+                                                       : "given") +
+        ")");
+    Fraction(0.1);
+    std::vector<std::string> not_estimated = decision_.held;
+    not_estimated.insert(not_estimated.end(), decision_.consider.begin(),
+                         decision_.consider.end());
+    res_.initial = Initialise(run_, data_, layout_, p_, opt_, not_estimated, noise0_);
+    if (opt_.init == BatchInit::kNominal && decision_.theta.size() == p_.n) {
+      res_.initial.theta = decision_.theta;  // the nominal values, scale and offset fitted
+    }
+    res_.init_seconds = Seconds(t_start_);
+    theta0_ = res_.initial.theta;
+    for (int i : held_) theta0_[i] = p_.prior.mean[i];
+    for (int i : consider_) theta0_[i] = p_.prior.mean[i];
   }
-  if (objective.HasGyroPart(pt, 0)) {
-    const GyroReduction& g = pt.gyro[0];
-    res.gyro.present = true;
-    res.gyro.noise_rad_s = g.noise_rad_s;
-    res.gyro.noise_declared_rad_s = run.gyro ? run.gyro->noise_rad_s : p.gyro_noise_rad_s;
-    res.gyro.noise_auto = run.gyro && run.gyro->noise_auto;
-    res.gyro.degrees_of_freedom = g.degrees_of_freedom;
-    res.gyro.neg_log_likelihood = g.neg_log_l;
-    const GyroPass& gp = *pt.gyro_passes[0];
+
+  // 3. The minimum. False when the noise was to be estimated and the run
+  // has too few degrees of freedom for it (a declared noise to fall back on).
+  bool Minimise() {
+    t_solve_ = std::chrono::steady_clock::now();
+    PriorAndConstraintRows(p_, &A_, &b_);
+    objective_.emplace(std::vector<LinkedRun>{LinkedRun{&p_, {}, {}}}, A_, b_, p_.prior.mean,
+                       threads_);
+    MinimizerOptions mo;
+    mo.max_iterations = opt_.max_iterations;
+    mo.tolerance = opt_.tolerance;
+    mo.estimate_noise = {opt_.estimate_noise};
+    mo.progress = [this](const std::string& s) { Say(s); };
+    if (opt_.fraction) mo.fraction = [this](double f) { opt_.fraction(0.15 + 0.75 * f); };
+    BatchMinimizer minimizer(*objective_, est_, mo);
+    MinimizerSummary summary;
+    pt_ = minimizer.Minimize(theta0_, {noise0_}, &summary);
+    res_.converged = summary.converged;
+    res_.termination = summary.termination;
+    res_.iterations = summary.iterations;
+    res_.passes = summary.passes;
+    Say(summary.termination);
+    res_.final_cost = pt_.cost - pt_.gyro_cost;
+    if (opt_.cost_at_noise.minCoeff() > 0.0) {
+      const BatchObjective::Point at =
+          objective_->AtNoise(pt_, {opt_.cost_at_noise}, ThetaPart::kNone);
+      res_.cost_at_noise = at.cost - at.gyro_cost;
+    }
+    res_.estimate.theta = pt_.phi;
+    res_.noise_used_mV = pt_.reductions[0].noise_mV;
+    res_.noise_source = opt_.estimate_noise ? "estimated" : "declared";
+    // A noise estimate needs degrees of freedom; with noise_mV: auto there is
+    // no declared figure to fall back on.
+    const Eigen::Vector3d noise_dof =
+        NoiseDegreesOfFreedom(pt_.reductions[0], static_cast<int>(est_.size()));
+    if (opt_.estimate_noise && noise_dof.minCoeff() < kMinNoiseDof) {
+      if (run_.noise_auto) {
+        throw InputError(run_.yaml_path + ": triad.noise_mV: auto needs a longer run: " +
+                         std::to_string(static_cast<int>(noise_dof.minCoeff())) +
+                         " degrees of freedom in the weakest channel, at least " +
+                         std::to_string(static_cast<int>(kMinNoiseDof)) +
+                         " (declare the noise instead)");
+      }
+      return false;
+    }
+    res_.solve_seconds = Seconds(t_solve_);
+    return true;
+  }
+
+  // Too short to estimate the noise: the declared noise, refitted at it.
+  BatchResult RefitAtTheDeclaredNoise() const {
+    Say("too few degrees of freedom to estimate the noise: the declared noise is used");
+    BatchOptions o = opt_;
+    o.estimate_noise = false;
+    o.decision = &decision_;
+    o.fraction = nullptr;
+    return SolveBatch(run_, data_, layout_, o);
+  }
+
+  // The gyro triad's part at the minimum, when the run has one.
+  void RecordGyro() {
+    if (!objective_->HasGyroPart(pt_, 0)) return;
+    const GyroReduction& g = pt_.gyro[0];
+    res_.gyro.present = true;
+    res_.gyro.noise_rad_s = g.noise_rad_s;
+    res_.gyro.noise_declared_rad_s = run_.gyro ? run_.gyro->noise_rad_s : p_.gyro_noise_rad_s;
+    res_.gyro.noise_auto = run_.gyro && run_.gyro->noise_auto;
+    res_.gyro.degrees_of_freedom = g.degrees_of_freedom;
+    res_.gyro.neg_log_likelihood = g.neg_log_l;
+    const GyroPass& gp = *pt_.gyro_passes[0];
     Eigen::Vector3d ss = Eigen::Vector3d::Zero();
     std::size_t used = 0;
     for (std::size_t k = 0; k < gp.r.size(); ++k) {
       if (!gp.valid[k]) continue;
       ss += gp.r[k].cwiseAbs2();
       ++used;
-      res.gyro.mid_samples.push_back((p.gyro_epochs[k] + p.gyro_epochs[k + 1]) / 2);
-      res.gyro.residual_rad.push_back(gp.r[k]);
-      res.gyro.whitened.push_back(g.whitened[k]);
+      res_.gyro.mid_samples.push_back((p_.gyro_epochs[k] + p_.gyro_epochs[k + 1]) / 2);
+      res_.gyro.residual_rad.push_back(gp.r[k]);
+      res_.gyro.whitened.push_back(g.whitened[k]);
     }
-    res.gyro.residual_rms_rad = (ss / std::max<std::size_t>(1, used)).cwiseSqrt();
-    res.gyro.intervals = static_cast<int>(gp.r.size());
+    res_.gyro.residual_rms_rad = (ss / std::max<std::size_t>(1, used)).cwiseSqrt();
+    res_.gyro.intervals = static_cast<int>(gp.r.size());
     // The mean interval as the samples fall (at 25 Hz a 0.1-s target gives 0.12 s).
-    const std::vector<std::size_t>& ge = p.gyro_epochs;
-    res.gyro.interval_s = ge.size() > 1 ? (data.t_s[ge.back()] - data.t_s[ge.front()]) /
-                                              static_cast<double>(ge.size() - 1)
-                                        : 0.0;
-    res.gyro.intervals_clipped = static_cast<int>(gp.r.size() - used);
-    res.gyro.whitened_rms = std::sqrt(2.0 * g.cost / std::max(1, g.degrees_of_freedom));
+    const std::vector<std::size_t>& ge = p_.gyro_epochs;
+    res_.gyro.interval_s = ge.size() > 1 ? (data_.t_s[ge.back()] - data_.t_s[ge.front()]) /
+                                               static_cast<double>(ge.size() - 1)
+                                         : 0.0;
+    res_.gyro.intervals_clipped = static_cast<int>(gp.r.size() - used);
+    res_.gyro.whitened_rms = std::sqrt(2.0 * g.cost / std::max(1, g.degrees_of_freedom));
   }
-  res.estimate.theta = pt.phi;
-  res.noise_used_mV = red.noise_mV;
-  res.noise_source = opt.estimate_noise ? "estimated" : "declared";
-  // A noise estimate needs degrees of freedom; with noise_mV: auto there is
-  // no declared figure to fall back on.
-  const Eigen::Vector3d noise_dof = NoiseDegreesOfFreedom(red, fitted);
-  if (opt.estimate_noise && noise_dof.minCoeff() < kMinNoiseDof) {
-    if (run.noise_auto) {
-      throw InputError(run.yaml_path + ": triad.noise_mV: auto needs a longer run: " +
-                       std::to_string(static_cast<int>(noise_dof.minCoeff())) +
-                       " degrees of freedom in the weakest channel, at least " +
-                       std::to_string(static_cast<int>(kMinNoiseDof)) +
-                       " (declare the noise instead)");
-    }
-    // Too short to estimate: the declared noise, refitted at it.
-    say("too few degrees of freedom to estimate the noise: the declared noise is used");
-    BatchOptions o = opt;
-    o.estimate_noise = false;
-    o.decision = &decision;
-    o.fraction = nullptr;
-    return SolveBatch(run, data, layout, o);
-  }
-  res.solve_seconds = Seconds(t_solve);
-  CollectResiduals(p, data, objective.weights(0), pass.theta, red, fitted, &res);
-  res.noise_check = CheckNoise(red, res.noise_declared_mV, fitted, res.process_whitened);
 
-  // 4. The covariance at the minimum.
-  res.estimate.cov = Eigen::MatrixXd::Zero(n, n);
-  if (!opt.compute_covariance || est.empty()) {
-    const WhitenessSummary w = ProcessWhiteness(res.process_whitened, {});
-    res.whiteness_p_value = w.p_value;
-    res.residual_white = w.white;
-    if (opt.fraction) opt.fraction(1.0);
-    return res;
+  // The residuals at the minimum and what they say of the noise.
+  void Residuals() {
+    const RunReduction& red = pt_.reductions[0];
+    const int fitted = static_cast<int>(est_.size());
+    CollectResiduals(p_, data_, objective_->weights(0), pt_.passes[0]->theta, red, fitted, &res_);
+    res_.noise_check = CheckNoise(red, res_.noise_declared_mV, fitted, res_.process_whitened);
   }
-  say("covariance");
-  if (opt.fraction) opt.fraction(0.95);
-  const auto t_cov = std::chrono::steady_clock::now();
-  const Eigen::MatrixXd Iaa = Sub(pt.information, est, est);
-  const Eigen::MatrixXd cov_a =
-      Eigen::LDLT<Eigen::MatrixXd>(Iaa).solve(Eigen::MatrixXd::Identity(est.size(), est.size()));
-  // The whitened process Jacobians over the estimated parameters: the
-  // autocorrelation the fit itself leaves in the residuals.
-  std::vector<Eigen::MatrixXd> C(E - 1);
-  std::vector<ProcessBlock> pb = red.process_blocks;
-  std::vector<MeasurementBlock> mb = red.measurement_blocks;
-  for (std::size_t e = 0; e < E; ++e) {
-    Eigen::MatrixXd N(6, est.size());
-    for (std::size_t k = 0; k < est.size(); ++k) N.col(k) = mb[e].N.col(est[k]);
-    mb[e].N = N;
-    if (e + 1 < E) {
-      Eigen::MatrixXd Ce(6, est.size());
-      for (std::size_t k = 0; k < est.size(); ++k) Ce.col(k) = pb[e].C.col(est[k]);
-      pb[e].C = Ce;
-      C[e] = Ce;
+
+  // 4. The covariance at the minimum: the model's, with the consider term,
+  // and the HAC sandwich over the epoch scores; the residual's whiteness
+  // (the autocorrelation the fit itself leaves subtracted) chooses.
+  void Covariance() {
+    Say("covariance");
+    Fraction(0.95);
+    const auto t_cov = std::chrono::steady_clock::now();
+    const int n = p_.n;
+    const std::size_t E = p_.epochs.size();
+    const RunReduction& red = pt_.reductions[0];
+    const Eigen::MatrixXd Iaa = Sub(pt_.information, est_, est_);
+    const Eigen::MatrixXd cov_a = Eigen::LDLT<Eigen::MatrixXd>(Iaa).solve(
+        Eigen::MatrixXd::Identity(est_.size(), est_.size()));
+    // The whitened process Jacobians over the estimated parameters: the
+    // autocorrelation the fit itself leaves in the residuals.
+    std::vector<Eigen::MatrixXd> C(E - 1);
+    std::vector<ProcessBlock> pb = red.process_blocks;
+    std::vector<MeasurementBlock> mb = red.measurement_blocks;
+    for (std::size_t e = 0; e < E; ++e) {
+      Eigen::MatrixXd N(6, est_.size());
+      for (std::size_t k = 0; k < est_.size(); ++k) N.col(k) = mb[e].N.col(est_[k]);
+      mb[e].N = N;
+      if (e + 1 < E) {
+        Eigen::MatrixXd Ce(6, est_.size());
+        for (std::size_t k = 0; k < est_.size(); ++k) Ce.col(k) = pb[e].C.col(est_[k]);
+        pb[e].C = Ce;
+        C[e] = Ce;
+      }
     }
-  }
-  res.process_whitened_expected_acf = ExpectedProcessAutocorrelation(C, cov_a, 20);
-  const WhitenessSummary w =
-      ProcessWhiteness(res.process_whitened, res.process_whitened_expected_acf);
-  res.whiteness_p_value = w.p_value;
-  res.residual_white = w.white;
-  // The consider term, from the information at the solution.
-  res.information = pt.data_information + ConstraintInformation(p);
-  Eigen::MatrixXd add = Eigen::MatrixXd::Zero(n, n);
-  if (!consider.empty()) {
-    ConsiderTerm(res.information, p.prior.sigma, est, consider, &res.consider_sensitivity, &add);
-    res.consider_cov = Eigen::MatrixXd::Zero(consider.size(), consider.size());
-    for (std::size_t q = 0; q < consider.size(); ++q) {
-      res.consider_cov(q, q) = p.prior.sigma[consider[q]] * p.prior.sigma[consider[q]];
+    res_.process_whitened_expected_acf = ExpectedProcessAutocorrelation(C, cov_a, 20);
+    const WhitenessSummary w =
+        ProcessWhiteness(res_.process_whitened, res_.process_whitened_expected_acf);
+    res_.whiteness_p_value = w.p_value;
+    res_.residual_white = w.white;
+    // The consider term, from the information at the solution.
+    res_.information = pt_.data_information + ConstraintInformation(p_);
+    Eigen::MatrixXd add = Eigen::MatrixXd::Zero(n, n);
+    if (!consider_.empty()) {
+      ConsiderTerm(res_.information, p_.prior.sigma, est_, consider_, &res_.consider_sensitivity,
+                   &add);
+      res_.consider_cov = Eigen::MatrixXd::Zero(consider_.size(), consider_.size());
+      for (std::size_t q = 0; q < consider_.size(); ++q) {
+        res_.consider_cov(q, q) = p_.prior.sigma[consider_[q]] * p_.prior.sigma[consider_[q]];
+      }
     }
+    res_.cov_white = Expand(cov_a, est_, n) + add;
+    res_.estimate.cov = res_.cov_white;
+    Eigen::MatrixXd Aa(A_.rows(), est_.size());
+    for (std::size_t k = 0; k < est_.size(); ++k) Aa.col(k) = A_.col(est_[k]);
+    const Eigen::MatrixXd rows_info = Aa.transpose() * Aa;
+    const HacCovariance hac =
+        HacThetaCovariance(Scores(pb, mb), Iaa, rows_info, opt_.hac_bandwidth_epochs, false,
+                           opt_.hac_kernel_bias_correction);
+    res_.hac_bandwidth_epochs = hac.bandwidth;
+    res_.hac_kernel_bias_corrected = opt_.hac_kernel_bias_correction;
+    res_.hac_kernel_bias_factor_max =
+        hac.kernel_bias_factor.size() > 0 ? hac.kernel_bias_factor.maxCoeff() : 1.0;
+    res_.cov_hac = Expand(hac.cov, est_, n) + add;
+    if (opt_.sigma == "hac" || (opt_.sigma == "auto" && !res_.residual_white)) {
+      res_.sigma_method = "hac";
+      res_.estimate.cov = FloorVariances(Expand(hac.cov, est_, n), Expand(cov_a, est_, n)) + add;
+      if (opt_.sigma == "auto") {
+        char figures[200];
+        std::snprintf(figures, sizeof(figures),
+                      "sigma from the HAC covariance: the residual is correlated in time "
+                      "(whiteness p %.2g; Bartlett bandwidth %.1f epochs)",
+                      w.p_value, hac.bandwidth);
+        Say(figures);
+      }
+    }
+    if (!consider_.empty()) res_.cov_given_consider = res_.estimate.cov - add;
+    res_.covariance_seconds = Seconds(t_cov);
   }
-  res.cov_white = Expand(cov_a, est, n) + add;
-  res.estimate.cov = res.cov_white;
-  Eigen::MatrixXd Aa(A.rows(), est.size());
-  for (std::size_t k = 0; k < est.size(); ++k) Aa.col(k) = A.col(est[k]);
-  const Eigen::MatrixXd rows_info = Aa.transpose() * Aa;
-  std::vector<Eigen::VectorXd> scores = EpochScores(pb, mb);
-  if (objective.HasGyroPart(pt, 0)) {
-    // Each gyro interval's score at the first epoch at or after its end,
-    // beside the accelerometer's.
-    const std::vector<Eigen::VectorXd>& gs = pt.gyro[0].scores;
+
+  // Each epoch's score over the estimated parameters; with the gyro, each
+  // gyro interval's score at the first epoch at or after its end.
+  std::vector<Eigen::VectorXd> Scores(const std::vector<ProcessBlock>& pb,
+                                      const std::vector<MeasurementBlock>& mb) const {
+    std::vector<Eigen::VectorXd> scores = EpochScores(pb, mb);
+    if (!objective_->HasGyroPart(pt_, 0)) return scores;
+    const std::size_t E = p_.epochs.size();
+    const std::vector<Eigen::VectorXd>& gs = pt_.gyro[0].scores;
     std::size_t e = 0;
     for (std::size_t k = 0; k < gs.size(); ++k) {
-      const std::size_t end = p.gyro_epochs[k + 1];
-      while (e + 1 < E && p.epochs[e] < end) ++e;
-      for (std::size_t q = 0; q < est.size(); ++q) scores[e][q] += gs[k][est[q]];
+      const std::size_t end = p_.gyro_epochs[k + 1];
+      while (e + 1 < E && p_.epochs[e] < end) ++e;
+      for (std::size_t q = 0; q < est_.size(); ++q) scores[e][q] += gs[k][est_[q]];
     }
+    return scores;
   }
-  const HacCovariance hac =
-      HacThetaCovariance(scores, Iaa, rows_info, opt.hac_bandwidth_epochs, false,
-                         opt.hac_kernel_bias_correction);
-  res.hac_bandwidth_epochs = hac.bandwidth;
-  res.hac_kernel_bias_corrected = opt.hac_kernel_bias_correction;
-  res.hac_kernel_bias_factor_max =
-      hac.kernel_bias_factor.size() > 0 ? hac.kernel_bias_factor.maxCoeff() : 1.0;
-  res.cov_hac = Expand(hac.cov, est, n) + add;
-  if (opt.sigma == "hac" || (opt.sigma == "auto" && !res.residual_white)) {
-    res.sigma_method = "hac";
-    res.estimate.cov = FloorVariances(Expand(hac.cov, est, n), Expand(cov_a, est, n)) + add;
-    if (opt.sigma == "auto") {
-      char figures[200];
-      std::snprintf(figures, sizeof(figures),
-                    "sigma from the HAC covariance: the residual is correlated in time "
-                    "(whiteness p %.2g; Bartlett bandwidth %.1f epochs)",
-                    w.p_value, hac.bandwidth);
-      say(figures);
-    }
-  }
-  if (!consider.empty()) res.cov_given_consider = res.estimate.cov - add;
-  res.covariance_seconds = Seconds(t_cov);
-  if (opt.fraction) opt.fraction(1.0);
-  return res;
+
+  const RunDescription& run_;
+  const RunData& data_;
+  const ParameterLayout& layout_;
+  const BatchOptions& opt_;
+  std::chrono::steady_clock::time_point t_start_, t_solve_;
+  int threads_ = 1;
+  RunProblem p_;
+  Eigen::Vector3d noise0_ = Eigen::Vector3d::Zero();
+  HoldDecision decision_;
+  std::vector<int> held_, consider_, est_;  // indices into the layout
+  Eigen::VectorXd theta0_;
+  Eigen::MatrixXd A_;  // prior and constraint rows
+  Eigen::VectorXd b_;
+  std::optional<BatchObjective> objective_;  // over p_ (built once p_ is final)
+  BatchObjective::Point pt_;                 // the minimum
+  BatchResult res_;
+};
+
+}  // namespace
+
+BatchResult SolveBatch(const RunDescription& run, const RunData& data,
+                       const ParameterLayout& layout, const BatchOptions& opt) {
+  return BatchSolve(run, data, layout, opt).Run();
 }
 
 }  // namespace triadcal
