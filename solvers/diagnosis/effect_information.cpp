@@ -115,162 +115,186 @@ std::vector<std::string> OneSidedAxes(const EffectSpec& spec, const RunData& dat
 
 }  // namespace
 
-EffectInformation AnalyseCandidates(const RunDescription& run, const RunData& data,
-                                    const std::vector<Effect>& current, const BatchResult& fit,
-                                    const std::vector<Effect>& candidates,
-                                    const BatchOptions& options) {
-  const int threads = options.threads > 0 ? options.threads : DefaultThreads();
-  const ParameterLayout cur(current);
-  std::vector<Effect> all = current;
-  all.insert(all.end(), candidates.begin(), candidates.end());
-  const ParameterLayout full(all);
+namespace {
+
+// The score tests of a round (AnalyseCandidates), step by step: the run
+// linearised with every candidate at zero, the base parameters, then per
+// candidate what the run supports of it and its score test.
+class CandidateAnalysis {
+ public:
+  CandidateAnalysis(const RunDescription& run, const RunData& data,
+                    const std::vector<Effect>& current, const BatchResult& fit,
+                    const std::vector<Effect>& candidates, const BatchOptions& options)
+      : run_(run), data_(data), current_(current), fit_(fit), candidates_(candidates),
+        options_(options) {}
+
+  EffectInformation Run() {
+    Linearise();
+    Base();
+    for (Effect e : candidates_) out_.candidates.push_back(Candidate(e));
+    return std::move(out_);
+  }
+
+ private:
   // The model with every candidate added at zero, evaluated at the fit as
   // the fit evaluates it (run_evaluation.h): the same noise weights (their
   // shape at the nominal values, the fit's reading noise), the trajectory
-  // solved for; the Jacobian's columns of the candidates come with it.
-  RunProblem p = BuildRunProblem(run, data, full, options.epoch_s, options.derivatives);
-  if (fit.noise_used_mV.minCoeff() > 0.0) p.noise_mV = fit.noise_used_mV;
-  const std::size_t E = p.epochs.size();
-  if (fit.process_residual.size() != E || fit.measurement_residual.size() != E) {
-    throw std::logic_error("AnalyseCandidates: the fit's epochs are not the run problem's");
-  }
-  Eigen::VectorXd theta = p.prior.mean;
-  for (int i = 0; i < cur.size(); ++i) {
-    theta[full.IndexOf(cur.info(i).name)] = fit.estimate.theta[i];
-  }
-  for (Effect e : candidates) {
-    const int k = static_cast<int>(GetEffectSpec(e).params.size());
-    for (int q = 0; q < k; ++q) theta[full.offset(e) + q] = 0.0;
-  }
-  const RunPass weights = WeightsPass(p, p.prior.mean, threads);
-  const RunReduction red =
-      Reduce(p, EvaluatePass(p, theta, true, threads), weights, p.noise_mV, threads);
-  // The fit's held and considered parameters are not base parameters of the
-  // tests below (the tests hold them), only of the check that an effect does
-  // not ride on them (LooseConditional): free here, under their priors.
-  // (The gyro's parameters are not in these layouts: the tests are on the
-  // accelerometer's part, which they do not enter.)
-  std::vector<int> held;
-  for (const std::vector<std::string>* names : {&fit.held, &fit.consider}) {
-    for (const std::string& h : *names) {
-      if (full.IndexOf(h) >= 0) held.push_back(full.IndexOf(h));
+  // solved for; the Jacobian's columns of the candidates come with it. Every
+  // parameter free: information and gradient of the data, the priors and the
+  // constraints.
+  void Linearise() {
+    const int threads = options_.threads > 0 ? options_.threads : DefaultThreads();
+    const ParameterLayout cur(current_);
+    std::vector<Effect> all = current_;
+    all.insert(all.end(), candidates_.begin(), candidates_.end());
+    full_ = ParameterLayout(all);
+    p_ = BuildRunProblem(run_, data_, full_, options_.epoch_s, options_.derivatives);
+    if (fit_.noise_used_mV.minCoeff() > 0.0) p_.noise_mV = fit_.noise_used_mV;
+    const std::size_t E = p_.epochs.size();
+    if (fit_.process_residual.size() != E || fit_.measurement_residual.size() != E) {
+      throw std::logic_error("AnalyseCandidates: the fit's epochs are not the run problem's");
+    }
+    Eigen::VectorXd theta = p_.prior.mean;
+    for (int i = 0; i < cur.size(); ++i) {
+      theta[full_.IndexOf(cur.info(i).name)] = fit_.estimate.theta[i];
+    }
+    for (Effect e : candidates_) {
+      const int k = static_cast<int>(GetEffectSpec(e).params.size());
+      for (int q = 0; q < k; ++q) theta[full_.offset(e) + q] = 0.0;
+    }
+    const RunPass weights = WeightsPass(p_, p_.prior.mean, threads);
+    const RunReduction red =
+        Reduce(p_, EvaluatePass(p_, theta, true, threads), weights, p_.noise_mV, threads);
+    const int nf = full_.size();
+    I_ = red.information;
+    g_ = red.gradient;
+    for (int i = 0; i < nf; ++i) {
+      I_(i, i) += 1.0 / (p_.prior.sigma[i] * p_.prior.sigma[i]);
+      g_[i] += (theta[i] - p_.prior.mean[i]) / (p_.prior.sigma[i] * p_.prior.sigma[i]);
+    }
+    for (const ConstraintRow& c : p_.constraints) {
+      I_ += c.c * c.c.transpose() / (c.sigma * c.sigma);
+      g_ += c.c * (c.c.dot(theta) - c.value) / (c.sigma * c.sigma);
     }
   }
-  std::sort(held.begin(), held.end());
-  const int nf = full.size();
-  // Every parameter free: information and gradient of the data, the priors
-  // and the constraints.
-  Eigen::MatrixXd I = red.information;
-  Eigen::VectorXd g = red.gradient;
-  for (int i = 0; i < nf; ++i) {
-    I(i, i) += 1.0 / (p.prior.sigma[i] * p.prior.sigma[i]);
-    g[i] += (theta[i] - p.prior.mean[i]) / (p.prior.sigma[i] * p.prior.sigma[i]);
-  }
-  for (const ConstraintRow& c : p.constraints) {
-    I += c.c * c.c.transpose() / (c.sigma * c.sigma);
-    g += c.c * (c.c.dot(theta) - c.value) / (c.sigma * c.sigma);
-  }
-  p.free.resize(nf);
-  for (int i = 0; i < nf; ++i) p.free[i] = i;
 
-  // Free indices: base (the current layout's free parameters) and each candidate's.
-  std::vector<int> free_of(full.size(), -1);
-  for (int j = 0; j < nf; ++j) free_of[p.free[j]] = j;
-  EffectInformation out;
-  out.chi2_per_dof = fit.chi2_per_dof;
-  std::vector<int> base;
-  for (int i = 0; i < cur.size(); ++i) {
-    const int f = full.IndexOf(cur.info(i).name);
-    if (std::binary_search(held.begin(), held.end(), f)) continue;
-    base.push_back(free_of[f]);
-    out.base_names.push_back(cur.info(i).name);
+  // The base parameters: the current layout's free ones (the fit's held and
+  // considered parameters are not, the tests hold them), and every base
+  // parameter with its prior (anchored: for the check that an effect does not
+  // ride on them, LooseConditional). (The gyro's parameters are not in these
+  // layouts: the tests are on the accelerometer's part, which they do not
+  // enter.)
+  void Base() {
+    const ParameterLayout cur(current_);
+    std::vector<int> held;
+    for (const std::vector<std::string>* names : {&fit_.held, &fit_.consider}) {
+      for (const std::string& h : *names) {
+        if (full_.IndexOf(h) >= 0) held.push_back(full_.IndexOf(h));
+      }
+    }
+    std::sort(held.begin(), held.end());
+    out_.chi2_per_dof = fit_.chi2_per_dof;
+    for (int i = 0; i < cur.size(); ++i) {
+      const int f = full_.IndexOf(cur.info(i).name);
+      if (std::binary_search(held.begin(), held.end(), f)) continue;
+      base_.push_back(f);
+      out_.base_names.push_back(cur.info(i).name);
+    }
+    anchored_ = base_;
+    anchored_names_ = out_.base_names;
+    for (int i : held) {
+      anchored_.push_back(i);
+      anchored_names_.push_back(full_.info(i).name);
+    }
+    anchored_prior_info_.resize(anchored_.size());
+    for (std::size_t a = 0; a < anchored_.size(); ++a) {
+      anchored_prior_info_[a] = 1.0 / std::pow(p_.prior.sigma[anchored_[a]], 2);
+    }
+    bb_.compute(Rows(I_, base_, base_));
+    const Eigen::MatrixXd Cbb =
+        bb_.solve(Eigen::MatrixXd::Identity(base_.size(), base_.size()));
+    out_.base_sigma = Cbb.diagonal().cwiseSqrt();
+    const Eigen::VectorXd gb = Entries(g_, base_);
+    out_.base_gradient_sigma = std::sqrt(std::max(0.0, gb.dot(Cbb * gb)));
   }
-  // Every base parameter, free or held, with its prior's information (for LooseConditional).
-  std::vector<int> anchored = base;
-  std::vector<std::string> anchored_names = out.base_names;
-  for (int i : held) {
-    anchored.push_back(free_of[i]);
-    anchored_names.push_back(full.info(i).name);
-  }
-  Eigen::VectorXd anchored_prior_info(anchored.size());
-  for (std::size_t a = 0; a < anchored.size(); ++a) {
-    anchored_prior_info[a] = 1.0 / std::pow(p.prior.sigma[p.free[anchored[a]]], 2);
-  }
-  const Eigen::MatrixXd Ibb = Rows(I, base, base);
-  const Eigen::LDLT<Eigen::MatrixXd> bb(Ibb);
-  const Eigen::MatrixXd Cbb = bb.solve(Eigen::MatrixXd::Identity(base.size(), base.size()));
-  out.base_sigma = Cbb.diagonal().cwiseSqrt();
-  const Eigen::VectorXd gb = Entries(g, base);
-  out.base_gradient_sigma = std::sqrt(std::max(0.0, gb.dot(Cbb * gb)));
 
-  for (Effect e : candidates) {
+  // One candidate: its columns, what the run supports of it, and its score test.
+  CandidateInformation Candidate(Effect e) {
     CandidateInformation c;
     c.effect = e;
     const int k_all = static_cast<int>(GetEffectSpec(e).params.size());
-    std::vector<int> cols(k_all);
-    Eigen::VectorXd prior_sigma(k_all);
+    cols_.assign(k_all, 0);
+    prior_sigma_.resize(k_all);
     for (int q = 0; q < k_all; ++q) {
-      cols[q] = free_of[full.offset(e) + q];
-      prior_sigma[q] = p.prior.sigma[full.offset(e) + q];
+      cols_[q] = full_.offset(e) + q;
+      prior_sigma_[q] = p_.prior.sigma[full_.offset(e) + q];
     }
+    Support(&c);
+    if (!c.supported.empty()) Score(&c);
+    return c;
+  }
+
+  // The base parameter whose loosening alone removes the most of component
+  // q's conditional information: the one it leans on.
+  std::string LeansOn(int q) const {
+    double least = std::numeric_limits<double>::infinity();
+    std::string on;
+    for (std::size_t a = 0; a < anchored_.size(); ++a) {
+      const double left =
+          LooseConditional(I_, anchored_, anchored_prior_info_, {static_cast<int>(a)},
+                           {cols_[q]}, prior_sigma_.segment(q, 1))(0, 0);
+      if (left < least) {
+        least = left;
+        on = anchored_names_[a];
+      }
+    }
+    return on;
+  }
+
+  // What the run supports of the candidate: supported (by the data apart from
+  // what the base parameters' priors and holds supply, LooseConditional), not
+  // separable, held (and why), weak.
+  void Support(CandidateInformation* cp) {
+    CandidateInformation& c = *cp;
+    const int k_all = static_cast<int>(cols_.size());
     // Conditional data information (the prior's 1/sigma^2 removed) in prior units.
-    const Eigen::MatrixXd Ibe_all = Rows(I, base, cols);
-    Eigen::MatrixXd N_all = Rows(I, cols, cols) - Ibe_all.transpose() * bb.solve(Ibe_all);
-    N_all.diagonal() -= prior_sigma.cwiseInverse().cwiseAbs2();
-    const Eigen::MatrixXd Np = prior_sigma.asDiagonal() * N_all * prior_sigma.asDiagonal();
-    // Supported: by the data apart from what the base parameters' priors and
-    // holds supply (LooseConditional); a component that only those determine is
-    // held, with the base parameter it leans on named.
+    const Eigen::MatrixXd Ibe_all = Rows(I_, base_, cols_);
+    N_all_ = Rows(I_, cols_, cols_) - Ibe_all.transpose() * bb_.solve(Ibe_all);
+    N_all_.diagonal() -= prior_sigma_.cwiseInverse().cwiseAbs2();
+    const Eigen::MatrixXd Np = prior_sigma_.asDiagonal() * N_all_ * prior_sigma_.asDiagonal();
+    // A component that only the base parameters' priors and holds determine
+    // is held, with the base parameter it leans on named.
     const std::vector<int> by_data = Supported(Np, kMinInformationSupported);
     // Components whose axis never reverses are left out before the rest is
     // decided (their information is that of the noise's sign, or of K u).
     const std::vector<std::string> one_sided =
-        OneSidedAxes(GetEffectSpec(e), data, p.noise_mV, fit.estimate.theta);
+        OneSidedAxes(GetEffectSpec(c.effect), data_, p_.noise_mV, fit_.estimate.theta);
     std::vector<int> two_sided;
     for (int q = 0; q < k_all; ++q) {
       if (one_sided[q].empty()) two_sided.push_back(q);
     }
     const Eigen::MatrixXd Nloose =
-        LooseConditional(I, anchored, anchored_prior_info, {}, cols, prior_sigma);
-    for (int q :
-         Supported(Rows(Nloose, two_sided, two_sided), kMinInformationSupported)) {
+        LooseConditional(I_, anchored_, anchored_prior_info_, {}, cols_, prior_sigma_);
+    for (int q : Supported(Rows(Nloose, two_sided, two_sided), kMinInformationSupported)) {
       c.supported.push_back(two_sided[q]);
     }
-    // The base parameter whose loosening alone removes the most of
-    // component q's conditional information: the one it leans on.
-    auto leans_on = [&](int q) {
-      double least = std::numeric_limits<double>::infinity();
-      std::string on;
-      for (std::size_t a = 0; a < anchored.size(); ++a) {
-        const double left =
-            LooseConditional(I, anchored, anchored_prior_info, {static_cast<int>(a)}, {cols[q]},
-                             prior_sigma.segment(q, 1))(0, 0);
-        if (left < least) {
-          least = left;
-          on = anchored_names[a];
-        }
-      }
-      return on;
-    };
     // Not separable from the base parameters (its multiple correlation with
     // them, their priors loosened, at least 0.99: it keeps less than
     // kMinSeparableShare of its own data information): what it would fit,
     // they fit (cross_quadratic.z_xx_yy and Kzz on a single-axis run, rho
     // 0.9993). Not tested; in a refit it stays at zero, considered.
-    {
-      std::vector<int> separable;
-      for (int q : c.supported) {
-        const double sq = prior_sigma[q] * prior_sigma[q];
-        const double own = (I(cols[q], cols[q]) - 1.0 / sq) * sq;
-        if (own > 0.0 && Nloose(q, q) < kMinSeparableShare * own) {
-          const double rho = std::sqrt(std::max(0.0, 1.0 - Nloose(q, q) / own));
-          c.not_separable.push_back({q, leans_on(q), rho});
-        } else {
-          separable.push_back(q);
-        }
+    std::vector<int> separable;
+    for (int q : c.supported) {
+      const double sq = prior_sigma_[q] * prior_sigma_[q];
+      const double own = (I_(cols_[q], cols_[q]) - 1.0 / sq) * sq;
+      if (own > 0.0 && Nloose(q, q) < kMinSeparableShare * own) {
+        const double rho = std::sqrt(std::max(0.0, 1.0 - Nloose(q, q) / own));
+        c.not_separable.push_back({q, LeansOn(q), rho});
+      } else {
+        separable.push_back(q);
       }
-      c.supported = separable;
     }
+    c.supported = separable;
     for (int q = 0; q < k_all; ++q) {
       if (std::find(c.supported.begin(), c.supported.end(), q) != c.supported.end()) continue;
       if (std::any_of(c.not_separable.begin(), c.not_separable.end(),
@@ -284,62 +308,93 @@ EffectInformation AnalyseCandidates(const RunDescription& run, const RunData& da
         continue;
       }
       // Which base parameter's prior or hold supplies what q needs.
-      const std::string on = leans_on(q);
+      const std::string on = LeansOn(q);
       c.held_because.emplace_back(q, "this run determines it only through " + on +
                                          "'s prior or hold (" + on +
                                          " is not determined by this run)");
     }
-    {
-      const Eigen::MatrixXd Ns = Rows(Nloose, c.supported, c.supported);
-      const std::vector<int> strong = Supported(Ns, kMinInformationFound);
-      for (std::size_t i = 0; i < c.supported.size(); ++i) {
-        if (std::find(strong.begin(), strong.end(), static_cast<int>(i)) == strong.end()) {
-          c.weak.emplace_back(c.supported[i], Ns(i, i));
-        }
+    const Eigen::MatrixXd Ns = Rows(Nloose, c.supported, c.supported);
+    const std::vector<int> strong = Supported(Ns, kMinInformationFound);
+    for (std::size_t i = 0; i < c.supported.size(); ++i) {
+      if (std::find(strong.begin(), strong.end(), static_cast<int>(i)) == strong.end()) {
+        c.weak.emplace_back(c.supported[i], Ns(i, i));
       }
     }
-    const int k = static_cast<int>(c.supported.size());
-    if (k > 0) {
-      std::vector<int> sc;
-      for (int q : c.supported) sc.push_back(cols[q]);
-      const Eigen::MatrixXd Ibe = Rows(I, base, sc);
-      c.B = bb.solve(Ibe);
-      const Eigen::MatrixXd with_prior = Rows(I, sc, sc) - Ibe.transpose() * c.B;
-      c.N = Rows(N_all, c.supported, c.supported);
-      const Eigen::VectorXd ge = Entries(g, sc);
-      c.score = std::max(0.0, ge.dot(with_prior.ldlt().solve(ge)));
-      // Newton step on (theta_b, theta_e): the block solve with the base
-      // gradient (~0) included.
-      std::vector<int> bs = base;
-      bs.insert(bs.end(), sc.begin(), sc.end());
-      const Eigen::VectorXd step = -Rows(I, bs, bs).ldlt().solve(Entries(g, bs));
-      c.step_base = step.head(base.size());
-      c.step_effect = step.tail(k);
-      const double chi2_aug =
-          (2.0 * fit.final_cost - c.score) / std::max(1, fit.degrees_of_freedom - k);
-      c.statistic = c.score / std::max(1.0, chi2_aug);
-      c.p_value = ChiSquareSurvival(c.statistic, k);
-      std::vector<int> strong;
-      for (int q : c.supported) {
-        if (std::none_of(c.weak.begin(), c.weak.end(),
-                         [&](const std::pair<int, double>& w) { return w.first == q; })) {
-          strong.push_back(cols[q]);
-        }
-      }
-      if (strong.size() == sc.size()) {
-        c.statistic_strong = c.statistic;
-        c.p_value_strong = c.p_value;
-      } else if (!strong.empty()) {
-        const Eigen::MatrixXd Ibs = Rows(I, base, strong);
-        const Eigen::MatrixXd ws = Rows(I, strong, strong) - Ibs.transpose() * bb.solve(Ibs);
-        const Eigen::VectorXd gs = Entries(g, strong);
-        c.statistic_strong = std::max(0.0, gs.dot(ws.ldlt().solve(gs))) / std::max(1.0, chi2_aug);
-        c.p_value_strong = ChiSquareSurvival(c.statistic_strong, static_cast<int>(strong.size()));
-      }
-    }
-    out.candidates.push_back(c);
   }
-  return out;
+
+  // The score test of the supported components, scaled by the predicted
+  // chi^2/dof with them added, the Gauss-Newton step to their refit, and the
+  // test of the well-determined ones alone.
+  void Score(CandidateInformation* cp) const {
+    CandidateInformation& c = *cp;
+    const int k = static_cast<int>(c.supported.size());
+    std::vector<int> sc;
+    for (int q : c.supported) sc.push_back(cols_[q]);
+    const Eigen::MatrixXd Ibe = Rows(I_, base_, sc);
+    c.B = bb_.solve(Ibe);
+    const Eigen::MatrixXd with_prior = Rows(I_, sc, sc) - Ibe.transpose() * c.B;
+    c.N = Rows(N_all_, c.supported, c.supported);
+    const Eigen::VectorXd ge = Entries(g_, sc);
+    c.score = std::max(0.0, ge.dot(with_prior.ldlt().solve(ge)));
+    // Newton step on (theta_b, theta_e): the block solve with the base
+    // gradient (~0) included.
+    std::vector<int> bs = base_;
+    bs.insert(bs.end(), sc.begin(), sc.end());
+    const Eigen::VectorXd step = -Rows(I_, bs, bs).ldlt().solve(Entries(g_, bs));
+    c.step_base = step.head(base_.size());
+    c.step_effect = step.tail(k);
+    const double chi2_aug =
+        (2.0 * fit_.final_cost - c.score) / std::max(1, fit_.degrees_of_freedom - k);
+    c.statistic = c.score / std::max(1.0, chi2_aug);
+    c.p_value = ChiSquareSurvival(c.statistic, k);
+    std::vector<int> strong;
+    for (int q : c.supported) {
+      if (std::none_of(c.weak.begin(), c.weak.end(),
+                       [&](const std::pair<int, double>& w) { return w.first == q; })) {
+        strong.push_back(cols_[q]);
+      }
+    }
+    if (strong.size() == sc.size()) {
+      c.statistic_strong = c.statistic;
+      c.p_value_strong = c.p_value;
+    } else if (!strong.empty()) {
+      const Eigen::MatrixXd Ibs = Rows(I_, base_, strong);
+      const Eigen::MatrixXd ws = Rows(I_, strong, strong) - Ibs.transpose() * bb_.solve(Ibs);
+      const Eigen::VectorXd gs = Entries(g_, strong);
+      c.statistic_strong = std::max(0.0, gs.dot(ws.ldlt().solve(gs))) / std::max(1.0, chi2_aug);
+      c.p_value_strong = ChiSquareSurvival(c.statistic_strong, static_cast<int>(strong.size()));
+    }
+  }
+
+  const RunDescription& run_;
+  const RunData& data_;
+  const std::vector<Effect>& current_;
+  const BatchResult& fit_;
+  const std::vector<Effect>& candidates_;
+  const BatchOptions& options_;
+  ParameterLayout full_;  // current + candidates
+  RunProblem p_;          // of full_, every parameter free
+  Eigen::MatrixXd I_;     // information of data, priors and constraints (full_)
+  Eigen::VectorXd g_;     // their gradient
+  std::vector<int> base_, anchored_;
+  std::vector<std::string> anchored_names_;
+  Eigen::VectorXd anchored_prior_info_;
+  Eigen::LDLT<Eigen::MatrixXd> bb_;  // I over the base parameters
+  // The candidate at hand: its columns in full_, their prior sigma, its
+  // conditional data information given the base parameters.
+  std::vector<int> cols_;
+  Eigen::VectorXd prior_sigma_;
+  Eigen::MatrixXd N_all_;
+  EffectInformation out_;
+};
+
+}  // namespace
+
+EffectInformation AnalyseCandidates(const RunDescription& run, const RunData& data,
+                                    const std::vector<Effect>& current, const BatchResult& fit,
+                                    const std::vector<Effect>& candidates,
+                                    const BatchOptions& options) {
+  return CandidateAnalysis(run, data, current, fit, candidates, options).Run();
 }
 
 HideCase MinimalDetectable(const EffectInformation& info, const CandidateInformation& c,
