@@ -36,6 +36,11 @@
 // Candidates that explain the residual about as well as the selected one are
 // listed as alternatives, and every selected effect's correlation with the
 // base parameters is reported.
+//
+// With a gyro (SPEC section 10) every fit of the loop estimates the gyro
+// block beside the accelerometer's parameters; the tests above are on the
+// accelerometer's part (cost and score), which the gyro's parameters do not
+// enter (docs/method.md section 6).
 #pragma once
 
 #include <functional>
