@@ -11,37 +11,31 @@
 #include "core/io/file_util.h"
 #include "core/model/errors.h"
 #include "tests/cli_test.h"
+#include "tests/error_of.h"
 
 namespace triadcal {
 namespace {
 
+using testing_fixtures::ValidateError;
+
 namespace fs = std::filesystem;
 using testing_fixtures::Comparable;
 
-std::string ErrorOf(const BatchSettings& s) {
-  try {
-    s.Validate();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
-
 TEST(BatchSettings, ValidateNamesTheOption) {
-  EXPECT_EQ(ErrorOf(BatchSettings()), "");
+  EXPECT_EQ(ValidateError(BatchSettings()), "");
   BatchSettings s;
   s.date = "2026-13-01";
-  EXPECT_EQ(ErrorOf(s), "--date: expected YYYY-MM-DD, got '2026-13-01'");
+  EXPECT_EQ(ValidateError(s), "--date: expected YYYY-MM-DD, got '2026-13-01'");
   s = BatchSettings();
   s.shard = {3, 2};
-  EXPECT_EQ(ErrorOf(s), "--shard: expected I/N with 1 <= I <= N, got '3/2'");
+  EXPECT_EQ(ValidateError(s), "--shard: expected I/N with 1 <= I <= N, got '3/2'");
   s = BatchSettings();
   s.threads = -1;
-  EXPECT_EQ(ErrorOf(s), "--threads: Value -1 not in range 0 to 1024");
+  EXPECT_EQ(ValidateError(s), "--threads: Value -1 not in range 0 to 1024");
   s = BatchSettings();
   s.fit.hold = {"Kx"};
   s.fit.free = {"Kx"};
-  EXPECT_EQ(ErrorOf(s), "--hold/--free: 'Kx' given to both: hold it or free it");
+  EXPECT_EQ(ValidateError(s), "--hold/--free: 'Kx' given to both: hold it or free it");
 }
 
 class BatchJob : public testing_fixtures::CliTest {
@@ -70,8 +64,8 @@ TEST_F(BatchJob, SameFilesAsTheCommandLine) {
             "  wx: {source: wx, unit: counts, counts_per_g: 174}\n"
             "  wy: {source: wy, unit: counts, counts_per_g: 174}\n"
             "  wz: {source: wz, unit: counts, counts_per_g: 174}\n");
-  const std::string manifest = WriteText(
-      "m.csv", "serial,run,Kx_max\nM1,run.yaml,185\nC1,counts.yaml,170\nX1,none.yaml,\n");
+  const std::string manifest =
+      WriteText("m.csv", "serial,run,Kx_max\nM1,run.yaml,185\nC1,counts.yaml,170\nX1,none.yaml,\n");
   const testing_fixtures::CliResult cli =
       Run("batch " + manifest + " -o " + Path("cli") + " --date 2026-01-31");
   ASSERT_EQ(cli.exit_code, 0) << cli.err;

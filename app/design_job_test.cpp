@@ -8,21 +8,14 @@
 
 #include "core/model/errors.h"
 #include "tests/cli_test.h"
+#include "tests/error_of.h"
 
 namespace triadcal {
 namespace {
 
 using testing_fixtures::Comparable;
 
-template <typename F>
-std::string ErrorOf(F&& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing_fixtures::ErrorOf;
 
 TEST(DesignSettings, TextBothWays) {
   const DesignSettings d;

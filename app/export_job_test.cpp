@@ -11,21 +11,14 @@
 #include "core/io/file_util.h"
 #include "core/model/errors.h"
 #include "tests/cli_test.h"
+#include "tests/error_of.h"
 
 namespace triadcal {
 namespace {
 
 using testing_fixtures::Comparable;
 
-template <typename F>
-std::string ErrorOf(F&& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing_fixtures::ErrorOf;
 
 // The text without its provenance lines (the command line, date, inputs).
 std::string WithoutProvenance(const std::string& text) {

@@ -9,36 +9,30 @@
 #include "app/fit_job.h"
 #include "core/model/errors.h"
 #include "tests/cli_test.h"
+#include "tests/error_of.h"
 
 namespace triadcal {
 namespace {
 
 using testing_fixtures::Comparable;
-
-std::string ErrorOf(const FilterSettings& s) {
-  try {
-    s.Validate();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing_fixtures::ValidateError;
 
 TEST(FilterSettings, ValidateNamesTheOption) {
-  EXPECT_EQ(ErrorOf(FilterSettings()), "");
+  EXPECT_EQ(ValidateError(FilterSettings()), "");
   FilterSettings s;
   s.iterations = 0;
-  EXPECT_EQ(ErrorOf(s), "--iterations: Value 0 not in range 1 to 20");
+  EXPECT_EQ(ValidateError(s), "--iterations: Value 0 not in range 1 to 20");
   s = FilterSettings();
   s.hold = {"dpsi"};
   s.free = {"dpsi"};
-  EXPECT_EQ(ErrorOf(s), "--hold/--free: 'dpsi' given to both: hold it or free it");
+  EXPECT_EQ(ValidateError(s), "--hold/--free: 'dpsi' given to both: hold it or free it");
   s = FilterSettings();
   s.effects = "thermal_drift,nonsense";
-  EXPECT_EQ(ErrorOf(s).rfind("--effects: unknown effect 'nonsense' (known: ", 0), 0u) << ErrorOf(s);
+  EXPECT_EQ(ValidateError(s).rfind("--effects: unknown effect 'nonsense' (known: ", 0), 0u)
+      << ValidateError(s);
   s = FilterSettings();
   s.rate_window_s = 0.0;
-  EXPECT_EQ(ErrorOf(s).rfind("--rate-window-s: ", 0), 0u) << ErrorOf(s);
+  EXPECT_EQ(ValidateError(s).rfind("--rate-window-s: ", 0), 0u) << ValidateError(s);
 }
 
 class FilterJob : public testing_fixtures::CliTest {};

@@ -7,18 +7,12 @@
 #include <string>
 
 #include "core/model/errors.h"
+#include "tests/error_of.h"
 
 namespace triadcal {
 namespace {
 
-std::string ErrorOf(const FitSettings& s) {
-  try {
-    s.Validate();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing_fixtures::ValidateError;
 
 TEST(FitSettings, DefaultsAreThoseOfTheCommand) {
   const FitSettings s;
@@ -27,7 +21,7 @@ TEST(FitSettings, DefaultsAreThoseOfTheCommand) {
   EXPECT_EQ(s.epoch_s, kDefaultEpoch_s);
   EXPECT_EQ(s.rate_window_s, AngleDerivativeOptions().half_window_s);
   EXPECT_TRUE(s.auto_hold);
-  EXPECT_EQ(ErrorOf(s), "");
+  EXPECT_EQ(ValidateError(s), "");
   const BatchOptions o = MakeBatchOptions(s);
   EXPECT_EQ(o.init, BatchInit::kRts);
   EXPECT_EQ(o.sigma, "auto");
@@ -70,17 +64,17 @@ TEST(FitSettings, BadTextNamesTheOption) {
 TEST(FitSettings, ValidateNamesTheOption) {
   FitSettings s;
   s.effects = "no_such_effect";
-  EXPECT_EQ(ErrorOf(s).rfind("--effects: ", 0), 0u) << ErrorOf(s);
+  EXPECT_EQ(ValidateError(s).rfind("--effects: ", 0), 0u) << ValidateError(s);
   s = FitSettings();
   s.hold = {"Kx"};
   s.free = {"Kx"};
-  EXPECT_EQ(ErrorOf(s), "--hold/--free: 'Kx' given to both: hold it or free it");
+  EXPECT_EQ(ValidateError(s), "--hold/--free: 'Kx' given to both: hold it or free it");
   s = FitSettings();
   s.rate_window_s = 0.0;
-  EXPECT_EQ(ErrorOf(s).rfind("--rate-window-s: ", 0), 0u) << ErrorOf(s);
+  EXPECT_EQ(ValidateError(s).rfind("--rate-window-s: ", 0), 0u) << ValidateError(s);
   s = FitSettings();
   s.threads = -1;
-  EXPECT_EQ(ErrorOf(s), "--threads: Value -1 not in range 0 to 1024");
+  EXPECT_EQ(ValidateError(s), "--threads: Value -1 not in range 0 to 1024");
 }
 
 }  // namespace

@@ -9,36 +9,31 @@
 
 #include "core/model/errors.h"
 #include "tests/cli_test.h"
+#include "tests/error_of.h"
 
 namespace triadcal {
 namespace {
 
 using testing_fixtures::Comparable;
-
-std::string ErrorOf(const ObservabilitySettings& s) {
-  try {
-    s.Validate();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing_fixtures::ValidateError;
 
 TEST(ObservabilitySettings, ValidateNamesTheOption) {
-  EXPECT_EQ(ErrorOf(ObservabilitySettings()), "");
+  EXPECT_EQ(ValidateError(ObservabilitySettings()), "");
   ObservabilitySettings s;
   s.unobservable_below = 2.0;
   s.weak_below = 1.0;
-  EXPECT_EQ(ErrorOf(s), "--unobservable-below, --weak-below: expected 0 < unobservable <= weak");
+  EXPECT_EQ(ValidateError(s),
+            "--unobservable-below, --weak-below: expected 0 < unobservable <= weak");
   s = ObservabilitySettings();
   s.alpha = 1.0;
-  EXPECT_EQ(ErrorOf(s), "--alpha: must be in (0, 1)");
+  EXPECT_EQ(ValidateError(s), "--alpha: must be in (0, 1)");
   s = ObservabilitySettings();
   s.threads = -1;
-  EXPECT_EQ(ErrorOf(s), "--threads: Value -1 not in range 0 to 1024");
+  EXPECT_EQ(ValidateError(s), "--threads: Value -1 not in range 0 to 1024");
   s = ObservabilitySettings();
   s.effects = "nonsense";
-  EXPECT_EQ(ErrorOf(s).rfind("--effects: unknown effect 'nonsense' (known: ", 0), 0u) << ErrorOf(s);
+  EXPECT_EQ(ValidateError(s).rfind("--effects: unknown effect 'nonsense' (known: ", 0), 0u)
+      << ValidateError(s);
 }
 
 class ObservabilityJob : public testing_fixtures::CliTest {

@@ -13,18 +13,12 @@
 #include "core/io/file_util.h"
 #include "core/model/errors.h"
 #include "tests/cli_test.h"
+#include "tests/error_of.h"
 
 namespace triadcal {
 namespace {
 
-std::string ErrorOf(const StaticSettings& s) {
-  try {
-    s.Validate();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing_fixtures::ValidateError;
 
 TEST(StaticSettings, ReferenceBothWays) {
   EXPECT_EQ(ParseStaticReference("auto"), std::nullopt);
@@ -43,19 +37,19 @@ TEST(StaticSettings, ReferenceBothWays) {
 }
 
 TEST(StaticSettings, ValidateNamesTheOption) {
-  EXPECT_EQ(ErrorOf(StaticSettings()), "");
+  EXPECT_EQ(ValidateError(StaticSettings()), "");
   StaticSettings s;
   s.placement_sigma_deg = 50.0;
-  EXPECT_EQ(ErrorOf(s), "--placement-sigma-deg: must be at most 45");
+  EXPECT_EQ(ValidateError(s), "--placement-sigma-deg: must be at most 45");
   s = StaticSettings();
   s.placement_sigma_deg = -1.0;
-  EXPECT_EQ(ErrorOf(s), "--placement-sigma-deg: must be >= 0");
+  EXPECT_EQ(ValidateError(s), "--placement-sigma-deg: must be >= 0");
   s = StaticSettings();
   s.still.noise_factor = 0.0;
-  EXPECT_EQ(ErrorOf(s), "--noise-factor: must be > 0");
+  EXPECT_EQ(ValidateError(s), "--noise-factor: must be > 0");
   s = StaticSettings();
   s.still.min_still_s = 1e4;
-  EXPECT_EQ(ErrorOf(s), "--min-still-s: must be at most 3600 s");
+  EXPECT_EQ(ValidateError(s), "--min-still-s: must be at most 3600 s");
 }
 
 class StaticJob : public testing_fixtures::TempDirTest {
