@@ -64,9 +64,7 @@ int RunCompare(const CompareArgs& a, Session& session) {
   const LoadedRun run = LoadRun(a.run_yaml, &session);
   CheckOverwrite(a.out_json, session);  // before the long work
   StageProgress progress("compare: ");
-  Session comparing = session;
-  comparing.stage = [&](const std::string& x) { progress.Stage(x); };
-  comparing.fraction = [&](double x) { progress.Fraction(x); };
+  const Session comparing = WithProgress(session, &progress);
   const CompareOutcome c = CompareRun(a.settings, a.run_yaml, run, comparing);
   EndProgress();
   if (!c.error.empty()) {

@@ -42,9 +42,7 @@ int RunDesign(DesignArgs a, Session& session) {
   session.provenance.RecordInput("scenario", a.scenario);
   CheckOverwrite(a.out_json, session);  // before the long work
   StageProgress progress("design: ");
-  Session designing = session;
-  designing.stage = [&](const std::string& x) { progress.Stage(x); };
-  designing.fraction = [&](double x) { progress.Fraction(x); };
+  const Session designing = WithProgress(session, &progress);
   const DesignOutcome o = DesignRun(settings, a.scenario, s, designing);
   EndProgress();
   WriteJson(o.json, a.out_json, session);

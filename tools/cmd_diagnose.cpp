@@ -48,9 +48,7 @@ int RunDiagnose(const DiagnoseArgs& a, Session& session) {
   }
   const std::map<std::string, double>* tp = a.truth_json.empty() ? nullptr : &truth;
   StageProgress progress("diagnose: ");
-  Session diagnosing = session;
-  diagnosing.stage = [&](const std::string& s) { progress.Stage(s); };
-  diagnosing.fraction = [&](double f) { progress.Fraction(f); };
+  const Session diagnosing = WithProgress(session, &progress);
   const DiagnoseOutcome outcome = DiagnoseRun(a.settings, a.run_yaml, run, tp, diagnosing);
   EndProgress();
   const DiagnosisResult& d = outcome.result;

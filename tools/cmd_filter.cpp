@@ -101,9 +101,7 @@ int RunFilter(FilterArgs a, Session& session) {
   const LoadedRun run = LoadRun(a.run_yaml, &session);
   CheckOverwrite(a.out_json, session);  // before the long work
   StageProgress progress("filter: ");
-  Session filtering = session;
-  filtering.stage = [&](const std::string& x) { progress.Stage(x); };
-  filtering.fraction = [&](double x) { progress.Fraction(x); };
+  const Session filtering = WithProgress(session, &progress);
   const FilterOutcome f = FilterRun(s, a.run_yaml, run, filtering);
   EndProgress();
   if (!f.error.empty()) {

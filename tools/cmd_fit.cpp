@@ -42,9 +42,7 @@ int RunFit(FitArgs a, Session& session) {
   const LoadedRun run = LoadRun(a.run_yaml, &session);
   CheckOverwrite(a.out_json, session);  // before the long work
   StageProgress progress("fit: ");
-  Session fitting = session;
-  fitting.stage = [&](const std::string& s) { progress.Stage(s); };
-  fitting.fraction = [&](double x) { progress.Fraction(x); };
+  const Session fitting = WithProgress(session, &progress);
   const FitOutcome f = FitRun(settings, a.run_yaml, run, fitting);
   EndProgress();
   const ParameterLayout& layout = f.layout;

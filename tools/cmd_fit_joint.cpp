@@ -50,9 +50,7 @@ int RunJointFit(const FitSettings& s, const std::vector<std::string>& inputs,
   const std::vector<JointRun>& runs = in.runs;
   const JointLayout& jl = *in.layout;
   StageProgress progress("fit: ");
-  Session fitting = session;
-  fitting.stage = [&](const std::string& line) { progress.Stage(line); };
-  fitting.fraction = [&](double x) { progress.Fraction(x); };
+  const Session fitting = WithProgress(session, &progress);
   const JointFitOutcome f = JointFitRun(s, in, fitting);
   EndProgress();
   const JointResult& r = f.result;

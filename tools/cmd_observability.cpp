@@ -29,14 +29,6 @@ struct ObservabilityArgs {
   ObservabilitySettings settings;  // filled by CLI11 directly
 };
 
-// The progress of the job's stages on stderr.
-Session WithProgress(const Session& session, StageProgress* progress) {
-  Session s = session;
-  s.stage = [progress](const std::string& x) { progress->Stage(x); };
-  s.fraction = [progress](double x) { progress->Fraction(x); };
-  return s;
-}
-
 void PrintJoint(const JointInput& in, const JointInformation& info) {
   const JointLayout& jl = *in.layout;
   std::vector<bool> held(jl.size(), false);

@@ -179,4 +179,11 @@ void WriteReportIfAsked(const std::string& report_html, const nlohmann::json& ou
   std::printf("wrote %s\n", report_html.c_str());
 }
 
+Session WithProgress(const Session& session, StageProgress* progress) {
+  Session s = session;
+  s.stage = [progress](const std::string& x) { progress->Stage(x); };
+  s.fraction = [progress](double x) { progress->Fraction(x); };
+  return s;
+}
+
 }  // namespace triadcal

@@ -56,6 +56,10 @@ class StageProgress {
   double fraction_ = 0.0;
 };
 
+// The session with the job's stages and fraction shown on `progress` (which
+// must outlive the returned session's use).
+Session WithProgress(const Session& session, StageProgress* progress);
+
 // `--report FILE` of the long commands: the HTML report of `out` (to be
 // written as out_json, with the session's provenance) into report_html;
 // nothing when report_html is empty.
