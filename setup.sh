@@ -6,7 +6,7 @@ cd "$(dirname "$0")"
 
 packages=(build-essential cmake ninja-build pkg-config
           libceres-dev libeigen3-dev libsuitesparse-dev libcli11-dev libgtest-dev
-          libyaml-cpp-dev nlohmann-json3-dev libmatio-dev
+          libyaml-cpp-dev nlohmann-json3-dev libmatio-dev libssl-dev
           pybind11-dev python3-dev python3-numpy python3-pytest
           libopenmpi-dev openmpi-bin
           chromium  # the HTML report's browser test (headless)

@@ -1,5 +1,5 @@
 // Fast reader of the text form of run data (CSV contract of docs/file-formats.md, or
-// blank-separated text): one pass over the file in memory, numbers parsed with
+// blank-separated text): one pass over the file in blocks, numbers parsed with
 // std::from_chars, only the wanted columns converted.
 #include <algorithm>
 #include <charconv>
@@ -17,23 +17,80 @@ namespace triadcal {
 
 namespace {
 
-std::string ReadWholeFile(const std::string& path) {
-  CheckInputFile(path);
-  NoteInputFile(path);
-  std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
-  if (!f) throw InputError(path + ": cannot read (no such file or not readable)");
-  std::string data;
-  char buf[1 << 16];
-  std::size_t n;
-  if (std::fseek(f.get(), 0, SEEK_END) == 0) {
-    const long size = std::ftell(f.get());
-    if (size > 0) data.reserve(static_cast<std::size_t>(size));
-    std::fseek(f.get(), 0, SEEK_SET);
+// The lines of a file, read in blocks: memory stays at one block however long
+// the file (a 40-min 1-kHz run is 250 MB of text). A line is valid until the
+// next call.
+class LineSource {
+ public:
+  explicit LineSource(const std::string& path) : path_(path), f_(nullptr, &std::fclose) {
+    CheckInputFile(path);
+    NoteInputFile(path);
+    f_.reset(std::fopen(path.c_str(), "rb"));
+    if (!f_) throw InputError(path + ": cannot read (no such file or not readable)");
+    if (std::fseek(f_.get(), 0, SEEK_END) == 0) {
+      const long size = std::ftell(f_.get());
+      if (size > 0) size_ = static_cast<std::size_t>(size);
+      std::fseek(f_.get(), 0, SEEK_SET);
+    }
+    Fill();
+    if (end_ - begin_ >= 3 && std::memcmp(buf_.data(), "\xEF\xBB\xBF", 3) == 0) begin_ += 3;
   }
-  while ((n = std::fread(buf, 1, sizeof(buf), f.get())) > 0) data.append(buf, n);
-  if (std::ferror(f.get())) throw InputError(path + ": read error");
-  return data;
-}
+
+  // The next line without its '\n'; false at the end of the file.
+  bool Next(const char** line_begin, const char** line_end) {
+    for (;;) {
+      const char* p = buf_.data() + begin_;
+      const char* end = buf_.data() + end_;
+      if (const char* eol = static_cast<const char*>(std::memchr(p, '\n', end - p))) {
+        *line_begin = p;
+        *line_end = eol;
+        begin_ = static_cast<std::size_t>(eol + 1 - buf_.data());
+        return true;
+      }
+      if (eof_) {
+        if (p == end) return false;
+        *line_begin = p;
+        *line_end = end;
+        begin_ = end_;
+        return true;
+      }
+      Fill();
+    }
+  }
+
+  // About how many lines the file has, from the first block's.
+  std::size_t LinesEstimate() const {
+    const std::size_t in_block = static_cast<std::size_t>(
+        std::count(buf_.data() + begin_, buf_.data() + end_, '\n'));
+    if (eof_ || in_block == 0) return in_block + 1;
+    return static_cast<std::size_t>(static_cast<double>(in_block) *
+                                     static_cast<double>(size_) /
+                                     static_cast<double>(end_ - begin_)) + 1;
+  }
+
+ private:
+  static constexpr std::size_t kBlock = 1 << 22;
+
+  // Keeps the unread part, then reads the next block behind it (the buffer
+  // grows only for a line longer than a block).
+  void Fill() {
+    buf_.erase(0, begin_);
+    end_ -= begin_;
+    begin_ = 0;
+    if (buf_.size() < end_ + kBlock) buf_.resize(end_ + kBlock);
+    const std::size_t n = std::fread(&buf_[end_], 1, buf_.size() - end_, f_.get());
+    if (std::ferror(f_.get())) throw InputError(path_ + ": read error");
+    end_ += n;
+    if (n == 0 || std::feof(f_.get())) eof_ = true;
+  }
+
+  std::string path_;
+  std::unique_ptr<FILE, int (*)(FILE*)> f_;
+  std::string buf_;
+  std::size_t begin_ = 0, end_ = 0;  // the unread bytes [begin_, end_) of buf_
+  std::size_t size_ = 0;
+  bool eof_ = false;
+};
 
 bool IsBlank(char c) { return c == ' ' || c == '\t' || c == '\r'; }
 
@@ -110,12 +167,9 @@ DataTable ReadTextTable(const std::string& path, const std::vector<std::string>&
 
 DataTable ReadTextTable(const std::string& path, const std::vector<std::string>& wanted,
                         const TextTableOptions& options) {
-  const std::string data = ReadWholeFile(path);
+  LineSource lines(path);  // without a UTF-8 BOM
   DataTable table;
   table.path = path;
-  const char* p = data.data();
-  const char* const end = p + data.size();
-  if (data.size() >= 3 && std::memcmp(p, "\xEF\xBB\xBF", 3) == 0) p += 3;  // UTF-8 BOM
 
   int line_no = 0;
   bool comma = true;
@@ -123,7 +177,7 @@ DataTable ReadTextTable(const std::string& path, const std::vector<std::string>&
   std::vector<std::vector<double>*> target;  // per field: where its value goes
   std::vector<std::vector<std::string>*> text_target;  // per field, for text columns
   std::size_t fields_needed = 0;
-  const std::size_t rows_estimate = static_cast<std::size_t>(std::count(p, end, '\n')) + 1;
+  const std::size_t rows_estimate = lines.LinesEstimate();
 
   // Once the column names are known: which field feeds which wanted column.
   auto assign_targets = [&]() {
@@ -156,11 +210,9 @@ DataTable ReadTextTable(const std::string& path, const std::vector<std::string>&
     have_names = true;
   };
 
-  while (p < end) {
-    const char* eol = static_cast<const char*>(std::memchr(p, '\n', end - p));
-    const char* line_end = eol ? eol : end;
-    const char* line_begin = p;
-    p = eol ? eol + 1 : end;
+  const char* line_begin;
+  const char* line_end;
+  while (lines.Next(&line_begin, &line_end)) {
     ++line_no;
     if (IsSkippedLine(line_begin, line_end)) continue;
 

@@ -10,6 +10,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
+#include <utility>
 
 #include "core/io/column_mapping.h"
 #include "core/io/data_table.h"
@@ -62,8 +64,11 @@ std::string Label(const DataTable& table, const std::string& name, const ColumnS
 }
 
 // Channel `name` in our units, or empty values when it is optional and absent.
-ChannelValues ReadChannel(const DataTable& table, const RunDescription& run,
-                          const ChannelInfo& ch) {
+// The channel's column is moved out of the table when no other channel is
+// still to read it (uses: the channels left per source): a long run is not
+// held twice.
+ChannelValues ReadChannel(DataTable& table, std::map<std::string, int>& uses,
+                          const RunDescription& run, const ChannelInfo& ch) {
   const ColumnSource src = SourceOf(run, ch.name);
   ChannelValues out;
   out.name = ch.name;
@@ -83,7 +88,11 @@ ChannelValues ReadChannel(const DataTable& table, const RunDescription& run,
     if (ch.required || run.columns.count(ch.name)) MissingColumn(table, ch.name, src);
     return out;
   }
-  out.values = it->second;
+  if (--uses[src.source] <= 0) {
+    out.values = std::move(it->second);
+  } else {
+    out.values = it->second;
+  }
   if (factor != 1.0 || src.offset != 0.0) {
     for (double& v : out.values) v = v * factor + src.offset;
   }
@@ -139,10 +148,9 @@ void CheckGyroColumnsPresent(const DataTable& table, const RunDescription& run) 
                    what + " " + list + why + "header: " + JoinNames(table.names) + ")");
 }
 
-std::vector<double> Scaled(const std::vector<double>& v, double factor) {
-  std::vector<double> out(v.size());
-  for (std::size_t k = 0; k < v.size(); ++k) out[k] = v[k] * factor;
-  return out;
+std::vector<double> Scaled(std::vector<double>&& v, double factor) {
+  for (double& x : v) x *= factor;
+  return std::move(v);
 }
 
 void AppendDouble(double x, std::string* out) {
@@ -166,10 +174,14 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
 
   // Read the columns the mapping asks for.
   std::vector<std::string> wanted;
+  std::map<std::string, int> uses;  // channels per source column
   for (const ChannelInfo& ch : Channels()) {
     if (IsGyroChannel(ch) && !run.gyro) continue;  // not calibrated: not read
     const ColumnSource src = SourceOf(run, ch.name);
-    if (!src.constant) wanted.push_back(src.source);
+    if (!src.constant) {
+      wanted.push_back(src.source);
+      ++uses[src.source];
+    }
   }
   const std::string label_source = LabelSource(run);
   if (IsMatFile(run.data_path) && (!label_source.empty() || !run.data_header.empty())) {
@@ -180,7 +192,7 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
   TextTableOptions text_options;
   text_options.header = run.data_header;
   if (!label_source.empty()) text_options.wanted_text.push_back(label_source);
-  const DataTable table = IsMatFile(run.data_path)
+  DataTable table = IsMatFile(run.data_path)
                               ? ReadMatTable(run.data_path, wanted)
                               : ReadTextTable(run.data_path, wanted, text_options);
   std::vector<std::string> labels;
@@ -191,22 +203,22 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
       src.source = label_source;
       MissingColumn(table, kLabelChannel, src);
     }
-    labels = it->second;
+    labels = std::move(it->second);
   }
   // t, l1, l2, wx, wy, wz, r1, r2, temp, gx, gy, gz
   const std::vector<ChannelInfo>& chs = Channels();
-  ChannelValues t = ReadChannel(table, run, chs[0]);
-  ChannelValues lambda[2] = {ReadChannel(table, run, chs[1]), ReadChannel(table, run, chs[2])};
-  ChannelValues w[3] = {ReadChannel(table, run, chs[3]), ReadChannel(table, run, chs[4]),
-                        ReadChannel(table, run, chs[5])};
-  ChannelValues rate[2] = {ReadChannel(table, run, chs[6]), ReadChannel(table, run, chs[7])};
-  ChannelValues temp = ReadChannel(table, run, chs[8]);
+  auto read = [&](const ChannelInfo& ch) { return ReadChannel(table, uses, run, ch); };
+  ChannelValues t = read(chs[0]);
+  ChannelValues lambda[2] = {read(chs[1]), read(chs[2])};
+  ChannelValues w[3] = {read(chs[3]), read(chs[4]), read(chs[5])};
+  ChannelValues rate[2] = {read(chs[6]), read(chs[7])};
+  ChannelValues temp = read(chs[8]);
   // The gyro (SPEC section 10), in deg/s on the IMU's own axes: read with a
   // gyro block, all three; without one, the columns are left alone.
   ChannelValues g[3];
   if (run.gyro) {
     CheckGyroColumnsPresent(table, run);
-    for (int i = 0; i < 3; ++i) g[i] = ReadChannel(table, run, chs[9 + i]);
+    for (int i = 0; i < 3; ++i) g[i] = read(chs[9 + i]);
   } else if (InTable(table, run, "gx") && InTable(table, run, "gy") && InTable(table, run, "gz")) {
     Warn(warnings, std::string("gx gy gz present but run.yaml has no gyro block: the gyro is "
                                "not calibrated"));
@@ -312,18 +324,13 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
   RunData data;
   data.t_s = std::move(t.values);
   for (int i = 0; i < 2; ++i) {
-    data.lambda_rad[i] = Scaled(lambda[i].values, kDegToRad);
-    if (rate[i].present()) data.rate_rad_s[i] = Scaled(rate[i].values, kDegToRad);
+    data.lambda_rad[i] = Scaled(std::move(lambda[i].values), kDegToRad);
+    if (rate[i].present()) data.rate_rad_s[i] = Scaled(std::move(rate[i].values), kDegToRad);
   }
   for (int i = 0; i < 3; ++i) {
-    data.w_mV[i] = run.axis_sign[i] == 1.0 ? w[run.axis_source[i]].values
-                                           : Scaled(w[run.axis_source[i]].values, -1.0);
+    data.w_mV[i] = Scaled(std::move(w[run.axis_source[i]].values), run.axis_sign[i]);
   }
   if (run.gyro) {
-    // The mounting turns the gyro's axes as the accelerometer's (one IMU).
-    for (int i = 0; i < 3; ++i) {
-      data.gyro_rad_s[i] = Scaled(g[run.axis_source[i]].values, run.axis_sign[i] * kDegToRad);
-    }
     // Readings held at the gyro's range: never fitted through (gyro_term.h
     // leaves their intervals out).
     std::vector<char> clipped(data.t_s.size(), 0);
@@ -337,6 +344,11 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
       Warn(warnings, std::to_string(n_clipped) +
                          " gyro samples at the range's limit: the gyro fit leaves out the "
                          "intervals that hold them");
+    }
+    // The mounting turns the gyro's axes as the accelerometer's (one IMU).
+    for (int i = 0; i < 3; ++i) {
+      data.gyro_rad_s[i] =
+          Scaled(std::move(g[run.axis_source[i]].values), run.axis_sign[i] * kDegToRad);
     }
   }
   data.temp_C = std::move(temp.values);

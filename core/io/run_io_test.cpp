@@ -140,6 +140,53 @@ TEST_F(RunIoTest, CsvRoundTripIsExact) {
   EXPECT_EQ(small.find("t,lambda1,lambda2,wx,wy,wz\n" + row0), 0u) << small;
 }
 
+// The text reader reads in blocks of a few MB: a file of several blocks, with
+// CRLF line ends and no final newline, reads back exactly, and an error in
+// its last block names the right line.
+TEST_F(RunIoTest, CsvOfSeveralReadBlocks) {
+  const RunData run = MakeRun(120000, true, true);  // about 13 MB of text
+  WriteRunCsv(run, Path("run.csv"), "long");
+  std::string text = ReadFile(Path("run.csv"));
+  ASSERT_GT(text.size(), 3u * (1u << 22));
+  std::string crlf;
+  crlf.reserve(text.size() + 130000);
+  for (char c : text) {
+    if (c == '\n') crlf += '\r';
+    crlf += c;
+  }
+  crlf.resize(crlf.size() - 2);  // no final line end
+  WriteText("crlf.csv", crlf);
+  RunWarnings warnings;
+  ExpectSameRun(run, LoadRunData(Describe("crlf.csv"), &warnings));
+  // Line 119 990 of the data, the 2 comment and header lines before it.
+  const std::size_t row = 119990;
+  std::size_t at = 0;
+  for (std::size_t k = 0; k < row + 2; ++k) at = crlf.find('\n', at) + 1;
+  crlf.insert(at, "x");
+  WriteText("bad.csv", crlf);
+  EXPECT_EQ(ErrorOf(Describe("bad.csv")),
+            Path("bad.csv") + ":" + std::to_string(row + 3) + ": column 't': not a number: 'x" +
+                FormatDouble(run.t_s[row]) + "'");
+}
+
+// One file column may feed two channels (the reader hands a column over to
+// the last channel that reads it, and copies it for the others).
+TEST_F(RunIoTest, OneColumnFeedsTwoChannels) {
+  WriteText("run.csv", [] {
+    std::string t;
+    for (const std::string& l : GoodCsv(40)) t += l + "\n";
+    return t;
+  }());
+  RunDescription run = DescribeYaml("data: run.csv\ncolumns:\n  wz: {source: wy}\n");
+  RunWarnings warnings;
+  const RunData data = LoadRunData(run, &warnings);
+  ASSERT_EQ(data.size(), 40u);
+  for (std::size_t k = 0; k < data.size(); ++k) {
+    ASSERT_EQ(data.w_mV[1][k], 1400.0 - 2.0 * static_cast<double>(k)) << k;
+    ASSERT_EQ(data.w_mV[2][k], data.w_mV[1][k]) << k;
+  }
+}
+
 // time_range_s keeps the samples with from <= t <= to; a range without
 // samples, or backwards, is an error naming the key.
 TEST_F(RunIoTest, TimeRangeKeepsPartOfTheRun) {

@@ -143,9 +143,7 @@ void CollectResiduals(const RunProblem& p, const RunData& data, const RunPass& w
     if (e > 0) pss += red.process_residual[e].cwiseAbs2();
   }
   // Whitened as a sequence: neighbouring intervals share their epoch's sample.
-  RunProblem q = p;
-  q.noise_mV = red.noise_mV;
-  const StateSpaceModel model(q);
+  const StateSpaceModel model(p, red.noise_mV);
   const std::vector<Vec6> raw(red.process_residual.begin() + 1, red.process_residual.end());
   const std::vector<Vec6> white = model.WhitenProcessSequence(weights.process, raw, theta);
   for (std::size_t e = 1; e < E; ++e) {

@@ -12,7 +12,11 @@ Mat6 ProcessStep::F() const {
   return F;
 }
 
-StateSpaceModel::StateSpaceModel(const RunProblem& problem) : p_(problem), acc_cfg_(problem.cfg) {
+StateSpaceModel::StateSpaceModel(const RunProblem& problem)
+    : StateSpaceModel(problem, problem.noise_mV) {}
+
+StateSpaceModel::StateSpaceModel(const RunProblem& problem, const Eigen::Vector3d& noise_mV)
+    : p_(problem), noise_mV_(noise_mV), acc_cfg_(problem.cfg) {
   if (acc_cfg_.layout.has_gyro()) acc_cfg_.layout = acc_cfg_.layout.WithGyro(false);
   n_acc_ = acc_cfg_.layout.size();
 }
@@ -33,7 +37,7 @@ Mat6 WhiteningOf(const Mat6& cov) {
 Eigen::Vector3d StateSpaceModel::ChannelVariance(const Eigen::VectorXd& theta) const {
   Eigen::Vector3d var;
   for (int i = 0; i < 3; ++i) {
-    const double s = p_.cfg.g_mps2 * p_.noise_mV[i] / std::abs(theta[kKx + i]);
+    const double s = p_.cfg.g_mps2 * noise_mV_[i] / std::abs(theta[kKx + i]);
     var[i] = s * s;
   }
   return var;

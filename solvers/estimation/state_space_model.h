@@ -84,6 +84,9 @@ class StateSpaceModel {
   // layout, gyro_term.h): it is evaluated without it, and its Jacobians get
   // zero columns there.
   explicit StateSpaceModel(const RunProblem& problem);
+  // The same with the reading noise noise_mV [reading units] in place of the
+  // problem's.
+  StateSpaceModel(const RunProblem& problem, const Eigen::Vector3d& noise_mV);
 
   const RunProblem& problem() const { return p_; }
   // s_i^2 [m^2/s^4] of each channel at theta.
@@ -139,6 +142,7 @@ class StateSpaceModel {
   // J (rows x accelerometer parameters) widened to the layout's n columns.
   Eigen::MatrixXd Widen(const Eigen::MatrixXd& J) const;
   const RunProblem& p_;
+  Eigen::Vector3d noise_mV_;
   ModelConfig acc_cfg_;  // p_.cfg without the gyro block
   int n_acc_ = 0;
 };

@@ -92,6 +92,7 @@ double FitAxis(const std::vector<double>& w, const std::vector<Eigen::Vector3d>&
   return ss;
 }
 
+// imu: the IMU's readings at the samples idx (ImuReadings).
 MountingFit Fit(const std::vector<std::vector<double>>& imu, const std::vector<std::size_t>& idx,
                 const std::vector<Eigen::Vector3d>& W, const int (&source)[3],
                 const double (&sign)[3], double z1, double z2) {
@@ -101,7 +102,7 @@ MountingFit Fit(const std::vector<std::vector<double>>& imu, const std::vector<s
   for (int i = 0; i < 3; ++i) {
     f.axis_source[i] = source[i];
     f.axis_sign[i] = sign[i];
-    for (std::size_t j = 0; j < idx.size(); ++j) w[j] = sign[i] * imu[source[i]][idx[j]];
+    for (std::size_t j = 0; j < idx.size(); ++j) w[j] = sign[i] * imu[source[i]][j];
     ss += FitAxis(w, W, i, &f.scale[i], &f.bias[i]);
   }
   f.zero_rad[0] = z1;
@@ -121,13 +122,13 @@ std::string MountingFit::AxesText() const {
   return s + "]";
 }
 
-std::vector<std::vector<double>> ImuReadings(const RunDescription& run, const RunData& data) {
+std::vector<std::vector<double>> ImuReadings(const RunDescription& run, const RunData& data,
+                                             const std::vector<std::size_t>& idx) {
   std::vector<std::vector<double>> imu(3);
   for (int i = 0; i < 3; ++i) {
-    imu[run.axis_source[i]] = data.w_mV[i];
-    if (run.axis_sign[i] < 0) {
-      for (double& v : imu[run.axis_source[i]]) v = -v;
-    }
+    std::vector<double>& col = imu[run.axis_source[i]];
+    col.resize(idx.size());
+    for (std::size_t j = 0; j < idx.size(); ++j) col[j] = run.axis_sign[i] * data.w_mV[i][idx[j]];
   }
   return imu;
 }
@@ -136,25 +137,32 @@ MountingFit FitMounting(const RunDescription& run, const RunData& data, const in
                         const double (&sign)[3], double z1_rad, double z2_rad,
                         std::size_t max_samples) {
   const std::vector<std::size_t> idx = Subsample(data.size(), max_samples);
-  const std::vector<std::vector<double>> imu = ImuReadings(run, data);
+  const std::vector<std::vector<double>> imu = ImuReadings(run, data, idx);
   return Fit(imu, idx, GravityProjection(run, data, idx, z1_rad, z2_rad), source, sign, z1_rad,
              z2_rad);
 }
 
-std::vector<MountingFit> SearchMountings(const RunDescription& run, const RunData& data,
-                                         double zero_range_rad, double zero_step_rad,
-                                         std::size_t max_samples) {
-  const std::vector<std::size_t> idx = Subsample(data.size(), max_samples);
-  const std::vector<std::vector<double>> imu = ImuReadings(run, data);
+namespace {
+
+// The samples a search uses and the IMU's own readings at them.
+struct SearchData {
+  std::vector<std::size_t> idx;
+  std::vector<std::vector<double>> imu;
+};
+
+// Every proper mounting at its best zeros on the grid.
+std::vector<MountingFit> GridFits(const RunDescription& run, const RunData& data,
+                                  const SearchData& s, double zero_range_rad,
+                                  double zero_step_rad) {
   const auto mountings = ProperMountings();
   std::vector<MountingFit> best(mountings.size());
   for (auto& b : best) b.rms_g = 1e300;
   auto try_zeros = [&](double z1, double z2) {
-    const std::vector<Eigen::Vector3d> W = GravityProjection(run, data, idx, z1, z2);
+    const std::vector<Eigen::Vector3d> W = GravityProjection(run, data, s.idx, z1, z2);
     for (std::size_t m = 0; m < mountings.size(); ++m) {
       const int src[3] = {mountings[m].first[0], mountings[m].first[1], mountings[m].first[2]};
       const double sg[3] = {mountings[m].second[0], mountings[m].second[1], mountings[m].second[2]};
-      const MountingFit f = Fit(imu, idx, W, src, sg, z1, z2);
+      const MountingFit f = Fit(s.imu, s.idx, W, src, sg, z1, z2);
       // Prefer the smaller zeros among fits equal to 0.1 %.
       const bool better =
           f.rms_g < best[m].rms_g * 0.999 ||
@@ -167,27 +175,46 @@ std::vector<MountingFit> SearchMountings(const RunDescription& run, const RunDat
   for (int a = -steps; a <= steps; ++a) {
     for (int b = -steps; b <= steps; ++b) try_zeros(a * zero_step_rad, b * zero_step_rad);
   }
-  // Refine each around its grid optimum: a finer grid, halving four times.
-  for (std::size_t m = 0; m < best.size(); ++m) {
-    double step = zero_step_rad / 2.0;
-    for (int round = 0; round < 4; ++round, step /= 2.0) {
-      const double c1 = best[m].zero_rad[0], c2 = best[m].zero_rad[1];
-      for (int a = -1; a <= 1; ++a) {
-        for (int b = -1; b <= 1; ++b) {
-          if (a == 0 && b == 0) continue;
-          const double z1 = c1 + a * step, z2 = c2 + b * step;
-          if (std::abs(z1) > zero_range_rad || std::abs(z2) > zero_range_rad) continue;
-          const MountingFit f =
-              Fit(imu, idx, GravityProjection(run, data, idx, z1, z2),
-                  {best[m].axis_source[0], best[m].axis_source[1], best[m].axis_source[2]},
-                  {best[m].axis_sign[0], best[m].axis_sign[1], best[m].axis_sign[2]}, z1, z2);
-          if (f.rms_g < best[m].rms_g) best[m] = f;
-        }
+  return best;
+}
+
+// One mounting's zeros refined around its grid optimum: a finer grid,
+// halving four times.
+void Refine(const RunDescription& run, const RunData& data, const SearchData& s,
+            double zero_range_rad, double zero_step_rad, MountingFit* best) {
+  double step = zero_step_rad / 2.0;
+  for (int round = 0; round < 4; ++round, step /= 2.0) {
+    const double c1 = best->zero_rad[0], c2 = best->zero_rad[1];
+    for (int a = -1; a <= 1; ++a) {
+      for (int b = -1; b <= 1; ++b) {
+        if (a == 0 && b == 0) continue;
+        const double z1 = c1 + a * step, z2 = c2 + b * step;
+        if (std::abs(z1) > zero_range_rad || std::abs(z2) > zero_range_rad) continue;
+        const MountingFit f =
+            Fit(s.imu, s.idx, GravityProjection(run, data, s.idx, z1, z2),
+                {best->axis_source[0], best->axis_source[1], best->axis_source[2]},
+                {best->axis_sign[0], best->axis_sign[1], best->axis_sign[2]}, z1, z2);
+        if (f.rms_g < best->rms_g) *best = f;
       }
     }
   }
-  std::sort(best.begin(), best.end(),
+}
+
+void SortByMisfit(std::vector<MountingFit>* fits) {
+  std::sort(fits->begin(), fits->end(),
             [](const MountingFit& a, const MountingFit& b) { return a.rms_g < b.rms_g; });
+}
+
+}  // namespace
+
+std::vector<MountingFit> SearchMountings(const RunDescription& run, const RunData& data,
+                                         double zero_range_rad, double zero_step_rad,
+                                         std::size_t max_samples) {
+  SearchData s{Subsample(data.size(), max_samples), {}};
+  s.imu = ImuReadings(run, data, s.idx);
+  std::vector<MountingFit> best = GridFits(run, data, s, zero_range_rad, zero_step_rad);
+  for (MountingFit& f : best) Refine(run, data, s, zero_range_rad, zero_step_rad, &f);
+  SortByMisfit(&best);
   return best;
 }
 
@@ -199,17 +226,29 @@ std::string MountingWarning(const RunDescription& run, const RunData& data) {
     if (*hi - *lo > 60.0 * kDegToRad) break;
     if (i == 1) return "";
   }
+  // The grid's best and the declared mounting refined (the others do not
+  // matter here).
   const double range = 5.0 * kDegToRad;
-  const std::vector<MountingFit> fits = SearchMountings(run, data, range, range / 2.0, 500);
-  MountingFit declared;
+  SearchData s{Subsample(data.size(), 500), {}};
+  s.imu = ImuReadings(run, data, s.idx);
+  std::vector<MountingFit> fits = GridFits(run, data, s, range, range / 2.0);
+  SortByMisfit(&fits);
+  MountingFit best = fits.front(), declared;
+  bool found = false;
   for (const MountingFit& f : fits) {
     bool same = true;
     for (int i = 0; i < 3; ++i) {
       same = same && f.axis_source[i] == run.axis_source[i] && f.axis_sign[i] == run.axis_sign[i];
     }
-    if (same) declared = f;
+    if (same) {
+      declared = f;
+      found = true;
+    }
   }
-  const MountingFit& best = fits.front();
+  if (!found) return "";
+  Refine(run, data, s, range, range / 2.0, &best);
+  Refine(run, data, s, range, range / 2.0, &declared);
+  if (declared.rms_g < best.rms_g) best = declared;
   if (!(declared.rms_g > 3.0 * best.rms_g && declared.rms_g > best.rms_g + 0.05)) return "";
   char buf[256];
   std::snprintf(buf, sizeof(buf),

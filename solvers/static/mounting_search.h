@@ -32,9 +32,10 @@ struct MountingFit {
   std::string AxesText() const;  // ["+y", "-z", "-x"]
 };
 
-// Readings of the IMU's own axes from a loaded run (LoadRunData applied the
-// declared mounting; this takes it back off).
-std::vector<std::vector<double>> ImuReadings(const RunDescription& run, const RunData& data);
+// Readings of the IMU's own axes at the samples idx of a loaded run
+// (LoadRunData applied the declared mounting; this takes it back off).
+std::vector<std::vector<double>> ImuReadings(const RunDescription& run, const RunData& data,
+                                             const std::vector<std::size_t>& idx);
 
 // Every proper signed permutation (24), best first, each with its best zeros
 // within +-zero_range_rad (searched on a grid of zero_step_rad, then refined).
