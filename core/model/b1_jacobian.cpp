@@ -104,7 +104,10 @@ bool B1HasAnalyticJacobian(const ParameterLayout& layout) {
   return true;
 }
 
-void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
+// flatten: everything it calls is inlined into it. GCC left the 9-wide Jets'
+// arithmetic of the size effect as calls (a fit with size_effect on the real
+// slow run: solve 1.97 -> 1.19 s, the same numbers).
+__attribute__((flatten)) void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
                               const BenchAngles<double>& rec, const Eigen::Vector3d& z_in,
                               const SampleContext& ctx, Eigen::Vector3d* a_out,
                               Eigen::Ref<Eigen::MatrixXd> J) {
