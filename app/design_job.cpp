@@ -7,6 +7,7 @@
 #include <map>
 
 #include "app/option_lists.h"
+#include "core/io/column_mapping.h"
 #include "core/io/file_util.h"
 #include "core/model/errors.h"
 #include "core/model/units.h"
@@ -228,7 +229,8 @@ std::string TargetsText(const std::vector<DesignTarget>& targets) {
 }
 
 void DesignSettings::Validate() const {
-  const ParameterLayout layout(ParseEffectList(effects));
+  // Targets may name the gyro's parameters (a scenario with a gyro block).
+  const ParameterLayout layout(ParseEffectList(effects), true);
   if (durations_s.empty()) {
     throw InputError("--durations: expected a comma-separated list, got nothing");
   }
@@ -251,12 +253,17 @@ DesignOutcome DesignRun(const DesignSettings& settings, const std::string& scena
   settings.Validate();
   const auto t_start = std::chrono::steady_clock::now();
   DesignOutcome o;
-  o.layout = ParameterLayout(ParseEffectList(settings.effects));
+  // The gyro's parameters when the scenario's run has a gyro block (its
+  // noise-free run then has gx gy gz, and the information their increments).
+  o.layout = ParameterLayout(ParseEffectList(settings.effects), s.run.gyro.has_value(),
+                             ReadingsUnit(s.run));
   DesignStudyOptions& opt = o.options;
   opt.durations_s = settings.durations_s;
   std::sort(opt.durations_s.begin(), opt.durations_s.end());
   opt.targets = settings.targets;
-  for (DesignTarget& t : opt.targets) t.indices = TargetIndices(o.layout, t.key);
+  WithFlags(DesignFlags(), [&] {
+    for (DesignTarget& t : opt.targets) t.indices = TargetIndices(o.layout, t.key);
+  });
   opt.static_positions = settings.static_positions;
   opt.static_duration_s = settings.static_duration_s;
   opt.design_duration_s = settings.design_duration_s;

@@ -77,5 +77,56 @@ TEST_F(DesignJob, SameOutAsTheCommandLine) {
   EXPECT_EQ(Comparable(o.json), Out("out.json"));
 }
 
+
+// A scenario with a gyro block: its parameters in every table of the study,
+// their sigma falling as 1/sqrt(duration) on the swing, not determined by the
+// (accelerometer's) static method, and the same as `observability` gives for
+// the scenario's own profile. A gyro target needs a gyro in the scenario.
+TEST_F(DesignJob, CarriesTheGyroOfTheScenario) {
+  const std::string profile =
+      "profile: {amplitude_deg: [360, 90], period_s: [30, 12], duration_s: 40, rate_hz: 25}\n"
+      "truth: {Kx: 171.5, W0x: 1504.2}\n"
+      "noise: {accel_mV: 2, angle_arcsec: 15, gyro_dps: 0.05}\n";
+  const std::string scenario = WriteText(
+      "scenario.yaml", profile + "run:\n  gyro: {scale: [1, 1, 1], noise_dps: 0.05}\n");
+  DesignSettings s;
+  s.durations_s = {40, 160};
+  s.periods_s = {{30, 12}};
+  s.amplitudes_deg = {{360, 90}};
+  s.static_duration_s = 60;
+  s.targets = ParseDesignTargets("gyro.Kx=0.001");
+  s.design_duration_s = 40;
+  const DesignOutcome o = DesignRun(s, scenario, LoadScenario(scenario), Session());
+  ASSERT_TRUE(o.layout.has_gyro());
+  const nlohmann::json& qh = o.json["duration"]["quasi_harmonic"];
+  for (const char* name : {"gyro.Kx", "gyro.W0y", "gyro.alpha_x", "gyro.Gzz"}) {
+    SCOPED_TRACE(name);
+    const double s40 = qh["sigma"][name][0], s160 = qh["sigma"][name][1];
+    EXPECT_GT(s40, 0.0);
+    EXPECT_NEAR(s160 / s40, 0.5, 0.05);  // four times the run, half the sigma
+    EXPECT_EQ(o.json["comparison"]["rows"][name]["ratio_static_over_quasi_harmonic"],
+              nullptr);
+  }
+  EXPECT_TRUE(o.json["targets"][0]["reached"].get<bool>()) << o.json["targets"].dump();
+  const testing_fixtures::CliResult obs =
+      Run("observability " + scenario + " -o " + Path("obs.json"));
+  ASSERT_EQ(obs.exit_code, 0) << obs.err;
+  const nlohmann::json crb = Out("obs.json");
+  for (const char* name : {"gyro.Kx", "gyro.Ky", "gyro.W0z", "gyro.beta_z", "gyro.Gxy"}) {
+    SCOPED_TRACE(name);
+    const double design = qh["sigma"][name][0];
+    const double observability = crb["crb"][name];
+    EXPECT_NEAR(design / observability, 1.0, 1e-6);
+  }
+
+  std::string without = profile;
+  without.replace(without.find(", gyro_dps: 0.05"), 16, "");
+  const std::string plain = WriteText("plain.yaml", without);
+  EXPECT_EQ(ErrorOf([&] { DesignRun(s, plain, LoadScenario(plain), Session()); }),
+            "--target: unknown parameter or group 'gyro.Kx' (a parameter name or K, W0, "
+            "angles, K_ij, bench, dR)");
+}
+
+
 }  // namespace
 }  // namespace triadcal

@@ -1,5 +1,6 @@
 #include "tools/report/design_report.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -15,15 +16,31 @@ std::string PairText(double a, double b) {
   return t;
 }
 
+// Widths of the name and unit columns: the longest of each (gyro.alpha_x,
+// (deg/s)/g).
+struct Widths {
+  int name = 9, unit = 7;
+  explicit Widths(const ParameterLayout& layout) {
+    for (int i = 0; i < layout.size(); ++i) {
+      name = std::max(name, static_cast<int>(layout.info(i).name.size()));
+      unit = std::max(unit, static_cast<int>(layout.info(i).unit.size()));
+    }
+  }
+  void Print(const std::string& a, const std::string& b) const {
+    std::printf("%-*s %-*s", name, a.c_str(), unit, b.c_str());
+  }
+};
+
 void PrintDurationTable(const ParameterLayout& layout, const DesignStudy& r, const char* what,
                         const std::vector<DesignPoint>& pts) {
   std::printf("\n%s: sigma against run duration [s] (* not determined: the prior's)\n", what);
-  std::printf("%-9s %-7s", "parameter", "unit");
+  const Widths w(layout);
+  w.Print("parameter", "unit");
   for (double T : r.durations_s) std::printf(" %9g", T);
   std::printf(" %7s\n", "slope");
   for (int i = 0; i < layout.size(); ++i) {
     const double f = layout.info(i).si_per_unit;
-    std::printf("%-9s %-7s", layout.info(i).name.c_str(), layout.info(i).unit.c_str());
+    w.Print(layout.info(i).name, layout.info(i).unit);
     std::vector<double> v;
     for (const DesignPoint& d : pts) {
       const bool held = Undetermined(d, layout.info(i).name);
@@ -86,8 +103,9 @@ void PrintComparison(const ParameterLayout& layout, const DesignStudy& r,
   std::printf(
       "\nquasi-harmonic %g s against the static %d-position method, %g s (* not determined)\n", Td,
       settings.static_positions, Ts);
-  std::printf("%-9s %-7s %14s %14s %14s %10s\n", "parameter", "unit", "quasi-harm.", "static",
-              "static same T", "ratio");
+  const Widths w(layout);
+  w.Print("parameter", "unit");
+  std::printf(" %14s %14s %14s %10s\n", "quasi-harm.", "static", "static same T", "ratio");
   for (int i = 0; i < layout.size(); ++i) {
     const ParameterInfo& p = layout.info(i);
     const double f = p.si_per_unit;
@@ -98,13 +116,18 @@ void PrintComparison(const ParameterLayout& layout, const DesignStudy& r,
     } else {
       std::snprintf(ratio, sizeof(ratio), "%10.3g", r.static_long.sigma[i] / r.qh_design.sigma[i]);
     }
-    std::printf("%-9s %-7s %13.3g%s %13.3g%s %13.3g%s %s\n", p.name.c_str(), p.unit.c_str(),
-                r.qh_design.sigma[i] / f, held(r.qh_design), r.static_long.sigma[i] / f,
+    w.Print(p.name, p.unit);
+    std::printf(" %13.3g%s %13.3g%s %13.3g%s %s\n", r.qh_design.sigma[i] / f, held(r.qh_design), r.static_long.sigma[i] / f,
                 held(r.static_long), r.static_design.sigma[i] / f, held(r.static_design), ratio);
   }
   std::printf(
       "(ratio: static %g s sigma / quasi-harmonic %g s sigma; -: not determined by one of them)\n",
       Ts, Td);
+  if (layout.has_gyro()) {
+    std::printf(
+        "(the static method here is the accelerometer's: the gyro's parameters show their "
+        "priors there)\n");
+  }
 }
 
 }  // namespace
@@ -114,9 +137,16 @@ void PrintDesign(const Scenario& s, const std::string& scenario_path,
   const ParameterLayout& layout = o.layout;
   const DesignStudyOptions& options = o.options;
   const DesignStudy& r = o.study;
-  std::printf("design: %s, %g Hz, declared noise %g mV, %g arcsec; static test: %d positions\n",
+  std::string gyro;
+  if (s.run.gyro) {
+    char t[64];
+    std::snprintf(t, sizeof(t), ", gyro %g deg/s", s.run.gyro->noise_rad_s.maxCoeff() / kDegToRad);
+    gyro = t;
+  }
+  std::printf("design: %s, %g Hz, declared noise %g %s, %g arcsec%s; static test: %d positions\n",
               scenario_path.c_str(), s.profile.rate_hz, s.run.noise_mV,
-              s.run.angle_noise_rad / kArcsecToRad, settings.static_positions);
+              layout.readings_unit().c_str(), s.run.angle_noise_rad / kArcsecToRad, gyro.c_str(),
+              settings.static_positions);
   PrintDurationTable(layout, r, "quasi-harmonic profile", r.quasi_harmonic);
   PrintDurationTable(layout, r, "static multi-position test", r.static_test);
   std::printf("(slope: log-log over durations >= 60 s; -0.5 is 1/sqrt(T))\n");
