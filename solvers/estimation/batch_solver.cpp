@@ -117,6 +117,7 @@ Estimate Initialise(const RunDescription& run, const RunData& data, const Parame
   fo.derivatives = opt.derivatives;
   fo.smoother_iterations = 1;
   fo.held = not_estimated;
+  fo.threads = opt.threads;
   return RunFilterSmoother(start, thin, layout, fo).rts;
 }
 
@@ -587,33 +588,9 @@ class BatchSolve {
   // The gyro triad's part at the minimum, when the run has one.
   void RecordGyro() {
     if (!objective_->HasGyroPart(pt_, 0)) return;
-    const GyroReduction& g = pt_.gyro[0];
-    res_.gyro.present = true;
-    res_.gyro.noise_rad_s = g.noise_rad_s;
+    res_.gyro = SummariseGyro(p_, *pt_.gyro_passes[0], pt_.gyro[0]);
     res_.gyro.noise_declared_rad_s = run_.gyro ? run_.gyro->noise_rad_s : p_.gyro_noise_rad_s;
     res_.gyro.noise_auto = run_.gyro && run_.gyro->noise_auto;
-    res_.gyro.degrees_of_freedom = g.degrees_of_freedom;
-    res_.gyro.neg_log_likelihood = g.neg_log_l;
-    const GyroPass& gp = *pt_.gyro_passes[0];
-    Eigen::Vector3d ss = Eigen::Vector3d::Zero();
-    std::size_t used = 0;
-    for (std::size_t k = 0; k < gp.r.size(); ++k) {
-      if (!gp.valid[k]) continue;
-      ss += gp.r[k].cwiseAbs2();
-      ++used;
-      res_.gyro.mid_samples.push_back((p_.gyro_epochs[k] + p_.gyro_epochs[k + 1]) / 2);
-      res_.gyro.residual_rad.push_back(gp.r[k]);
-      res_.gyro.whitened.push_back(g.whitened[k]);
-    }
-    res_.gyro.residual_rms_rad = (ss / std::max<std::size_t>(1, used)).cwiseSqrt();
-    res_.gyro.intervals = static_cast<int>(gp.r.size());
-    // The mean interval as the samples fall (at 25 Hz a 0.1-s target gives 0.12 s).
-    const std::vector<std::size_t>& ge = p_.gyro_epochs;
-    res_.gyro.interval_s = ge.size() > 1 ? (data_.t_s[ge.back()] - data_.t_s[ge.front()]) /
-                                               static_cast<double>(ge.size() - 1)
-                                         : 0.0;
-    res_.gyro.intervals_clipped = static_cast<int>(gp.r.size() - used);
-    res_.gyro.whitened_rms = std::sqrt(2.0 * g.cost / std::max(1, g.degrees_of_freedom));
   }
 
   // The residuals at the minimum and what they say of the noise.

@@ -45,6 +45,7 @@
 #include "core/model/priors.h"
 #include "core/model/run_data.h"
 #include "core/model/run_description.h"
+#include "solvers/estimation/gyro_term.h"
 #include "solvers/estimation/kalman_smoother.h"
 #include "solvers/estimation/noise_estimation.h"
 #include "solvers/estimation/run_problem.h"
@@ -259,31 +260,11 @@ struct BatchResult {
   double hac_kernel_bias_factor_max = 1.0;
   double init_seconds = 0.0, solve_seconds = 0.0, covariance_seconds = 0.0;
   int epochs = 0;
-  // The gyro triad's part (gyro_term.h), when the run has one: its rate
-  // noise per channel at the maximum likelihood [rad/s of input rate; the
-  // readings' is |gyro.K_i| times it], the declared one, its increment
-  // residuals' RMS per component (inner, outer, normal) [rad] and whitened
-  // RMS (1 when the model holds), chi^2 per degree of freedom. final_cost
-  // and chi2_per_dof above are the accelerometer's.
-  struct Gyro {
-    bool present = false;
-    Eigen::Vector3d noise_rad_s = Eigen::Vector3d::Zero();
-    Eigen::Vector3d noise_declared_rad_s = Eigen::Vector3d::Zero();
-    Eigen::Vector3d residual_rms_rad = Eigen::Vector3d::Zero();
-    double whitened_rms = 0.0;
-    int degrees_of_freedom = 0;
-    double neg_log_likelihood = 0.0;
-    int intervals = 0;          // of interval_s
-    double interval_s = 0.0;    // their mean length (about min(epoch, kGyroEpoch_s))
-    int intervals_clipped = 0;  // left out: a gyro sample at the range's limit
-    bool noise_auto = false;    // run.yaml gyro.noise_dps: auto (declared is the start)
-    // Per interval used (the clipped ones left out), in time order: the
-    // sample index of its midpoint, its increment residual (inner, outer,
-    // normal) [rad] and its innovation whitened (unit white when the model
-    // holds), for the residual's analysis and plot.
-    std::vector<std::size_t> mid_samples;
-    std::vector<Eigen::Vector3d> residual_rad, whitened;
-  } gyro;
+  // The gyro triad's part (gyro_term.h), when the run has one: its noise at
+  // the maximum likelihood, its residuals. final_cost and chi2_per_dof above
+  // are the accelerometer's.
+  using Gyro = GyroSummary;
+  Gyro gyro;
 };
 
 BatchResult SolveBatch(const RunDescription& run, const RunData& data,

@@ -103,6 +103,20 @@ Mat3d WeightOf(const std::array<double, 6>& m, const Vec3d& u) {
   return W;
 }
 
+// The channels' covariance sum_i v_i W(u_i), u_i = Mg^-1 e_i (the columns of U).
+Mat3d ChannelCovariance(const std::array<double, 6>& m, const Vec3d& v, const Mat3d& U) {
+  Mat3d W = Mat3d::Zero();
+  for (int i = 0; i < 3; ++i) W += v[i] * WeightOf(m, U.col(i));
+  return W;
+}
+
+// The angle noise of the recorded angles in the residual (inner, outer).
+Mat3d AngleCovariance(double angle_var) {
+  Mat3d R3 = Mat3d::Zero();
+  R3(0, 0) = R3(1, 1) = angle_var;
+  return R3;
+}
+
 }  // namespace
 
 bool RunHasGyro(const RunProblem& p) {
@@ -111,7 +125,7 @@ bool RunHasGyro(const RunProblem& p) {
 }
 
 GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, bool with_jacobian,
-                          int threads) {
+                          int threads, std::size_t first, std::size_t count) {
   if (!RunHasGyro(p)) throw std::logic_error("EvaluateGyroPass: the run has no gyro");
   const RunData& d = *p.series.run;
   const ModelConfig& cfg = p.cfg;
@@ -121,6 +135,8 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
   const double* g = th + go;
   const std::vector<std::size_t>& epochs = p.gyro_epochs;
   const std::size_t E = epochs.size();
+  if (first >= E - 1) throw std::logic_error("EvaluateGyroPass: no such interval");
+  const std::size_t count_in = std::min(count, E - 1 - first);
 
   const Mat3d Mg_inv = GyroMisalignmentMatrix(g).inverse();
   Mat3d A = Mg_inv;  // Mg^-1 diag(K)^-1
@@ -131,12 +147,13 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
   GyroPass pass;
   pass.theta = theta;
   pass.with_jacobian = with_jacobian;
+  pass.first_interval = first;
   pass.angle_var = p.sigma_angle * p.sigma_angle;
   for (int i = 0; i < 3; ++i) {
     pass.K[i] = g[kGKx + i];
     pass.K_ref[i] = p.prior.mean[go + kGKx + i];
   }
-  if (with_jacobian) pass.J_info.resize(E - 1);
+  if (with_jacobian) pass.J_info.resize(count_in);
   // The bench's angle rates for the information's K columns, by central
   // differences over about +-0.05 s.
   const double dt_mean = (d.t_s.back() - d.t_s.front()) / std::max<std::size_t>(1, d.size() - 1);
@@ -169,17 +186,18 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
   auto bench_at = [&](std::size_t k) {
     return BenchAnglesAt(cfg, th_jet, angle_idx, p.series.recorded[k]);
   };
-  pass.r.resize(E - 1);
-  pass.valid.assign(E - 1, 1);
-  pass.moments.assign(E - 1, {0, 0, 0, 0, 0, 0});
-  pass.cross_moments.assign(E - 1, {0, 0, 0, 0, 0, 0});
-  if (with_jacobian) pass.J.resize(E - 1);
+  pass.r.resize(count_in);
+  pass.valid.assign(count_in, 1);
+  pass.moments.assign(count_in, {0, 0, 0, 0, 0, 0});
+  pass.cross_moments.assign(count_in, {0, 0, 0, 0, 0, 0});
+  if (with_jacobian) pass.J.resize(count_in);
 
-  ParallelFor(E - 1, threads, [&](std::size_t e) {
+  ParallelFor(count_in, threads, [&](std::size_t i) {
+    const std::size_t e = first + i;  // the run's interval
     const std::size_t k0 = epochs[e], k1 = epochs[e + 1];
     if (!d.gyro_clipped.empty()) {
       for (std::size_t k = k0; k <= k1; ++k) {
-        if (d.gyro_clipped[k]) pass.valid[e] = 0;
+        if (d.gyro_clipped[k]) pass.valid[i] = 0;
       }
     }
     Vec3d r = Vec3d::Zero();
@@ -249,13 +267,13 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
       Ja.row(0) -= b1.d.row(1) - b0.d.row(1);
       Ja.row(1) -= b1.d.row(0) - b0.d.row(0);
     }
-    pass.r[e] = r;
-    pass.moments[e] = mom;
+    pass.r[i] = r;
+    pass.moments[i] = mom;
     // The sample at epoch e+1 ends this interval and starts the next.
     if (e + 2 < E) {
       const double w_last = TrapezoidWeight(d, k0, k1, k1);
       const double w_first = TrapezoidWeight(d, k1, epochs[e + 2], k1);
-      AddMoments(d, k1, w_last * w_first, &pass.cross_moments[e]);
+      AddMoments(d, k1, w_last * w_first, &pass.cross_moments[i]);
     }
     if (with_jacobian) {
       Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, n);
@@ -263,11 +281,52 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
       J.col(kDlambda2) = Jl.col(kLocalDlambda2);
       for (int q = 0; q < na; ++q) J.col(angle_idx[q]) = Ja.col(q);
       for (int q = 0; q < ns; ++q) J.col(sensor_idx[q]) += Js.col(q);
-      pass.J[e] = std::move(J);
-      pass.J_info[e] = JI;
+      pass.J[i] = std::move(J);
+      pass.J_info[i] = JI;
     }
   });
   return pass;
+}
+
+void GyroIncrementCovariance(const GyroPass& pass, std::size_t i,
+                             const Eigen::Vector3d& noise_rad_s, Eigen::Matrix3d* own,
+                             Eigen::Matrix3d* with_next) {
+  // As ReduceGyro: channel i's noise sigma_i / K_i along P Mg^-1 e_i, the
+  // angle noise at both ends (shared, with the opposite sign, with the next).
+  const Vec3d var = noise_rad_s.cwiseQuotient(pass.K).cwiseAbs2();
+  const Mat3d R3 = AngleCovariance(pass.angle_var);
+  *own = 2.0 * R3 + ChannelCovariance(pass.moments[i], var, pass.Mg_inv);
+  *with_next = -R3 + ChannelCovariance(pass.cross_moments[i], var, pass.Mg_inv);
+}
+
+GyroSummary SummariseGyro(const RunProblem& p, const GyroPass& pass, const GyroReduction& red) {
+  const RunData& d = *p.series.run;
+  GyroSummary s;
+  s.present = true;
+  s.noise_rad_s = red.noise_rad_s;
+  s.degrees_of_freedom = red.degrees_of_freedom;
+  s.neg_log_likelihood = red.neg_log_l;
+  Vec3d ss = Vec3d::Zero();
+  std::size_t used = 0;
+  for (std::size_t i = 0; i < pass.r.size(); ++i) {
+    if (!pass.valid[i]) continue;
+    const std::size_t k = pass.first_interval + i;
+    ss += pass.r[i].cwiseAbs2();
+    ++used;
+    s.mid_samples.push_back((p.gyro_epochs[k] + p.gyro_epochs[k + 1]) / 2);
+    s.residual_rad.push_back(pass.r[i]);
+    s.whitened.push_back(red.whitened[i]);
+  }
+  s.residual_rms_rad = (ss / std::max<std::size_t>(1, used)).cwiseSqrt();
+  s.intervals = static_cast<int>(pass.r.size());
+  // The mean interval as the samples fall (at 25 Hz a 0.1-s target gives 0.12 s).
+  const std::vector<std::size_t>& ge = p.gyro_epochs;
+  s.interval_s = ge.size() > 1 ? (d.t_s[ge.back()] - d.t_s[ge.front()]) /
+                                     static_cast<double>(ge.size() - 1)
+                               : 0.0;
+  s.intervals_clipped = static_cast<int>(pass.r.size() - used);
+  s.whitened_rms = std::sqrt(2.0 * red.cost / std::max(1, red.degrees_of_freedom));
+  return s;
 }
 
 GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_s, double rho,
@@ -282,13 +341,8 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
   const bool same_ref = (pass.K - pass.K_ref).cwiseAbs().maxCoeff() == 0.0 &&
                         (Mi - pass.Mg_inv_ref).cwiseAbs().maxCoeff() == 0.0;
   // Channel i's noise direction before the rotation: u_i = Mg^-1 e_i.
-  auto channels = [&](const std::array<double, 6>& m, const Vec3d& v, const Mat3d& U) {
-    Mat3d W = Mat3d::Zero();
-    for (int i = 0; i < 3; ++i) W += v[i] * WeightOf(m, U.col(i));
-    return W;
-  };
-  Mat3d R3 = Mat3d::Zero();
-  R3(0, 0) = R3(1, 1) = pass.angle_var;
+  const auto& channels = ChannelCovariance;
+  const Mat3d R3 = AngleCovariance(pass.angle_var);
   GyroReduction out;
   out.noise_rad_s = noise_rad_s;
   out.rho = rho;

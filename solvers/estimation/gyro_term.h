@@ -101,10 +101,24 @@ struct GyroPass {
   // gyro_clipped): left out, never fitted through.
   std::vector<char> valid;
   bool with_jacobian = false;
+  // The run's interval the pass's first one is (EvaluateGyroPass's `first`).
+  std::size_t first_interval = 0;
 };
 
+// The pass over intervals first .. first + count - 1 (all of them by
+// default; count is cut at the run's end). The filter takes one interval at
+// a time, each at its own estimate (gyro_measurements.h).
 GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, bool with_jacobian,
-                          int threads);
+                          int threads, std::size_t first = 0,
+                          std::size_t count = static_cast<std::size_t>(-1));
+
+// The noise of interval i of the pass (its index in the pass) at the reading
+// noise noise_rad_s, with the pass's weights (its scale factors and Mg^-1):
+// the covariance of its residual, and of it with the next interval's (the
+// epoch and the trapezoid's sample they share). ReduceGyro's blocks.
+void GyroIncrementCovariance(const GyroPass& pass, std::size_t i,
+                             const Eigen::Vector3d& noise_rad_s, Eigen::Matrix3d* own,
+                             Eigen::Matrix3d* with_next);
 
 struct GyroReduction {
   double cost = 0.0;       // 0.5 sum nu^T S^-1 nu at noise
@@ -141,5 +155,34 @@ GyroReduction ReduceGyroAtNoise(const GyroPass& pass, const Eigen::Vector3d& noi
 // result does not depend on it.
 GyroReduction ReduceGyroAtBestNoise(const GyroPass& pass, const Eigen::Vector3d& start,
                                     int fitted_parameters, bool theta_part, int threads = 1);
+
+// The gyro's part of an estimate, for its report (fit, filter, diagnose): its
+// rate noise per channel [rad/s of input rate; the readings' is |gyro.K_i|
+// times it] (the fit's at the maximum likelihood; the filter's the one it
+// ran at), the declared one, its increment residuals' RMS per component
+// (inner, outer, normal) [rad] and whitened RMS (1 when the model holds).
+struct GyroSummary {
+  bool present = false;
+  Eigen::Vector3d noise_rad_s = Eigen::Vector3d::Zero();
+  Eigen::Vector3d noise_declared_rad_s = Eigen::Vector3d::Zero();
+  Eigen::Vector3d residual_rms_rad = Eigen::Vector3d::Zero();
+  double whitened_rms = 0.0;
+  int degrees_of_freedom = 0;
+  double neg_log_likelihood = 0.0;
+  int intervals = 0;          // of interval_s
+  double interval_s = 0.0;    // their mean length (about min(epoch, kGyroEpoch_s))
+  int intervals_clipped = 0;  // left out: a gyro sample at the range's limit
+  bool noise_auto = false;    // run.yaml gyro.noise_dps: auto (declared is the start)
+  // Per interval used (the clipped ones left out), in time order: the
+  // sample index of its midpoint, its increment residual (inner, outer,
+  // normal) [rad] and its innovation whitened (unit white when the model
+  // holds), for the residual's analysis and plot.
+  std::vector<std::size_t> mid_samples;
+  std::vector<Eigen::Vector3d> residual_rad, whitened;
+};
+
+// The summary of a whole pass (EvaluateGyroPass over every interval) reduced
+// at some noise (red); noise_declared_rad_s and noise_auto are the caller's.
+GyroSummary SummariseGyro(const RunProblem& p, const GyroPass& pass, const GyroReduction& red);
 
 }  // namespace triadcal
