@@ -57,8 +57,9 @@ std::vector<MonteCarloRun> RunMonteCarloSeeds(const Scenario& s, const MonteCarl
     std::string filter_failure;
     FilterOptions fo = opt.filter;
     fo.progress = nullptr;
-    // The filter has no gyro measurement (method.md section 11): the gyro's
-    // parameters stay out of its state.
+    // The gyro's parameters stay out of the filter's state here (its readings
+    // unused): Monte Carlo judges the batch fit's gyro (method.md section 11).
+    fo.gyro = false;
     for (int i = 0; i < layout.size(); ++i) {
       if (layout.is_gyro(i)) fo.held.push_back(layout.info(i).name);
     }

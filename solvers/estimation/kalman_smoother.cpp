@@ -3,9 +3,13 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include "core/model/errors.h"
+#include "core/model/units.h"
+#include "solvers/estimation/gyro_measurements.h"
 #include "solvers/estimation/inertial_increments.h"
+#include "solvers/estimation/parallel.h"
 #include "solvers/estimation/run_problem.h"
 #include "solvers/estimation/state_space_model.h"
 
@@ -73,10 +77,38 @@ struct PassResult {
   std::vector<FilterSeriesRow> series;
   Vec6 innovation_ss = Vec6::Zero();
   double nis_sum = 0.0;
+  double gyro_nis_sum = 0.0;
+  int gyro_count = 0;
 };
 
-PassResult ForwardPass(const StateSpaceModel& model, const Eigen::VectorXd* theta_lin_free,
-                       bool keep_series, const std::function<void(double)>& progress) {
+// The gyro's interval k as a measurement of the parameter states
+// (gyro_measurements.h), linearised at th_l (free parameters): the
+// innovation -(nu + Jnu (theta - th_l)) with covariance S, Joseph form.
+// Returns its normalised innovation squared (negative when left out).
+double GyroUpdate(const StateSpaceModel& model, GyroMeasurements* gyro, std::size_t k,
+                  const Eigen::VectorXd& th_l, Eigen::VectorXd* x, Eigen::MatrixXd* P) {
+  const RunProblem& c = model.problem();
+  const int n = model.num_free(), N = 6 + n;
+  GyroInnovation g;
+  if (!gyro->Next(k, model.Expand(th_l), &g)) return -1.0;
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(3, N);
+  for (int j = 0; j < n; ++j) H.col(6 + j) = g.H.col(c.free[j]);
+  const Eigen::Vector3d y = -(g.nu + H.rightCols(n) * (x->tail(n) - th_l));
+  const Eigen::MatrixXd PHt = *P * H.transpose();
+  const Eigen::Matrix3d S = H * PHt + g.S;
+  const Eigen::LLT<Eigen::Matrix3d> llt(S);
+  const Eigen::MatrixXd K = llt.solve(PHt.transpose()).transpose();
+  *x += K * y;
+  Eigen::MatrixXd IKH = -K * H;
+  IKH.diagonal().array() += 1.0;
+  *P = IKH * *P * IKH.transpose() + K * g.S * K.transpose();
+  *P = 0.5 * (*P + P->transpose());
+  return y.dot(llt.solve(y));
+}
+
+PassResult ForwardPass(const StateSpaceModel& model, GyroMeasurements* gyro, int threads,
+                       const Eigen::VectorXd* theta_lin_free, bool keep_series,
+                       const std::function<void(double)>& progress) {
   const RunProblem& c = model.problem();
   const int n = model.num_free(), N = 6 + n;
   PassResult out;
@@ -97,6 +129,15 @@ PassResult ForwardPass(const StateSpaceModel& model, const Eigen::VectorXd* thet
   }
   const std::size_t E = c.epochs.size();
   std::size_t next_report = 0;
+  std::size_t next_gyro = 0;  // the gyro's next interval
+  if (gyro) {
+    if (theta_lin_free) {
+      const Eigen::VectorXd th = model.Expand(*theta_lin_free);
+      gyro->Start(&th, threads);
+    } else {
+      gyro->Start(nullptr);
+    }
+  }
   for (std::size_t e = 0; e < E; ++e) {
     EpochStore st;
     if (e > 0) {
@@ -145,6 +186,18 @@ PassResult ForwardPass(const StateSpaceModel& model, const Eigen::VectorXd* thet
         x += Ph * (innov / s);
         P -= Ph * Ph.transpose() / s;
         P = 0.5 * (P + P.transpose());
+      }
+    }
+    // The gyro's intervals that end by this epoch (at the last, all left):
+    // measurements of theta alone, each linearised at the current estimate
+    // (or the pass's point).
+    while (gyro && next_gyro < gyro->size() &&
+           (e + 1 == E || gyro->end_sample(next_gyro) <= k)) {
+      const Eigen::VectorXd th_l = theta_lin_free ? *theta_lin_free : Eigen::VectorXd(x.tail(n));
+      const double nis = GyroUpdate(model, gyro, next_gyro++, th_l, &x, &P);
+      if (nis >= 0.0) {
+        out.gyro_nis_sum += nis;
+        ++out.gyro_count;
       }
     }
     if (keep_series) {
@@ -231,12 +284,17 @@ FilterResult RunFilterSmoother(const RunDescription& run, const RunData& data,
   res.rate_noise_rad_s = c.sigma_rate;
   const int passes = std::max(1, options.smoother_iterations);
   const int n = model.num_free();
+  // The gyro's increments, at its declared noise (floored).
+  std::unique_ptr<GyroMeasurements> gyro;
+  Eigen::Vector3d gyro_noise = c.gyro_noise_rad_s.cwiseMax(kGyroNoiseFloor_dps * kDegToRad);
+  const int threads = options.threads > 0 ? options.threads : DefaultThreads();
+  if (options.gyro && RunHasGyro(c)) gyro = std::make_unique<GyroMeasurements>(c, gyro_noise);
   Eigen::VectorXd theta_lin_free;
   for (int p = 0; p < passes; ++p) {
     auto prog = [&](double f) {
       if (options.progress) options.progress(p + 1, f);
     };
-    PassResult pass = ForwardPass(model, p == 0 ? nullptr : &theta_lin_free,
+    PassResult pass = ForwardPass(model, gyro.get(), threads, p == 0 ? nullptr : &theta_lin_free,
                                   options.keep_series && p == 0, prog);
     if (p == 0) {
       const Eigen::MatrixXd P_end = Unpack(pass.store.back().P_upper, 6 + n);
@@ -248,7 +306,19 @@ FilterResult RunFilterSmoother(const RunDescription& run, const RunData& data,
     const double E = static_cast<double>(pass.store.size());
     res.innovation_rms = (pass.innovation_ss / E).cwiseSqrt();
     res.mean_nis = pass.nis_sum / E;
+    res.gyro_measurements = pass.gyro_count;
+    res.gyro_mean_nis = pass.gyro_count > 0 ? pass.gyro_nis_sum / pass.gyro_count : 0.0;
     res.passes = p + 1;
+  }
+  if (gyro) {
+    // The gyro's residuals at the smoothed estimate, at the noise the filter
+    // ran at, and the noise the fit would estimate there.
+    const GyroPass at = EvaluateGyroPass(c, res.rts.theta, false, threads);
+    res.gyro = SummariseGyro(c, at, ReduceGyro(at, gyro_noise, 1.0, false));
+    res.gyro.noise_declared_rad_s = run.gyro ? run.gyro->noise_rad_s : c.gyro_noise_rad_s;
+    res.gyro.noise_auto = run.gyro && run.gyro->noise_auto;
+    res.gyro_noise_ml_rad_s =
+        ReduceGyroAtBestNoise(at, gyro_noise, kNumGyroParams, false, threads).noise_rad_s;
   }
   return res;
 }

@@ -20,6 +20,15 @@
 // of information, not one per epoch). The extended filter relinearises B1 and B2
 // about its current estimate at each epoch.
 //
+// Gyro (when the layout has the gyro block and the data its columns,
+// gyro_measurements.h): each of the gyro's increment residuals (gyro_term.h,
+// the batch fit's residual, every kGyroEpoch_s) is a measurement of theta
+// alone, 0 = nu_k(theta) + v_k with the innovations of their block LDL^T (so
+// that they are independent), applied at the first epoch at or after the
+// interval's end; the gyro's parameters are constants like the others. Its
+// noise is the run's gyro.noise_dps (with auto, the readings' own: the
+// caller's, sample_noise.h WithReadingNoise), at least kGyroNoiseFloor_dps.
+//
 // Smoother: the RTS recursion over the epochs. For constant parameters the
 // smoothed theta equals the final filtered theta of the same linearisation; the
 // smoother improves the trajectory, and with smoother_iterations > 1 the whole
@@ -42,9 +51,15 @@
 #include "core/model/run_data.h"
 #include "core/model/run_description.h"
 #include "core/model/priors.h"
+#include "solvers/estimation/gyro_term.h"
 #include "solvers/estimation/run_problem.h"
 
 namespace triadcal {
+
+// The least gyro reading noise the filter runs at [deg/s per channel]: with
+// noise-free readings and angles the increments' covariance is singular
+// (a MEMS gyro's white noise is 0.005 deg/s or more).
+constexpr double kGyroNoiseFloor_dps = 1e-4;
 
 struct FilterOptions {
   double epoch_s = kDefaultEpoch_s;  // measurement epochs
@@ -52,6 +67,11 @@ struct FilterOptions {
   std::vector<std::string> held;
   AngleDerivativeOptions derivatives;
   int smoother_iterations = 2;
+  // The gyro's increments as measurements when the run has a gyro (the
+  // layout's gyro block and the data's columns). Off: the gyro's readings are
+  // not used (its parameters must then be held, or they stay at the prior).
+  bool gyro = true;
+  int threads = 0;  // the gyro's whole-run passes (0: all cores)
   bool keep_series = false;
   // Called with (pass, fraction done) now and then; may be empty.
   std::function<void(int, double)> progress;
@@ -81,6 +101,16 @@ struct FilterResult {
   // Innovation statistics of the last forward pass.
   Eigen::Matrix<double, 6, 1> innovation_rms = Eigen::Matrix<double, 6, 1>::Zero();
   double mean_nis = 0.0;  // E = 6 for a consistent filter
+  // The gyro, when the filter took its increments (gyro.present): at the
+  // smoothed estimate, the residuals and their whitening at the noise the
+  // filter ran at (gyro.noise_rad_s; whitened RMS 1 when that noise is
+  // right), and the noise at the maximum likelihood there (a check of it,
+  // as fit estimates it). gyro_mean_nis: the last forward pass's mean
+  // normalised innovation squared of the gyro's measurements (E = 3).
+  GyroSummary gyro;
+  Eigen::Vector3d gyro_noise_ml_rad_s = Eigen::Vector3d::Zero();
+  double gyro_mean_nis = 0.0;
+  int gyro_measurements = 0;  // per forward pass
 };
 
 FilterResult RunFilterSmoother(const RunDescription& run, const RunData& data,
