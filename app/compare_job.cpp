@@ -16,7 +16,8 @@ double Seconds(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-nlohmann::json CompareJson(const std::string& run_yaml, const CompareOutcome& c) {
+nlohmann::json CompareJson(const std::string& run_yaml, const LoadedRun& run,
+                           const CompareOutcome& c) {
   const ParameterLayout& layout = c.filter.layout;
   const FilterResult& fr = c.filter.result;
   const BatchResult& br = c.batch;
@@ -33,7 +34,13 @@ nlohmann::json CompareJson(const std::string& run_yaml, const CompareOutcome& c)
       {"verdict", rep.verdict},
       {"chi2_per_dof", br.chi2_per_dof}};
   out["not_estimable"] = std::vector<std::string>(ParametersIn(rep.weak));
-  if (c.filter.gyro_left_out) out["gyro"] = FilterGyroJson();
+  if (c.filter.gyro && br.gyro.present) {
+    // Each estimator's gyro block, with fit's keys: the smoother's (at the
+    // noise the filter ran at) and the batch's (at its estimated noise).
+    nlohmann::json batch = GyroJson(layout, br);
+    AddGyroAnalysis(run.description, run.data, layout, br, rep, &batch);
+    out["gyro"] = {{"rts", c.filter.json["gyro"]}, {"batch", batch}};
+  }
   out["time_s"] = {{"filter", c.filter_s}, {"fit_from_rts", c.fit_s}};
   nlohmann::json diff = nlohmann::json::object();
   double max_abs = 0.0;
@@ -103,7 +110,7 @@ CompareOutcome CompareRun(const CompareSettings& s, const std::string& run_yaml,
   c.batch.initial = c.filter.result.rts;
   c.fit_s = Seconds(t0);
   c.report = MakeFitReport(c.filter.layout, c.batch);
-  c.json = CompareJson(run_yaml, c);
+  c.json = CompareJson(run_yaml, run, c);
   return c;
 }
 

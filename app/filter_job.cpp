@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "app/estimate_json.h"
+#include "app/fit_report.h"
 #include "app/option_lists.h"
 #include "core/io/column_mapping.h"
 #include "core/io/file_util.h"
@@ -56,7 +57,46 @@ std::string FilterSeriesCsv(const ParameterLayout& layout, const FilterResult& r
   return s.str();
 }
 
-nlohmann::json FilterGyroJson() { return {{"estimated", false}, {"why", kFilterLeavesTheGyro}}; }
+nlohmann::json FilterGyroJson(const RunDescription& run, const RunData& data,
+                              const FilterOutcome& f) {
+  // The smoother's estimate as fit's report reads one (a batch result with
+  // the RTS theta and the filter's gyro summary), its noise the estimate at
+  // that theta; then what the filter ran at.
+  const FilterResult& r = f.result;
+  BatchResult view;
+  view.estimate = r.rts;
+  view.prior = r.prior;
+  view.converged = true;
+  view.held = f.decision.held;
+  view.consider = f.decision.consider;
+  view.relative_to = f.decision.relative_to;
+  view.gyro = r.gyro;
+  view.gyro.noise_rad_s = r.gyro_noise_ml_rad_s;
+  view.gyro.noise_declared_rad_s = run.gyro ? run.gyro->noise_rad_s : r.gyro.noise_declared_rad_s;
+  view.gyro.noise_auto = run.gyro && run.gyro->noise_auto;
+  FitReport rep;
+  rep.weak = f.weak;
+  rep.not_estimable = f.not_estimable;
+  rep.held.insert(f.decision.held.begin(), f.decision.held.end());
+  rep.consider.insert(f.decision.consider.begin(), f.decision.consider.end());
+  rep.beyond_prior = BeyondPrior(f.layout, r.rts.theta, r.prior.mean, r.prior.sigma);
+  nlohmann::json g = GyroJson(f.layout, view);
+  // The readings' unit: |gyro.K_i| times the rate noise (GyroJson's).
+  const int go = f.layout.gyro_offset();
+  std::vector<double> used(3);
+  for (int i = 0; i < 3; ++i) {
+    used[i] = r.gyro.noise_rad_s[i] * std::abs(r.rts.theta[go + kGKx + i]) / kDegToRad;
+  }
+  g["noise"]["used_dps"] = used;
+  g["noise"]["source"] = view.gyro.noise_auto ? "readings' own white noise (noise_dps: auto)"
+                                              : "declared";
+  g["whitened_at"] = "the noise used";
+  g["mean_nis"] = r.gyro_mean_nis;
+  g["mean_nis_expected"] = 3;
+  g["measurements"] = r.gyro_measurements;
+  AddGyroAnalysis(run, data, f.layout, view, rep, &g);
+  return g;
+}
 
 namespace {
 
@@ -109,7 +149,7 @@ nlohmann::json FilterJson(const FilterSettings& s, const std::string& run_yaml,
       {"rms_s_m", {r.innovation_rms[3], r.innovation_rms[4], r.innovation_rms[5]}},
       {"mean_nis", r.mean_nis},
       {"mean_nis_expected", 6}};
-  if (f.gyro_left_out) out["gyro"] = FilterGyroJson();
+  if (f.gyro) out["gyro"] = FilterGyroJson(run.description, run.data, f);
   out["samples"] = run.data.size();
   out["time_s"] = f.seconds;
   return out;
@@ -122,9 +162,10 @@ FilterOutcome FilterRun(const FilterSettings& s, const std::string& run_yaml, co
   s.Validate();
   const auto t0 = std::chrono::steady_clock::now();
   FilterOutcome f;
-  f.gyro_left_out = run.description.gyro.has_value() && run.data.has_gyro();
-  if (f.gyro_left_out && session.warning) session.warning(kFilterLeavesTheGyro);
-  f.layout = ParameterLayout(ParseEffectList(s.effects, run.data), /*gyro=*/false,
+  // The gyro's parameters beside the accelerometer's when the run has one,
+  // as fit estimates them.
+  f.gyro = run.description.gyro.has_value() && run.data.has_gyro();
+  f.layout = ParameterLayout(ParseEffectList(s.effects, run.data), f.gyro,
                              ReadingsUnit(run.description));
   FilterOptions opt;
   opt.epoch_s = s.epoch_s;

@@ -41,13 +41,6 @@ struct FilterSettings {
   void Validate() const;
 };
 
-// Why the filter (and compare) leave a run's gyro out.
-inline constexpr const char* kFilterLeavesTheGyro =
-    "the gyro triad is left out: the filter has no gyro measurement (fit and diagnose "
-    "calibrate it)";
-// OUT's "gyro" of a filter that left it out.
-nlohmann::json FilterGyroJson();
-
 struct FilterOutcome {
   ParameterLayout layout;
   FilterResult result;
@@ -57,10 +50,10 @@ struct FilterOutcome {
   std::vector<std::string> pinned;      // held at nominal: decision.held + decision.consider
   std::vector<WeakDirection> weak;      // directions the run leaves to the prior
   std::set<std::string> not_estimable;  // prior values: weak, pinned and relative ones
-  // The run has a gyro (block and columns) the filter leaves out: it has no
-  // gyro measurement (fit and diagnose calibrate the gyro). Said as a warning
-  // and in OUT ("gyro": {"estimated": false, "why": ...}).
-  bool gyro_left_out = false;
+  // The run has a gyro (block and columns): its parameters are in the
+  // layout and the filter takes its increments (result.gyro); OUT's "gyro"
+  // is fit's block (FilterGyroJson).
+  bool gyro = false;
   // The reading noise it ran at, per channel, in the readings' unit: the
   // declared one, or with noise_mV: auto the readings' own (RunReadingNoise_mV).
   Eigen::Vector3d noise = Eigen::Vector3d::Zero();
@@ -75,6 +68,15 @@ struct FilterOutcome {
 // goes to the session's callbacks ("pass 1/2" and the fraction done).
 FilterOutcome FilterRun(const FilterSettings& s, const std::string& run_yaml, const LoadedRun& run,
                         const Session& session);
+
+// OUT's "gyro" of a filter that took the run's gyro (f.gyro): fit's block
+// (fit_report.h GyroJson, AddGyroAnalysis: the same keys) for the smoother's
+// estimate: its residuals whitened at the noise the filter ran at
+// ("noise": "used_dps", "source" declared or the readings' own), the noise
+// the fit would estimate there ("estimated_dps"), and "mean_nis" of its
+// measurements (3 expected).
+nlohmann::json FilterGyroJson(const RunDescription& run, const RunData& data,
+                              const FilterOutcome& f);
 
 // The forward pass (FilterResult::series) as CSV: each parameter and its
 // sigma in file units, the innovations and theirs, against time.

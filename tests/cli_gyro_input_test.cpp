@@ -251,21 +251,51 @@ TEST_F(CliGyroInput, DiagnoseCarriesTheGyroAndFindsTheSharedLatency) {
   EXPECT_GE(judged, 15);
 }
 
-// filter and compare on a run with a gyro say that they leave it out (one
-// warning line, and OUT's "gyro"), never silently.
-TEST_F(CliGyroInput, FilterAndCompareSayTheyLeaveTheGyroOut) {
-  for (const char* command : {"filter", "compare"}) {
-    const testing_fixtures::CliResult r =
-        Run(std::string(command) + " " + WriteText("g.yaml", "data: gyro.csv\ngyro: {}\n") +
-            " -o " + Path("out.json"));
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-    EXPECT_NE(r.err.find("triadcal: warning: the gyro triad is left out: the filter has no gyro "
-                         "measurement"),
-              std::string::npos)
-        << command << ": " << r.err;
-    const nlohmann::json out = nlohmann::json::parse(ReadFile(Path("out.json")));
-    EXPECT_EQ(out["gyro"]["estimated"], false) << command;
+// filter and compare on a run with a gyro estimate it beside the
+// accelerometer (the filter takes the gyro's increments as measurements,
+// docs/method.md section 11): no warning, the gyro's parameters with a sigma,
+// and OUT's "gyro" with every key of fit's (compare: the smoother's and the
+// batch's); before, both left the gyro out with a warning.
+TEST_F(CliGyroInput, FilterAndCompareCarryTheGyro) {
+  const std::string yaml = WriteText("g.yaml", "data: gyro.csv\ngyro: {}\n");
+  const testing_fixtures::CliResult fit = Run("fit " + yaml + " -o " + Path("fit.json"));
+  ASSERT_EQ(fit.exit_code, 0) << fit.err;
+  const nlohmann::json fit_gyro = nlohmann::json::parse(ReadFile(Path("fit.json")))["gyro"];
+  auto has_fit_keys = [&](const nlohmann::json& g, const std::string& what) {
+    ASSERT_TRUE(g.is_object()) << what;
+    for (const auto& [key, value] : fit_gyro.items()) {
+      EXPECT_TRUE(g.contains(key)) << what << ": " << key;
+    }
+    for (const auto& [key, value] : fit_gyro["noise"].items()) {
+      EXPECT_TRUE(g["noise"].contains(key)) << what << ": noise." << key;
+    }
+    EXPECT_EQ(g["noise"]["source"], "declared") << what;
+    EXPECT_TRUE(g["verdict"].contains("pass")) << what;
+  };
+  const testing_fixtures::CliResult f = Run("filter " + yaml + " -o " + Path("f.json"));
+  ASSERT_EQ(f.exit_code, 0) << f.err;
+  EXPECT_EQ(f.err.find("gyro"), std::string::npos) << f.err;
+  const nlohmann::json fo = nlohmann::json::parse(ReadFile(Path("f.json")));
+  for (const char* section : {"ekf", "rts"}) {
+    const nlohmann::json& p = fo[section]["parameters"]["gyro.Kx"];
+    ASSERT_TRUE(p["sigma"].is_number()) << section << ": " << p.dump();
+    EXPECT_LT(std::abs(p["value"].get<double>() - 1.0), 4.0 * p["sigma"].get<double>());
   }
+  has_fit_keys(fo["gyro"], "filter");
+  EXPECT_NEAR(fo["gyro"]["mean_nis"].get<double>(), 3.0, 0.5);
+  EXPECT_NEAR(fo["gyro"]["noise"]["used_dps"][0].get<double>(), 0.05, 1e-3);
+
+  const testing_fixtures::CliResult c = Run("compare " + yaml + " -o " + Path("c.json"));
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  EXPECT_EQ(c.err.find("gyro"), std::string::npos) << c.err;
+  const nlohmann::json co = nlohmann::json::parse(ReadFile(Path("c.json")));
+  has_fit_keys(co["gyro"]["rts"], "compare rts");
+  ASSERT_TRUE(co["gyro"]["batch"].is_object());
+  EXPECT_EQ(co["gyro"]["batch"]["noise"]["source"], "estimated");
+  const nlohmann::json& d = co["differences_in_sigma"]["gyro.W0y"];
+  ASSERT_TRUE(d["batch_minus_rts"].is_number()) << d.dump();
+  EXPECT_LT(std::abs(d["batch_minus_rts"].get<double>()), 0.5);
+
   // Without a gyro, nothing is said.
   const testing_fixtures::CliResult plain = Run("filter " + Path("run.yaml") + " -o " +
                                                 Path("plain.json"));
