@@ -204,7 +204,7 @@ BatchOutcome BatchRun(const BatchSettings& s, const std::string& manifest,
                        {"manifest_units", entries.size()}};
   }
   o.summary_base = SummaryBase(out_dir, started, s.shard);
-  WriteFileAtomically(o.summary_base + ".csv", BatchSummaryCsv(o.units));
+  WriteFileAtomically(o.summary_base + ".csv", BatchSummaryCsv(o.units), session.write_options());
   WriteJsonFile(o.json, o.summary_base + ".json", session);
   o.filed = true;
   return o;

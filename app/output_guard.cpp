@@ -173,7 +173,7 @@ std::string StampedJson(const nlohmann::json& j, const Session& session) {
 
 void WriteJsonFile(const nlohmann::json& j, const std::string& path, const Session& session) {
   CheckOverwrite(path, session);
-  WriteFileAtomically(path, StampedJson(j, session));
+  WriteFileAtomically(path, StampedJson(j, session), session.write_options());
 }
 
 }  // namespace triadcal

@@ -12,6 +12,7 @@
 
 #include "app/provenance.h"
 #include "core/io/file_util.h"
+#include "core/io/temporary_files.h"
 
 namespace triadcal {
 
@@ -23,6 +24,10 @@ struct Session {
   // the copies of the session; the command installs it on its threads
   // (ScopedOutputGuard). Null: no guard (a library caller).
   std::shared_ptr<OutputGuard> output_guard;
+  // The temporaries being written, removed on a signal: the executable's one
+  // registry (tools/main.cpp, core/io/temporary_files.h). Null: a signal
+  // leaves a temporary, which the next write of that output removes.
+  TemporaryFiles* temporaries = nullptr;
   // Progress of a long job: the stage ("relinearising pass 2") and the
   // fraction of the work done; either may be empty (no progress).
   std::function<void(const std::string&)> stage;
@@ -30,6 +35,13 @@ struct Session {
   // A warning for the user (one sentence, e.g. of the loading); may be empty:
   // the jobs also return their warnings (LoadedRun::warnings).
   std::function<void(const std::string&)> warning;
+
+  // What the session's writes are given (core/io/file_util.h).
+  WriteOptions write_options() const {
+    WriteOptions o;
+    o.temporaries = temporaries;
+    return o;
+  }
 };
 
 }  // namespace triadcal

@@ -24,7 +24,7 @@ int RunApply(const ApplyArgs& a, Session& session) {
   for (const std::string& w : o.warnings) {
     std::fprintf(stderr, "triadcal: warning: %s\n", OneLine(w).c_str());
   }
-  WriteOutput(a.out_csv, o.csv);
+  WriteOutput(a.out_csv, o.csv, session);
   if (to_stdout) return 0;  // stdout holds the CSV
   std::printf("apply: %zu samples, %d parameters from %s (%s)%s\nwrote %s\n", o.samples,
               o.calibration.layout.size(), a.calibration_json.c_str(),

@@ -50,13 +50,13 @@ int RunExport(ExportArgs a, Session& session) {
       break;
     case ExportFormat::kYaml:
       if (!to_stdout) CheckOverwrite(a.out, session);
-      WriteOutput(a.out, o.yaml);
+      WriteOutput(a.out, o.yaml, session);
       break;
     case ExportFormat::kC:
       CheckOverwrite(c_path.string(), session);
       CheckOverwrite(h_path.string(), session);
-      WriteFileAtomically(h_path.string(), o.c.header);
-      WriteFileAtomically(c_path.string(), o.c.source);
+      WriteFileAtomically(h_path.string(), o.c.header, session.write_options());
+      WriteFileAtomically(c_path.string(), o.c.source, session.write_options());
       std::printf(
           "export: %s_apply()%s in %s and %s\n", o.name.c_str(),
           o.calibration.layout.has_gyro() ? (" and " + o.name + "_apply_gyro()").c_str() : "",

@@ -113,7 +113,9 @@ int RunFilter(FilterArgs a, Session& session) {
   }
   WriteJson(f.json, a.out_json, session);
   WriteReportIfAsked(a.report_html, f.json, a.out_json, session);
-  if (!a.series_csv.empty()) WriteFileAtomically(a.series_csv, FilterSeriesCsv(f.layout, f.result));
+  if (!a.series_csv.empty()) {
+    WriteFileAtomically(a.series_csv, FilterSeriesCsv(f.layout, f.result), session.write_options());
+  }
   PrintFilter(s, run, f);
   std::printf("wrote %s%s%s\n", a.out_json.c_str(), a.series_csv.empty() ? "" : " and ",
               a.series_csv.c_str());

@@ -55,7 +55,9 @@ int RunFit(FitArgs a, Session& session) {
   }
   WriteJson(f.json, a.out_json, session);
   WriteReportIfAsked(a.report_html, f.json, a.out_json, session);
-  if (!a.residuals_csv.empty()) WriteFileAtomically(a.residuals_csv, ResidualsCsv(r));
+  if (!a.residuals_csv.empty()) {
+    WriteFileAtomically(a.residuals_csv, ResidualsCsv(r), session.write_options());
+  }
 
   std::printf("fit: %zu samples, %d epochs, %s\n", run.data.size(), r.epochs,
               rep.verdict.c_str());

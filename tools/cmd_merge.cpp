@@ -64,7 +64,7 @@ int RunMerge(const MergeArgs& a, Session& session) {
       if (csv.size() > 5 && csv.compare(csv.size() - 5, 5, ".json") == 0)
         csv.resize(csv.size() - 5);
       csv += ".csv";
-      WriteFileAtomically(csv, BatchSummaryCsv(units));
+      WriteFileAtomically(csv, BatchSummaryCsv(units), session.write_options());
       WriteJson(out, a.out_json, session);
       std::printf("batch: %d pass, %d fail, %d error of %d runs\n", out["pass"].get<int>(),
                   out["fail"].get<int>(), out["error"].get<int>(), out["units"].get<int>());

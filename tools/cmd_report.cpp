@@ -19,7 +19,7 @@ struct ReportArgs {
 int RunReport(const ReportArgs& a, Session& session) {
   CheckOutputPath(a.out_html);
   const std::vector<ReportInput> inputs = LoadReportInputs(a.inputs);
-  WriteHtmlReport(inputs, a.out_html);
+  WriteHtmlReport(inputs, a.out_html, session.write_options());
   std::printf("wrote %s (%zu output%s)\n", a.out_html.c_str(), inputs.size(),
               inputs.size() == 1 ? "" : "s");
   return 0;

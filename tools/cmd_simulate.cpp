@@ -112,7 +112,8 @@ Command AddSimulateCommand(CLI::App& app) {
     if (seed->count() > 0) s.seed = seed_value;
     SampleTruth(&s);
     const RunData data = Simulate(s);
-    WriteSimulation(s, data, opt->out_dir, session.provenance.Json().dump());
+    WriteSimulation(s, data, opt->out_dir, session.provenance.Json().dump(),
+                    session.write_options());
     PrintSummary(s, data, opt->out_dir);
     return 0;
   };

@@ -146,9 +146,9 @@ void CheckOutputPath(const std::string& path, const std::string& option) {
   NoteOutputFile(path);
 }
 
-void WriteOutput(const std::string& path, const std::string& content) {
+void WriteOutput(const std::string& path, const std::string& content, const Session& session) {
   if (!IsStdout(path)) {
-    WriteFileAtomically(path, content);
+    WriteFileAtomically(path, content, session.write_options());
     return;
   }
   if (std::fwrite(content.data(), 1, content.size(), stdout) != content.size() ||
@@ -159,7 +159,7 @@ void WriteOutput(const std::string& path, const std::string& content) {
 
 void WriteJson(const nlohmann::json& j, const std::string& path, const Session& session) {
   if (IsStdout(path)) {
-    WriteOutput(path, StampedJson(j, session));
+    WriteOutput(path, StampedJson(j, session), session);
   } else {
     WriteJsonFile(j, path, session);
   }
@@ -175,7 +175,7 @@ void WriteReportIfAsked(const std::string& report_html, const nlohmann::json& ou
   if (in.out.is_object() && !in.out.contains("provenance")) {
     in.out["provenance"] = session.provenance.Json();
   }
-  WriteHtmlReport({in}, report_html);
+  WriteHtmlReport({in}, report_html, session.write_options());
   std::printf("wrote %s\n", report_html.c_str());
 }
 

@@ -93,8 +93,9 @@ std::uint64_t ParseSeed(const std::string& text, const std::string& option);
 // on stdout).
 inline bool IsStdout(const std::string& path) { return path == "-"; }
 // Writes content to stdout when IsStdout(path) (InputError when stdout
-// fails: a closed pipe, a full disk), else WriteFileAtomically.
-void WriteOutput(const std::string& path, const std::string& content);
+// fails: a closed pipe, a full disk), else WriteFileAtomically with the
+// session's write options.
+void WriteOutput(const std::string& path, const std::string& content, const Session& session);
 
 // Adds the session's "provenance" (app/provenance.h), refuses to replace an
 // output of other inputs (app/output_guard.h CheckOverwrite), serialises with

@@ -11,6 +11,7 @@
 #include <glog/logging.h>
 
 #include "core/io/file_util.h"
+#include "core/io/temporary_files.h"
 #include "core/model/errors.h"
 #include "core/version/version.h"
 #include "tools/command_util.h"
@@ -20,6 +21,17 @@
 #include "tools/distribution/mpi_context.h"
 
 namespace {
+
+// The process's temporaries being written (core/io/temporary_files.h): every
+// command's writes register theirs here (Session::temporaries), and the
+// handler removes them on SIGINT, SIGTERM or SIGHUP before the signal takes
+// its default course. Static storage: the handler may run at any time.
+triadcal::TemporaryFiles g_temporaries;
+
+extern "C" void RemoveTemporariesAndReraise(int sig) {
+  g_temporaries.UnlinkAll();
+  triadcal::ReraiseWithDefaultAction(sig);
+}
 
 // The last guard on what an error echoes: the readers quote at most short
 // excerpts of their input (errors.h Excerpt), and no error line is longer than
@@ -82,8 +94,11 @@ int main(int argc, char** argv) {
   FLAGS_logtostderr = false;
 
   // What every command runs in: the provenance of its outputs (this binary,
-  // this command line), --force, and its warnings on stderr.
+  // this command line), --force, the process's temporaries, and its warnings
+  // on stderr.
   triadcal::Session session;
+  session.temporaries = &g_temporaries;
+  triadcal::InstallTerminationHandler(&RemoveTemporariesAndReraise);
   session.provenance = triadcal::Provenance(triadcal::ToolVersion(), triadcal::ToolGitCommit(),
                                             triadcal::CommandLineOf(argc, argv));
   session.warning = [](const std::string& w) {

@@ -17,6 +17,7 @@
 #include <sstream>
 #include <vector>
 
+#include "core/io/temporary_files.h"
 #include "core/model/errors.h"
 
 namespace triadcal {
@@ -74,65 +75,6 @@ std::string ErrnoProblem(int err) {
       return std::strerror(err);
   }
 }
-
-// Temporaries being written, removed by the signal handler on SIGINT, SIGTERM
-// or SIGHUP (fixed storage: the handler may only call async-signal-safe
-// functions).
-constexpr int kTempSlots = 16;
-char g_temp_paths[kTempSlots][4096];
-volatile sig_atomic_t g_temp_used[kTempSlots];
-std::mutex g_temp_mutex;
-
-extern "C" void RemoveTemporariesAndReraise(int sig) {
-  for (int i = 0; i < kTempSlots; ++i) {
-    if (g_temp_used[i]) ::unlink(g_temp_paths[i]);
-  }
-  ::signal(sig, SIG_DFL);
-  ::raise(sig);
-}
-
-void InstallTemporaryHandlers() {
-  static std::once_flag once;
-  std::call_once(once, [] {
-    for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
-      struct sigaction old {};
-      if (::sigaction(sig, nullptr, &old) == 0 && old.sa_handler == SIG_DFL) {
-        struct sigaction sa {};
-        sa.sa_handler = &RemoveTemporariesAndReraise;
-        sigemptyset(&sa.sa_mask);
-        ::sigaction(sig, &sa, nullptr);
-      }
-    }
-  });
-}
-
-// Registers a temporary for the handler for its lifetime (no slot: the
-// handler does not know it, the next run removes it).
-class TemporaryRegistration {
- public:
-  explicit TemporaryRegistration(const std::string& path) {
-    InstallTemporaryHandlers();
-    if (path.size() >= sizeof(g_temp_paths[0])) return;
-    const std::lock_guard<std::mutex> lock(g_temp_mutex);
-    for (int i = 0; i < kTempSlots; ++i) {
-      if (g_temp_used[i]) continue;
-      std::memcpy(g_temp_paths[i], path.c_str(), path.size() + 1);
-      g_temp_used[i] = 1;
-      slot_ = i;
-      return;
-    }
-  }
-  ~TemporaryRegistration() {
-    if (slot_ < 0) return;
-    const std::lock_guard<std::mutex> lock(g_temp_mutex);
-    g_temp_used[slot_] = 0;
-  }
-  TemporaryRegistration(const TemporaryRegistration&) = delete;
-  TemporaryRegistration& operator=(const TemporaryRegistration&) = delete;
-
- private:
-  int slot_ = -1;
-};
 
 // The file a write of `path` replaces: a symbolic link to a regular file is
 // written through (its target), anything else is `path` itself.
@@ -334,13 +276,14 @@ void RemoveStaleTemporaries(const std::string& path) {
                      false);
 }
 
-void WriteFileAtomically(const std::string& path, const std::string& content) {
+void WriteFileAtomically(const std::string& path, const std::string& content,
+                         const WriteOptions& options) {
   CheckOutputFile(path);
   CheckOutputsAreNotInputs(path);
   const std::string target = WriteTarget(path);
   RemoveStaleTemporaries(target);
   const std::string tmp = TemporaryPathFor(target);
-  const TemporaryRegistration registration(tmp);
+  const TemporaryRegistration registration(options.temporaries, tmp);
   ::unlink(tmp.c_str());  // ours, from an earlier failed attempt of this process
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC | O_NOFOLLOW, 0666);
   if (fd < 0) throw InputError(path + ": cannot write (folder missing or not writable)");

@@ -9,6 +9,17 @@
 
 namespace triadcal {
 
+class TemporaryFiles;  // core/io/temporary_files.h
+
+// What a write is given besides its content (each may be null: a library
+// caller's plain write).
+struct WriteOptions {
+  // The registry the temporary is registered in while it is written, so that
+  // the executable's signal handler removes it on SIGINT, SIGTERM or SIGHUP.
+  // Null: no removal on a signal.
+  TemporaryFiles* temporaries = nullptr;
+};
+
 // Writes content to path through a temporary file in the same folder and a
 // rename, so that readers never see a partial file. Throws InputError when the
 // folder cannot be written, or when path is not fit for an output
@@ -16,10 +27,12 @@ namespace triadcal {
 // the file it names is replaced, the link stays.
 //
 // Temporaries: TemporaryPathFor(target), in the target's folder. Removed
-// when the write fails and on SIGINT, SIGTERM or SIGHUP; one left by a killed
-// process (kill -9, a power cut) is removed by the next write of the same
+// when the write fails, and on a signal when options.temporaries is given
+// (the executable's handler); one left by a killed process (kill -9, a power
+// cut, a signal without a handler) is removed by the next write of the same
 // output on the same host (RemoveStaleTemporaries).
-void WriteFileAtomically(const std::string& path, const std::string& content);
+void WriteFileAtomically(const std::string& path, const std::string& content,
+                         const WriteOptions& options = {});
 
 // ".tmp.NAME.HOST.PID" beside `path` (NAME its file name, HOST this host's
 // name, PID this process).

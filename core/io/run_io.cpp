@@ -356,7 +356,8 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
   return data;
 }
 
-void WriteRunCsv(const RunData& run, const std::string& path, const std::string& comment) {
+void WriteRunCsv(const RunData& run, const std::string& path, const std::string& comment,
+                 const WriteOptions& options) {
   std::string out;
   out.reserve(128 + run.size() * 160);
   std::string text = comment;
@@ -403,7 +404,7 @@ void WriteRunCsv(const RunData& run, const std::string& path, const std::string&
     }
     out += '\n';
   }
-  WriteFileAtomically(path, out);
+  WriteFileAtomically(path, out, options);
 }
 
 }  // namespace triadcal

@@ -5,6 +5,7 @@
 
 #include <string>
 
+#include "core/io/file_util.h"
 #include "core/model/run_data.h"
 #include "core/model/run_description.h"
 
@@ -24,7 +25,9 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings);
 // lambda1_rate, lambda2_rate [deg/s] / temp_C / gx, gy, gz [deg/s] when
 // present (in that order), with shortest
 // round-trip formatting (no precision lost). Writes to a temporary file and
-// renames it, so a failure leaves no partial file.
-void WriteRunCsv(const RunData& run, const std::string& path, const std::string& comment);
+// renames it, so a failure leaves no partial file (WriteFileAtomically, with
+// `options`).
+void WriteRunCsv(const RunData& run, const std::string& path, const std::string& comment,
+                 const WriteOptions& options = {});
 
 }  // namespace triadcal

@@ -93,7 +93,7 @@ void RemoveStaleStaging(const fs::path& dir) {
 }  // namespace
 
 void WriteSimulation(const Scenario& s, const RunData& data, const std::string& dir,
-                     const std::string& provenance_json) {
+                     const std::string& provenance_json, const WriteOptions& options) {
   // Everything that can fail without touching the disk, first.
   const std::string yaml_text = RunDescriptionToYaml(s.run, "run.csv");
   const std::string json_text = TruthJson(s, data, provenance_json);
@@ -130,9 +130,9 @@ void WriteSimulation(const Scenario& s, const RunData& data, const std::string& 
   }
   std::vector<fs::path> moved;
   try {
-    WriteRunCsv(data, (staging / "run.csv").string(), CsvComment(s));
-    WriteFileAtomically((staging / "run.yaml").string(), yaml_text);
-    WriteFileAtomically((staging / "truth.json").string(), json_text);
+    WriteRunCsv(data, (staging / "run.csv").string(), CsvComment(s), options);
+    WriteFileAtomically((staging / "run.yaml").string(), yaml_text, options);
+    WriteFileAtomically((staging / "truth.json").string(), json_text, options);
     for (const std::string& name : names) {
       fs::rename(staging / name, out / name, ec);
       if (ec) throw InputError((out / name).string() + ": cannot write: " + ec.message());

@@ -79,6 +79,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/io/file_util.h"
 #include "core/model/bench_model.h"
 #include "core/model/run_data.h"
 #include "core/model/run_description.h"
@@ -177,7 +178,8 @@ double TruthFileValue(const ParameterLayout& layout, const Eigen::VectorXd& thet
 //                "seed": N, "noise": {"accel_mV", "angle_arcsec", "gyro_dps" (with a
 //                gyro)}, "samples": N,
 //                "provenance": {...}}  (provenance_json, when not empty)
+// `options` go to every write (core/io/file_util.h).
 void WriteSimulation(const Scenario& s, const RunData& data, const std::string& dir,
-                     const std::string& provenance_json = "");
+                     const std::string& provenance_json = "", const WriteOptions& options = {});
 
 }  // namespace triadcal

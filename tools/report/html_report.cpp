@@ -112,8 +112,9 @@ std::string HtmlReport(const std::vector<ReportInput>& inputs) {
   return h;
 }
 
-void WriteHtmlReport(const std::vector<ReportInput>& inputs, const std::string& path) {
-  WriteFileAtomically(path, HtmlReport(inputs));
+void WriteHtmlReport(const std::vector<ReportInput>& inputs, const std::string& path,
+                     const WriteOptions& options) {
+  WriteFileAtomically(path, HtmlReport(inputs), options);
 }
 
 }  // namespace triadcal

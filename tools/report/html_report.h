@@ -16,6 +16,8 @@
 #include <string>
 #include <vector>
 
+#include "core/io/file_util.h"
+
 namespace triadcal {
 
 struct ReportInput {
@@ -30,7 +32,8 @@ std::vector<ReportInput> LoadReportInputs(const std::vector<std::string>& paths)
 // The whole page.
 std::string HtmlReport(const std::vector<ReportInput>& inputs);
 
-// Writes HtmlReport(inputs) atomically.
-void WriteHtmlReport(const std::vector<ReportInput>& inputs, const std::string& path);
+// Writes HtmlReport(inputs) atomically (WriteFileAtomically with `options`).
+void WriteHtmlReport(const std::vector<ReportInput>& inputs, const std::string& path,
+                     const WriteOptions& options);
 
 }  // namespace triadcal
