@@ -93,7 +93,7 @@ ApplyOutcome ApplyRun(const std::string& calibration_json, const std::string& ru
   ApplyOutcome o;
   o.calibration = LoadCalibration(calibration_json);
   const Calibration& cal = o.calibration;
-  session->provenance.RecordInput("calibration", calibration_json);
+  session->RecordInput("calibration", calibration_json);
   const LoadedRun run = LoadRun(run_yaml, session);
   CheckCalibrationForRun(cal, run.description);
   o.samples = run.data.size();

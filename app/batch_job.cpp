@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <mutex>
 
 #include "app/acceptance.h"
@@ -23,10 +24,10 @@ namespace fs = std::filesystem;
 // What a rank hands to rank 0 for one manifest run: the fit job and, when the
 // manifest asks, the diagnose job with its defaults, each run in a session of
 // its own (the runs are fitted in parallel; each names its units for its own
-// readings, through its layout).
+// readings, through its layout) that notes what it loads into the command's
+// guard.
 nlohmann::json FitUnit(const FitSettings& settings, const ManifestEntry& e, int item,
-                       OutputGuard* guard) {
-  const ScopedOutputGuard on(guard);  // this thread's reads are the command's inputs
+                       const std::shared_ptr<OutputGuard>& guard) {
   const auto t0 = std::chrono::steady_clock::now();
   nlohmann::json j = {{"item", item},
                       {"status", "fitted"},
@@ -35,6 +36,7 @@ nlohmann::json FitUnit(const FitSettings& settings, const ManifestEntry& e, int 
                       {"diagnose", nullptr}};
   try {
     Session session;
+    session.output_guard = guard;
     const LoadedRun run = LoadRun(e.run_path, &session);
     j["warnings"] = run.warnings;
     FitSettings fs = settings;
@@ -78,10 +80,12 @@ void Judge(const ManifestEntry& e, const nlohmann::json& cal, UnitResult* u) {
 }
 
 // The change since the unit's previous calibration, in sigma.
-void CompareWithPrevious(const std::string& out_dir, const nlohmann::json& cal, UnitResult* u) {
+void CompareWithPrevious(const std::string& out_dir, const nlohmann::json& cal,
+                         const Session& session, UnitResult* u) {
   if (u->previous.empty()) return;
-  const nlohmann::json before = nlohmann::json::parse(
-      ReadFile((fs::path(out_dir) / u->previous / "calibration.json").string()));
+  const std::string previous = (fs::path(out_dir) / u->previous / "calibration.json").string();
+  const nlohmann::json before = nlohmann::json::parse(ReadFile(previous));
+  session.NoteInput(previous);
   u->change_sigma = ChangeInSigma(cal["parameters"], before["parameters"]);
   for (auto it = u->change_sigma.begin(); it != u->change_sigma.end(); ++it) {
     if (std::abs(it.value().get<double>()) > std::abs(u->largest_change_sigma) ||
@@ -119,7 +123,7 @@ UnitResult FileUnit(const std::string& manifest, const std::string& out_dir,
     u.diagnose_selected = job["diagnose"]["selected"].get<std::vector<std::string>>();
   }
   Judge(e, cal, &u);
-  CompareWithPrevious(out_dir, cal, &u);
+  CompareWithPrevious(out_dir, cal, session, &u);
   nlohmann::json unit = UnitResultJson(u);
   unit["limits"] = LimitsJson(e.limits);
   unit["manifest"] = manifest;
@@ -170,7 +174,7 @@ BatchOutcome BatchRun(const BatchSettings& s, const std::string& manifest,
   std::mutex mutex;
   int done = 0;
   ParallelFor(mine.size(), o.threads, [&](std::size_t k) {
-    jobs[k] = FitUnit(s.fit, entries[mine[k]], mine[k], session.output_guard.get());
+    jobs[k] = FitUnit(s.fit, entries[mine[k]], mine[k], session.output_guard);
     std::lock_guard<std::mutex> lock(mutex);
     ++done;
     if (ranks.rank != 0) return;

@@ -84,7 +84,7 @@ ExportOutcome ExportRun(const ExportSettings& s, const std::string& calibration_
   }
   // Before any output: an effect the exported forms cannot carry.
   if (const std::string why = ExportRefusal(cal); !why.empty()) throw InputError(why);
-  session->provenance.RecordInput("calibration", calibration_json);
+  session->RecordInput("calibration", calibration_json);
   const std::string provenance = session->provenance.Json().dump();
   switch (s.format) {
     case ExportFormat::kJsonMatrix:

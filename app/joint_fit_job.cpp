@@ -73,7 +73,7 @@ std::vector<JointRun> LoadJointRuns(const RunsFile& file, Session* session) {
   std::vector<JointRun> runs;
   for (const RunsFile::Entry& e : file.runs) {
     LoadedRun lr = LoadRun(e.run_yaml, session);
-    session->provenance.RecordInput("run " + e.name, e.run_yaml);
+    session->RecordInput("run " + e.name, e.run_yaml);
     JointRun r;
     r.name = e.name;
     r.source = e.where;
@@ -99,6 +99,7 @@ JointInput LoadJointInput(const std::vector<std::string>& inputs, const std::str
                           Session* session) {
   JointInput in;
   in.file = RunsOfCommandLine(inputs);
+  if (!in.file.path.empty()) session->NoteInput(in.file.path);  // the runs file
   in.runs = LoadJointRuns(in.file, session);
   // The effects must suit every run's data.
   std::vector<Effect> list;

@@ -116,7 +116,7 @@ ObservabilityInput LoadObservabilityInput(const std::string& path, const std::st
   in.scenario = IsScenarioFile(path);
   if (in.scenario) {
     const Scenario s = NoiseFreeScenario(LoadScenario(path));
-    session->provenance.RecordInput("scenario", path);
+    session->RecordInput("scenario", path);
     in.data = Simulate(s);
     in.run = s.run;
     in.layout =
@@ -162,6 +162,7 @@ ObservabilityOutcome ObservabilityRun(const ObservabilitySettings& s, const Obse
   Eigen::VectorXd theta = in.theta;
   if (!s.at.empty()) {
     SetFromFileUnits(in.layout, ReadParameterValues(s.at), &theta);
+    session.NoteInput(s.at);
     o.at = s.at;
   }
   if (s.could_hide && !in.scenario) {

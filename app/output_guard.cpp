@@ -116,7 +116,9 @@ std::string Describe(const InputSet& inputs) {
 }  // namespace
 
 void CheckOverwrite(const std::string& out_path, const Session& session) {
-  CheckOutputsAreNotInputs(out_path);  // the plainer error first
+  if (session.output_guard) {
+    session.output_guard->CheckOutputsAreNotInputs(out_path);  // the plainer error first
+  }
   // Not even --force writes into a directory, FIFO, device node or socket.
   CheckOutputFile(out_path);
   std::error_code ec;

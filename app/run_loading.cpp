@@ -10,7 +10,7 @@ namespace triadcal {
 
 LoadedRun LoadRun(const std::string& run_yaml, Session* session) {
   RunDescription description = LoadRunDescription(run_yaml);
-  session->provenance.RecordInput("run", run_yaml);
+  session->RecordInput("run", run_yaml);
   return LoadRun(std::move(description), session);
 }
 
@@ -26,7 +26,7 @@ LoadedRun LoadRun(RunDescription description, Session* session) {
   if (session->warning) {
     for (const std::string& w : r.warnings) session->warning(w);
   }
-  session->provenance.RecordInput("data", r.description.data_path);
+  session->RecordInput("data", r.description.data_path);
   return r;
 }
 

@@ -21,8 +21,9 @@ struct LoadedRun {
 };
 
 // Loads run.yaml and its data; records both (and the sensor) in
-// session->provenance and says each warning through session->warning (when
-// set). Throws InputError for bad input.
+// session->provenance, notes both in its output guard (Session::RecordInput)
+// and says each warning through session->warning (when set). Throws
+// InputError for bad input.
 LoadedRun LoadRun(const std::string& run_yaml, Session* session);
 
 // The same for a description already read (Python's dict of run.yaml's keys):

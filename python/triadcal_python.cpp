@@ -156,7 +156,7 @@ py::object RunJob(const py::object& run_arg, const std::string& call, const Job&
     py::gil_scoped_release release;
     Session session;
     session.provenance = Provenance(ToolVersion(), ToolGitCommit(), "python: triadcal." + call);
-    if (from_file) session.provenance.RecordInput("run", description.yaml_path);
+    if (from_file) session.RecordInput("run", description.yaml_path);
     const LoadedRun run = LoadRun(description, &session);
     out = job(description.yaml_path, run, session);
     out["provenance"] = session.provenance.Json();

@@ -346,6 +346,48 @@ TEST_F(CliInputErrors, FitResidualsOntoTheDataFileWritesNothing) {
           "' (an output never replaces an input; choose another name)");
 }
 
+// The jobs and commands note what they load into the session's guard (core's
+// readers note nothing): each kind of input, as every command that reads it
+// takes it, is refused as an output, and left as it was.
+TEST_F(CliInputErrors, EveryKindOfInputIsRefusedAsAnOutput) {
+  const std::string scenario = WriteText(
+      "scenario.yaml", "profile: {duration_s: 2, rate_hz: 20}\nrun: {triad: {noise_mV: 2}}\n");
+  fs::copy_file(Path("run.csv"), Path("run2.csv"));
+  WriteText("run2.yaml", "data: run2.csv\n");
+  const std::string runs = WriteText(
+      "runs.yaml", "runs:\n  - {name: a, run: run.yaml}\n  - {name: b, run: run2.yaml}\n");
+  ASSERT_EQ(Run("fit " + Path("run.yaml") + " -o " + Path("fit.json")).exit_code, 0);
+  for (const char* shard : {"1/2", "2/2"}) {
+    ASSERT_EQ(Run("montecarlo " + scenario + " -n 2 --shard " + shard + " -o " +
+                  Path(std::string("shard") + shard[0] + ".json"))
+                  .exit_code,
+              0);
+  }
+  const std::string fit = Path("fit.json"), shard = Path("shard2.json");
+  const struct {
+    std::string args, input;
+  } cases[] = {
+      {"fit " + runs + " -o " + runs, runs},                            // a runs file
+      {"observability " + runs + " -o " + runs, runs},                  // the same
+      {"fit " + runs + " -o " + Path("run2.yaml"), Path("run2.yaml")},  // a run of it
+      {"observability " + scenario + " -o " + scenario, scenario},      // a scenario
+      {"design " + scenario + " -o " + scenario, scenario},
+      {"montecarlo " + scenario + " -n 2 -o " + scenario, scenario},
+      {"observability " + Path("run.yaml") + " --at " + fit + " -o " + fit, fit},  // --at
+      {"export " + fit + " --format yaml -o " + fit, fit},                         // a calibration
+      {"report " + fit + " -o " + fit, fit},                                       // a report's OUT
+      {"merge " + Path("shard1.json") + " " + shard + " -o " + shard, shard},      // a shard
+  };
+  for (const auto& c : cases) {
+    const std::string before = ReadFile(c.input);
+    ExpectError(c.args,
+                c.input + ": is the input file '" + c.input +
+                    "' (an output never replaces an input; choose another name)",
+                {});
+    EXPECT_EQ(ReadFile(c.input), before) << c.args;
+  }
+}
+
 TEST_F(CliInputErrors, TwoOutputsOneFile) {
   ExpectError(
       "filter " + Path("run.yaml") + " -o " + Path("out.json") + " --series " + Path("out.json"),

@@ -18,7 +18,7 @@ struct ApplyArgs {
 
 int RunApply(const ApplyArgs& a, Session& session) {
   const bool to_stdout = IsStdout(a.out_csv);
-  if (!to_stdout) CheckOutputPath(a.out_csv);
+  if (!to_stdout) CheckOutputPath(a.out_csv, session);
   const ApplyOutcome o = ApplyRun(a.calibration_json, a.run_yaml, &session);
   if (!to_stdout) CheckOverwrite(a.out_csv, session);
   for (const std::string& w : o.warnings) {

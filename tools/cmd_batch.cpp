@@ -53,11 +53,12 @@ int RunBatch(BatchArgs a, Session& session) {
   s.fit = a.fit.Settings();
   s.Validate();
   const std::vector<ManifestEntry> entries = LoadManifest(a.manifest);
+  session.NoteInput(a.manifest);
   // On every rank (the same answer on a shared file system), so that a bad
   // DIR stops them all before the gather.
   std::error_code ec;
   fs::create_directories(a.out_dir, ec);
-  CheckOutputPath((fs::path(a.out_dir) / "summary.json").string());
+  CheckOutputPath((fs::path(a.out_dir) / "summary.json").string(), session);
   BatchRanks ranks;
   ranks.rank = MpiRank();
   ranks.ranks = MpiSize();

@@ -58,8 +58,8 @@ void PrintCompare(const CompareOutcome& c) {
 }
 
 int RunCompare(const CompareArgs& a, Session& session) {
-  if (!a.report_html.empty()) CheckOutputPath(a.report_html);
-  CheckOutputPath(a.out_json);
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html, session);
+  CheckOutputPath(a.out_json, session);
   a.settings.Validate();
   const LoadedRun run = LoadRun(a.run_yaml, &session);
   CheckOverwrite(a.out_json, session);  // before the long work

@@ -30,8 +30,8 @@ struct DesignArgs {
 };
 
 int RunDesign(DesignArgs a, Session& session) {
-  if (!a.report_html.empty()) CheckOutputPath(a.report_html);
-  CheckOutputPath(a.out_json);
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html, session);
+  CheckOutputPath(a.out_json, session);
   DesignSettings& settings = a.settings;
   settings.durations_s = ParsePositiveList(a.durations, "--durations");
   settings.targets = ParseDesignTargets(a.targets);
@@ -39,7 +39,7 @@ int RunDesign(DesignArgs a, Session& session) {
   if (!a.amplitudes.empty()) settings.amplitudes_deg = ParsePairs(a.amplitudes, "--amplitudes");
   settings.Validate();
   const Scenario s = LoadScenario(a.scenario);
-  session.provenance.RecordInput("scenario", a.scenario);
+  session.RecordInput("scenario", a.scenario);
   CheckOverwrite(a.out_json, session);  // before the long work
   StageProgress progress("design: ");
   const Session designing = WithProgress(session, &progress);

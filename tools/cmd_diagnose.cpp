@@ -35,8 +35,8 @@ std::map<std::string, double> ReadTruth(const std::string& path) {
 }
 
 int RunDiagnose(const DiagnoseArgs& a, Session& session) {
-  if (!a.report_html.empty()) CheckOutputPath(a.report_html);
-  CheckOutputPath(a.out_json);
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html, session);
+  CheckOutputPath(a.out_json, session);
   const LoadedRun run = LoadRun(a.run_yaml, &session);
   CheckOverwrite(a.out_json, session);  // before the long work
   a.settings.Validate();
@@ -44,7 +44,7 @@ int RunDiagnose(const DiagnoseArgs& a, Session& session) {
   // Read the truth first: a bad truth file must fail before the work.
   if (!a.truth_json.empty()) {
     truth = ReadTruth(a.truth_json);
-    session.provenance.RecordInput("truth", a.truth_json);
+    session.RecordInput("truth", a.truth_json);
   }
   const std::map<std::string, double>* tp = a.truth_json.empty() ? nullptr : &truth;
   StageProgress progress("diagnose: ");

@@ -30,14 +30,14 @@ int RunExport(ExportArgs a, Session& session) {
   if (to_stdout && s.format == ExportFormat::kC) {
     throw InputError("-o -: --format c writes two files (NAME.c and NAME.h), not stdout");
   }
-  if (!to_stdout) CheckOutputPath(a.out);
+  if (!to_stdout) CheckOutputPath(a.out, session);
   // --format c writes both NAME.c and NAME.h, whichever -o names.
   const fs::path out(a.out);
   fs::path c_path = out, h_path = out;
   c_path.replace_extension(".c");
   h_path.replace_extension(".h");
   if (s.format == ExportFormat::kC) {
-    CheckOutputPath(c_path.string() == a.out ? h_path.string() : c_path.string());
+    CheckOutputPath(c_path.string() == a.out ? h_path.string() : c_path.string(), session);
     if (out.extension() != ".c" && out.extension() != ".h") {
       throw InputError("-o: for --format c give NAME.c or NAME.h (both are written), got '" +
                        a.out + "'");

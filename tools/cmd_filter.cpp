@@ -89,9 +89,9 @@ void PrintFilter(const FilterSettings& s, const LoadedRun& run, const FilterOutc
 }
 
 int RunFilter(FilterArgs a, Session& session) {
-  if (!a.report_html.empty()) CheckOutputPath(a.report_html, "--report");
-  CheckOutputPath(a.out_json);
-  if (!a.series_csv.empty()) CheckOutputPath(a.series_csv, "--series");
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html, session, "--report");
+  CheckOutputPath(a.out_json, session);
+  if (!a.series_csv.empty()) CheckOutputPath(a.series_csv, session, "--series");
   FilterSettings& s = a.settings;
   s.hold = SplitList(a.hold);
   s.free = SplitList(a.free);

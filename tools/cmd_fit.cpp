@@ -35,10 +35,10 @@ int RunFit(FitArgs a, Session& session) {
     return RunJointFit(a.fit.Settings(), a.runs, a.out_json, a.report_html, session);
   }
   a.run_yaml = a.runs[0];
-  if (!a.report_html.empty()) CheckOutputPath(a.report_html, "--report");
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html, session, "--report");
   const FitSettings settings = a.fit.Settings();
-  CheckOutputPath(a.out_json);
-  if (!a.residuals_csv.empty()) CheckOutputPath(a.residuals_csv, "--residuals");
+  CheckOutputPath(a.out_json, session);
+  if (!a.residuals_csv.empty()) CheckOutputPath(a.residuals_csv, session, "--residuals");
   const LoadedRun run = LoadRun(a.run_yaml, &session);
   CheckOverwrite(a.out_json, session);  // before the long work
   StageProgress progress("fit: ");

@@ -44,7 +44,7 @@ int RunJointFit(const FitSettings& s, const std::vector<std::string>& inputs,
   if (!report_html.empty()) {
     throw InputError("--report: not available for a joint fit of several runs yet");
   }
-  CheckOutputPath(out_json);
+  CheckOutputPath(out_json, session);
   const JointInput in = LoadJointInput(inputs, s.effects, &session);
   CheckOverwrite(out_json, session);
   const std::vector<JointRun>& runs = in.runs;

@@ -25,7 +25,7 @@ struct MergeArgs {
 };
 
 int RunMerge(const MergeArgs& a, Session& session) {
-  CheckOutputPath(a.out_json);
+  CheckOutputPath(a.out_json, session);
   std::vector<nlohmann::json> shards;
   std::string command;
   for (const std::string& path : a.shards) {
@@ -45,6 +45,7 @@ int RunMerge(const MergeArgs& a, Session& session) {
     }
     command = c;
     shards.push_back(std::move(j));
+    session.NoteInput(path);
   }
   try {
     if (command == "montecarlo") {

@@ -53,7 +53,7 @@ int RunMonteCarloCommand(MonteCarloArgs a, Session& session) {
     throw InputError("--first-seed: seeds " + a.first_seed_text + " .. first-seed + " +
                      std::to_string(a.runs) + " - 1 pass 18446744073709551615 (2^64 - 1)");
   }
-  if (!a.report_html.empty()) CheckOutputPath(a.report_html, "--report");
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html, session, "--report");
   if (a.runs < 1) throw InputError("-n: at least 1 run, got " + std::to_string(a.runs));
   if (a.runs > kMaxRuns) {
     throw InputError("-n: at most " + std::to_string(kMaxRuns) + " runs, got " +
@@ -62,9 +62,9 @@ int RunMonteCarloCommand(MonteCarloArgs a, Session& session) {
   if (!(a.tolerance > 0)) throw InputError("--tolerance: must be > 0");
   if (!(a.tolerance <= 1000.0)) throw InputError("--tolerance: must be at most 1000");
   const Shard shard = ParseShard(a.shard);
-  CheckOutputPath(a.out_json);
+  CheckOutputPath(a.out_json, session);
   const Scenario s = LoadScenario(a.scenario);
-  session.provenance.RecordInput("scenario", a.scenario);
+  session.RecordInput("scenario", a.scenario);
   CheckOverwrite(a.out_json, session);  // before the long work
   MonteCarloOptions opt;
   opt.runs = a.runs;

@@ -21,7 +21,7 @@ struct MountingArgs {
 };
 
 int RunMounting(const MountingArgs& a, Session& session) {
-  if (!a.out_json.empty()) CheckOutputPath(a.out_json);
+  if (!a.out_json.empty()) CheckOutputPath(a.out_json, session);
   const LoadedRun run = LoadRun(a.run_yaml, &session);
   const std::vector<MountingFit> fits =
       SearchMountings(run.description, run.data, a.zero_range_deg * kDegToRad, 5.0 * kDegToRad);

@@ -71,7 +71,7 @@ int RunJointObservability(const ObservabilityArgs& a, Session& session) {
   }
   StageProgress progress("observability: ");
   progress.Stage("loading the runs");
-  CheckOutputPath(a.out_json);
+  CheckOutputPath(a.out_json, session);
   JointInput in = LoadJointInput(a.inputs, a.settings.effects, &session);
   CheckOverwrite(a.out_json, session);
   const JointObservabilityOutcome o =
@@ -98,7 +98,7 @@ void PrintCouldHide(const ObservabilitySettings& s, const std::vector<HideCase>&
 
 int RunObservability(const ObservabilityArgs& a, Session& session) {
   if (a.inputs.size() > 1 || IsRunsFile(a.inputs[0])) return RunJointObservability(a, session);
-  if (!a.report_html.empty()) CheckOutputPath(a.report_html);
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html, session);
   a.settings.Validate();
   // The run (recorded or simulated), its description and the point of evaluation.
   StageProgress progress("observability: ");

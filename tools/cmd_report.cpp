@@ -17,8 +17,9 @@ struct ReportArgs {
 };
 
 int RunReport(const ReportArgs& a, Session& session) {
-  CheckOutputPath(a.out_html);
+  CheckOutputPath(a.out_html, session);
   const std::vector<ReportInput> inputs = LoadReportInputs(a.inputs);
+  for (const std::string& in : a.inputs) session.NoteInput(in);
   WriteHtmlReport(inputs, a.out_html, session.write_options());
   std::printf("wrote %s (%zu output%s)\n", a.out_html.c_str(), inputs.size(),
               inputs.size() == 1 ? "" : "s");

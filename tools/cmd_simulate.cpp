@@ -66,7 +66,8 @@ const char* const kSimulationFiles[] = {"run.csv", "run.yaml", "truth.json"};
 // Before any work: DIR is a folder (or missing), and each of its three files
 // is missing or a regular file; a FIFO, device node, directory or symbolic
 // link in their place is never replaced (the files are moved in by rename).
-void CheckSimulationOutputs(const std::string& dir) {
+// Notes the three in the session's guard.
+void CheckSimulationOutputs(const std::string& dir, const Session& session) {
   namespace fs = std::filesystem;
   if (dir.empty()) throw InputError("-o: empty folder name (give a folder)");
   std::error_code ec;
@@ -83,7 +84,7 @@ void CheckSimulationOutputs(const std::string& dir) {
                        "folder; remove the link or choose another folder)");
     }
     CheckOutputFile(p.string());
-    NoteOutputFile(p.string());
+    session.NoteOutput(p.string());
   }
 }
 
@@ -100,13 +101,14 @@ Command AddSimulateCommand(CLI::App& app) {
       c.app->add_option("--seed", opt->seed, "noise seed, 0 to 2^64 - 1 (overrides `seed:`)");
   c.run = [opt, seed](Session& session) {
     const std::uint64_t seed_value = seed->count() > 0 ? ParseSeed(opt->seed, "--seed") : 0;
-    CheckSimulationOutputs(opt->out_dir);
+    CheckSimulationOutputs(opt->out_dir, session);
     Scenario s = LoadScenario(opt->scenario_path);
-    session.provenance.RecordInput("scenario", opt->scenario_path);
+    session.RecordInput("scenario", opt->scenario_path);
     // No output may be an input, --force or not: DIR/run.yaml of `simulate
     // run.yaml -o .` is the scenario itself.
     for (const char* name : kSimulationFiles) {
-      CheckOutputsAreNotInputs((std::filesystem::path(opt->out_dir) / name).string());
+      const std::string out = (std::filesystem::path(opt->out_dir) / name).string();
+      if (session.output_guard) session.output_guard->CheckOutputsAreNotInputs(out);
     }
     CheckSimulationFolder(opt->out_dir, session);
     if (seed->count() > 0) s.seed = seed_value;

@@ -122,8 +122,8 @@ void PrintReport(const LoadedRun& run, const StaticResult& r) {
 }
 
 int RunStatic(StaticArgs a, Session& session) {
-  if (!a.report_html.empty()) CheckOutputPath(a.report_html, "--report");
-  CheckOutputPath(a.out_json);
+  if (!a.report_html.empty()) CheckOutputPath(a.report_html, session, "--report");
+  CheckOutputPath(a.out_json, session);
   StaticSettings& s = a.settings;
   s.reference = ParseStaticReference(a.reference);
   s.fix = SplitList(a.fix);

@@ -130,7 +130,7 @@ std::uint64_t ParseSeed(const std::string& text, const std::string& option) {
   return v;
 }
 
-void CheckOutputPath(const std::string& path, const std::string& option) {
+void CheckOutputPath(const std::string& path, const Session& session, const std::string& option) {
   namespace fs = std::filesystem;
   if (path.empty()) throw InputError(option + ": empty file name (give a file name)");
   if (IsStdout(path)) {
@@ -143,7 +143,7 @@ void CheckOutputPath(const std::string& path, const std::string& option) {
   if (!fs::is_directory(dir) || access(dir.c_str(), W_OK) != 0) {
     throw InputError(path + ": cannot write (folder missing or not writable)");
   }
-  NoteOutputFile(path);
+  session.NoteOutput(path);
 }
 
 void WriteOutput(const std::string& path, const std::string& content, const Session& session) {

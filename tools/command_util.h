@@ -25,8 +25,9 @@ namespace triadcal {
 // file or a symbolic link to one (a directory, FIFO, device node, socket:
 // core/io/file_util.h CheckOutputFile), or a folder that is missing or not
 // writable ("PATH: cannot write (folder missing or not writable)"). Notes the
-// output for the guard. `option` names the flag that gave it.
-void CheckOutputPath(const std::string& path, const std::string& option = "-o");
+// output in the session's guard. `option` names the flag that gave it.
+void CheckOutputPath(const std::string& path, const Session& session,
+                     const std::string& option = "-o");
 
 // Progress on stderr ("fit: relinearising pass 2  57%"). On a terminal one
 // line rewritten in place (at most 10 times a second); otherwise (piped, in

@@ -144,10 +144,9 @@ int main(int argc, char** argv) {
               << (command.empty() ? "" : command + " ") << "--help`)\n";
     return 2;
   }
-  // An output never replaces an input: the readers note their files into the
-  // session's guard, installed on this thread (batch installs it on its own).
+  // An output never replaces an input: the jobs note the files they load
+  // into the session's guard, and every write checks it.
   session.output_guard = std::make_shared<triadcal::OutputGuard>();
-  const triadcal::ScopedOutputGuard guard(session.output_guard.get());
   try {
     for (const triadcal::Command& c : commands) {
       if (!c.app->parsed()) continue;

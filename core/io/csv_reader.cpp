@@ -24,7 +24,6 @@ class LineSource {
  public:
   explicit LineSource(const std::string& path) : path_(path), f_(nullptr, &std::fclose) {
     CheckInputFile(path);
-    NoteInputFile(path);
     f_.reset(std::fopen(path.c_str(), "rb"));
     if (!f_) throw InputError(path + ": cannot read (no such file or not readable)");
     if (std::fseek(f_.get(), 0, SEEK_END) == 0) {

@@ -26,10 +26,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// The guard of this thread (ScopedOutputGuard): a pointer to the session's
-// value, scoped to the command (or the batch unit) that installed it.
-thread_local OutputGuard* t_guard = nullptr;
-
 bool SameFile(const std::string& a, const std::string& b) {
   if (a.empty() || b.empty()) return false;
   std::error_code ec;
@@ -90,9 +86,6 @@ std::string WriteTarget(const std::string& path) {
 
 }  // namespace
 
-ScopedOutputGuard::ScopedOutputGuard(OutputGuard* guard) : previous_(t_guard) { t_guard = guard; }
-ScopedOutputGuard::~ScopedOutputGuard() { t_guard = previous_; }
-
 void OutputGuard::NoteInput(const std::string& path) {
   const std::lock_guard<std::mutex> lock(mutex_);
   inputs_.push_back(path);
@@ -120,18 +113,6 @@ void OutputGuard::CheckOutputsAreNotInputs(const std::string& path) const {
       }
     }
   }
-}
-
-void NoteInputFile(const std::string& path) {
-  if (t_guard) t_guard->NoteInput(path);
-}
-
-void NoteOutputFile(const std::string& path) {
-  if (t_guard) t_guard->NoteOutput(path);
-}
-
-void CheckOutputsAreNotInputs(const std::string& path) {
-  if (t_guard) t_guard->CheckOutputsAreNotInputs(path);
 }
 
 std::string PathForMessage(const std::string& path) {
@@ -279,7 +260,7 @@ void RemoveStaleTemporaries(const std::string& path) {
 void WriteFileAtomically(const std::string& path, const std::string& content,
                          const WriteOptions& options) {
   CheckOutputFile(path);
-  CheckOutputsAreNotInputs(path);
+  if (options.guard) options.guard->CheckOutputsAreNotInputs(path);
   const std::string target = WriteTarget(path);
   RemoveStaleTemporaries(target);
   const std::string tmp = TemporaryPathFor(target);
@@ -316,7 +297,6 @@ void WriteFileAtomically(const std::string& path, const std::string& content,
 
 std::string ReadFile(const std::string& path) {
   CheckInputFile(path);
-  NoteInputFile(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot read (no such file or not readable)");
   std::ostringstream ss;

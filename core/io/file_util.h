@@ -9,11 +9,17 @@
 
 namespace triadcal {
 
+class OutputGuard;     // below
 class TemporaryFiles;  // core/io/temporary_files.h
 
 // What a write is given besides its content (each may be null: a library
 // caller's plain write).
 struct WriteOptions {
+  // The command's output guard: the write is refused when the output, or an
+  // output announced before it, is one of the inputs noted so far
+  // (OutputGuard::CheckOutputsAreNotInputs), so a command with several
+  // outputs writes none of them. Null: not checked.
+  const OutputGuard* guard = nullptr;
   // The registry the temporary is registered in while it is written, so that
   // the executable's signal handler removes it on SIGINT, SIGTERM or SIGHUP.
   // Null: no removal on a signal.
@@ -22,9 +28,10 @@ struct WriteOptions {
 
 // Writes content to path through a temporary file in the same folder and a
 // rename, so that readers never see a partial file. Throws InputError when the
-// folder cannot be written, or when path is not fit for an output
-// (CheckOutputFile). A symbolic link to a regular file is written through:
-// the file it names is replaced, the link stays.
+// folder cannot be written, when path is not fit for an output
+// (CheckOutputFile), or when options.guard refuses it. A symbolic link to a
+// regular file is written through: the file it names is replaced, the link
+// stays.
 //
 // Temporaries: TemporaryPathFor(target), in the target's folder. Removed
 // when the write fails, and on a signal when options.temporaries is given
@@ -79,11 +86,11 @@ std::string ReadFileRange(const std::string& path, std::uintmax_t offset, std::s
 
 // The output guard of a command: the files it read and the outputs it
 // announced, so that an output never replaces an input and two outputs never
-// share a file. A value: the command's session holds one (app/session.h) and
-// installs it on its thread (ScopedOutputGuard); the readers below note their
-// files into the guard of their thread, and nothing is noted where none is
-// installed (tests that rewrite what they read, Python, a library caller).
-// Thread-safe: `batch` installs its guard on the threads that load its units.
+// share a file. A value that core makes none of and keeps nowhere: the
+// command's session holds one (app/session.h), the jobs note the files they
+// load into it (core's readers note nothing), and the writers are given it
+// (WriteOptions::guard). Thread-safe: `batch` loads its runs on several
+// threads into the command's guard.
 class OutputGuard {
  public:
   void NoteInput(const std::string& path);
@@ -98,27 +105,6 @@ class OutputGuard {
   mutable std::mutex mutex_;
   std::vector<std::string> inputs_, outputs_;
 };
-
-// Installs `guard` (may be null: none) on this thread for its lifetime; the
-// guard installed before comes back after.
-class ScopedOutputGuard {
- public:
-  explicit ScopedOutputGuard(OutputGuard* guard);
-  ~ScopedOutputGuard();
-  ScopedOutputGuard(const ScopedOutputGuard&) = delete;
-  ScopedOutputGuard& operator=(const ScopedOutputGuard&) = delete;
-
- private:
-  OutputGuard* previous_;
-};
-
-// The same on the guard of this thread (no-ops when none is installed):
-// readers note a file read; a command notes an output before the work starts.
-// WriteFileAtomically calls CheckOutputsAreNotInputs before writing, so a
-// command with several outputs writes none of them.
-void NoteInputFile(const std::string& path);
-void NoteOutputFile(const std::string& path);
-void CheckOutputsAreNotInputs(const std::string& path);
 
 // Reads a whole file; throws InputError("PATH: cannot read ...")
 // (CheckInputFile first: a FIFO or a device is never opened).

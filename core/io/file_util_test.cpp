@@ -1,9 +1,8 @@
 // The output guard (file_util.h) under concurrent readers: `batch` loads its
-// units on several threads, each with the command's guard installed, and each
-// reader notes its files. Before the guard held a mutex, ASan found a
-// heap-buffer-overflow in NoteInputFile there (two threads growing one
-// vector); here many threads note files at once, and the guard must still
-// refuse an output that is one of them.
+// units on several threads, each noting its files into the command's guard.
+// Before the guard held a mutex, ASan found a heap-buffer-overflow there (two
+// threads growing one vector); here many threads note files at once, and the
+// guard must still refuse an output that is one of them, in a write too.
 #include "core/io/file_util.h"
 
 #include <gtest/gtest.h>
@@ -29,29 +28,22 @@ TEST(OutputGuard, ConcurrentReadersAreAllNoted) {
   std::vector<std::thread> threads;
   for (int t = 0; t < 8; ++t) {
     threads.emplace_back([t, &guard] {
-      const ScopedOutputGuard on(&guard);  // as `batch` on its worker threads
       for (int i = 0; i < 2000; ++i) {
-        NoteInputFile("/nonexistent/guard-test/in_" + std::to_string(t) + "_" +
-                      std::to_string(i) + ".csv");
+        guard.NoteInput("/nonexistent/guard-test/in_" + std::to_string(t) + "_" +
+                        std::to_string(i) + ".csv");
       }
     });
   }
   for (std::thread& th : threads) th.join();
   // The last file of every thread was noted: writing over it is refused.
-  {
-    const ScopedOutputGuard on(&guard);
-    for (int t = 0; t < 8; ++t) {
-      const std::string in = "/nonexistent/guard-test/in_" + std::to_string(t) + "_1999.csv";
-      EXPECT_THROW(CheckOutputsAreNotInputs(in), InputError) << in;
-    }
-    EXPECT_NO_THROW(CheckOutputsAreNotInputs("/nonexistent/guard-test/out.json"));
+  for (int t = 0; t < 8; ++t) {
+    const std::string in = "/nonexistent/guard-test/in_" + std::to_string(t) + "_1999.csv";
+    EXPECT_THROW(guard.CheckOutputsAreNotInputs(in), InputError) << in;
   }
-  // Without a guard on this thread nothing is checked; another guard is
-  // another value.
-  EXPECT_NO_THROW(CheckOutputsAreNotInputs("/nonexistent/guard-test/in_0_1999.csv"));
-  OutputGuard other;
-  const ScopedOutputGuard on(&other);
-  EXPECT_NO_THROW(CheckOutputsAreNotInputs("/nonexistent/guard-test/in_0_1999.csv"));
+  EXPECT_NO_THROW(guard.CheckOutputsAreNotInputs("/nonexistent/guard-test/out.json"));
+  // Another guard is another value.
+  const OutputGuard other;
+  EXPECT_NO_THROW(other.CheckOutputsAreNotInputs("/nonexistent/guard-test/in_0_1999.csv"));
 }
 
 // Inputs: what is wrong with a path that is no readable regular file, in words.
@@ -129,6 +121,31 @@ TEST_F(FileKinds, WriteThroughASymlinkKeepsTheLinkAndThePermissions) {
   int files = 0;
   for (const auto& e : std::filesystem::directory_iterator(dir_)) files += !e.path().empty();
   EXPECT_EQ(files, 2);
+}
+
+// The guard goes with the write (WriteOptions::guard): an input noted in it is
+// never replaced, nor is anything written when an output announced before is
+// one; without a guard nothing is checked (a library caller's plain write).
+TEST_F(FileKinds, AWriteChecksTheGuardItIsGiven) {
+  const std::string in = WriteText("in.csv", "input");
+  OutputGuard guard;
+  guard.NoteInput(in);
+  WriteOptions options;
+  options.guard = &guard;
+  try {
+    WriteFileAtomically(in, "output", options);
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), in + ": is the input file '" + in +
+                                         "' (an output never replaces an input; choose "
+                                         "another name)");
+  }
+  EXPECT_EQ(ReadFile(in), "input");
+  guard.NoteOutput(in);  // announced, as -o is before the work
+  EXPECT_THROW(WriteFileAtomically(Path("other.json"), "x", options), InputError);
+  EXPECT_FALSE(std::filesystem::exists(Path("other.json")));
+  WriteFileAtomically(in, "output");
+  EXPECT_EQ(ReadFile(in), "output");
 }
 
 TEST_F(FileKinds, TemporaryNamesAndStaleOnes) {

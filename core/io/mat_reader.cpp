@@ -546,7 +546,6 @@ void CheckMatHeader(const std::string& path) {
 
 DataTable ReadMatTable(const std::string& path, const std::vector<std::string>& wanted) {
   CheckInputFile(path);
-  NoteInputFile(path);
   CheckMatHeader(path);
   std::string log;
   const MatLogCapture capture(&log);

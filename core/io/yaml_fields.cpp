@@ -71,7 +71,6 @@ class DocumentContent : public YAML::EventHandler {
 
 YAML::Node LoadYamlFile(const std::string& path) {
   CheckInputFile(path);
-  NoteInputFile(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot read (no such file or not readable)");
   const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};

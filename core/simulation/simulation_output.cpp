@@ -114,7 +114,7 @@ void WriteSimulation(const Scenario& s, const RunData& data, const std::string& 
                        "folder)");
     }
     CheckOutputFile(p.string());
-    CheckOutputsAreNotInputs(p.string());
+    if (options.guard) options.guard->CheckOutputsAreNotInputs(p.string());
   }
   if (existed) RemoveStaleStaging(out);
   if (!existed) {
