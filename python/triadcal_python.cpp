@@ -24,6 +24,7 @@
 #include <string>
 
 #include "core/io/calibration_io.h"
+#include "core/io/data_table.h"
 #include "core/io/run_description_io.h"
 #include "core/io/run_io.h"
 #include "core/model/apply_calibration.h"
@@ -312,6 +313,8 @@ PYBIND11_MODULE(triadcal, m) {
   using namespace pybind11::literals;
   m.doc() = "triadcal: calibrate a MEMS accelerometer triad from a two-axis bench run";
   m.attr("__version__") = triadcal::ToolVersion();  // project()'s, core/version/version.h
+  // A damaged v7.3 file raises InputError without HDF5's report on stderr.
+  triadcal::SilenceMatioDiagnostics();
   static py::exception<triadcal::InputError> input_error(m, "InputError", PyExc_ValueError);
   py::register_exception_translator([](std::exception_ptr p) {
     try {

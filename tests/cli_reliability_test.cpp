@@ -594,9 +594,10 @@ TEST_F(MatElements, TextWhereDoublesAreDeclared) {
 }
 
 // A compressed element that holds no variable (a fuzzer's file): the walk
-// goes on to the next element (it looped on this one for ever), and matio
-// names what is wrong.
-TEST_F(MatElements, CompressedElementWithoutAVariableIsSkipped) {
+// does not loop on it (it looped on this one for ever) and names it: a
+// top-level compressed element holds one variable (matio said "Uncompressed
+// type not MAT_T_MATRIX" in its log, which the reader no longer captures).
+TEST_F(MatElements, CompressedElementWithoutAVariableIsRefused) {
   unsigned char inner[16] = {1, 0, 0, 0, 4, 0, 0, 0, 'a', 'b', 'c', 'd', 0, 0, 0, 0};  // miINT8
   uLongf packed_size = compressBound(sizeof(inner));
   std::vector<unsigned char> packed(packed_size);
@@ -608,7 +609,32 @@ TEST_F(MatElements, CompressedElementWithoutAVariableIsSkipped) {
   const CliResult r = FitMat(bytes_.substr(0, 128) + element + bytes_.substr(128));
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(r.err, "triadcal: error: " + Path("bad.mat") +
-                       ": damaged MATLAB file (matio: Uncompressed type not MAT_T_MATRIX)\n");
+                       ": damaged MATLAB file (element 1: its compressed data hold data type 1, "
+                       "not a variable (miMATRIX, 14))\n");
+}
+
+// A v7.3 file (HDF5 inside) cut short: HDF5 cannot open it and matio finds no
+// variable. One line, and nothing of HDF5's own report of the failure on
+// stderr (the command turns it off: SilenceMatioDiagnostics).
+TEST_F(MatElements, CutV73FileSaysDamagedOnOneLine) {
+  const RunData d = Simulate(testing_fixtures::PaperScenario(50.0, 20.0, 2.0, 15.0, 11));
+  mat_t* mat = Mat_CreateVer(Path("v73.mat").c_str(), nullptr, MAT_FT_MAT73);
+  ASSERT_NE(mat, nullptr);
+  std::vector<double> column = d.t_s;
+  std::size_t dims[2] = {column.size(), 1};
+  for (const char* name : {"t", "lambda1", "lambda2", "wx", "wy", "wz"}) {
+    matvar_t* var = Mat_VarCreate(name, MAT_C_DOUBLE, MAT_T_DOUBLE, 2, dims, column.data(),
+                                  MAT_F_DONT_COPY_DATA);
+    Mat_VarWrite(mat, var, MAT_COMPRESSION_NONE);
+    Mat_VarFree(var);
+  }
+  Mat_Close(mat);
+  const std::string whole = ReadFile(Path("v73.mat"));
+  const CliResult r = FitMat(whole.substr(0, whole.size() * 3 / 4));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err, "triadcal: error: " + Path("bad.mat") +
+                       ": damaged MATLAB file (a v7.3 file in which matio finds no variable: "
+                       "HDF5 cannot read it, cut short?)\n");
 }
 
 // A cell array whose dimensions say 6e12 elements in a file of a few KB:

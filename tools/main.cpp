@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 #include <glog/logging.h>
 
+#include "core/io/data_table.h"
 #include "core/io/file_util.h"
 #include "core/io/temporary_files.h"
 #include "core/model/errors.h"
@@ -92,6 +93,9 @@ int main(int argc, char** argv) {
   // are dropped; what matters comes back as an error or a warning line.
   FLAGS_minloglevel = google::GLOG_FATAL;
   FLAGS_logtostderr = false;
+  // Nor do matio's and HDF5's (a damaged v7.3 file): the reader's error says
+  // what is wrong, on one line.
+  triadcal::SilenceMatioDiagnostics();
 
   // What every command runs in: the provenance of its outputs (this binary,
   // this command line), --force, the process's temporaries, and its warnings

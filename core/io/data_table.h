@@ -51,7 +51,19 @@ DataTable ReadTextTable(const std::string& path, const std::vector<std::string>&
 
 // Reads the wanted variables of a MATLAB file (matio: v5, and v7.3 when matio
 // has HDF5). Each must be a real numeric vector (row or column) with the
-// length of the others. Missing variables are left out of `columns`.
+// length of the others. Missing variables are left out of `columns`. A
+// damaged file gives InputError("PATH: damaged MATLAB file (WHAT)"), WHAT
+// from the reader's own checks (the element or variable, and what is wrong):
+// matio's log has no place for the caller's state, so its messages are not
+// quoted.
 DataTable ReadMatTable(const std::string& path, const std::vector<std::string>& wanted);
+
+// Turns off what matio and the HDF5 library under it print on stderr (HDF5
+// prints a stack of errors for a damaged v7.3 file; matio 1.5 prints nothing
+// unless asked). Settings of those libraries for the whole process: call it
+// once, before reading, from the program (tools/main.cpp, the Python module);
+// a library caller that does not call it reads the same and gets the same
+// errors, with HDF5's report on stderr besides.
+void SilenceMatioDiagnostics();
 
 }  // namespace triadcal

@@ -1,5 +1,8 @@
 // Reader of MATLAB files through matio: the wanted variables, each a real
-// numeric vector, converted to double.
+// numeric vector, converted to double. What is damaged is found by the
+// reader's own checks (the v5 element walk, the declared sizes, what matio
+// returns) and said in its own words: matio's log hook is one C function for
+// the whole process, with no pointer of the caller's, so it is not captured.
 #include <matio.h>
 #include <zlib.h>
 
@@ -10,7 +13,6 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
-#include <mutex>
 #include <string>
 #include <vector>
 
@@ -102,33 +104,6 @@ std::string ToVector(const matvar_t& v, std::vector<double>* out) {
   return "";
 }
 
-// What matio logged while this thread reads a file (errors and warnings: a
-// damaged file). matio's log hook is one C function for the whole process,
-// with no pointer of the caller's; what it captures into is the reading's
-// own string, reached through this thread's pointer (set for one read only:
-// two threads reading MAT files, as `batch` does, each get their own log).
-thread_local std::string* t_mat_log = nullptr;
-
-void CaptureMatLog(int level, char* message) {
-  if (t_mat_log && level <= MATIO_LOG_LEVEL_WARNING && t_mat_log->empty() && message) {
-    *t_mat_log = message;
-  }
-}
-
-// Sets the matio log of this thread to *out for its lifetime (matio's
-// default prints to stderr); the hook is installed once.
-class MatLogCapture {
- public:
-  explicit MatLogCapture(std::string* out) {
-    static std::once_flag hook;
-    std::call_once(hook, [] { Mat_LogInitFunc("triadcal", &CaptureMatLog); });
-    t_mat_log = out;
-  }
-  ~MatLogCapture() { t_mat_log = nullptr; }
-  MatLogCapture(const MatLogCapture&) = delete;
-  MatLogCapture& operator=(const MatLogCapture&) = delete;
-};
-
 std::uint32_t ReadU32(const unsigned char* p, bool swap) {
   return swap ? (std::uint32_t(p[0]) << 24 | std::uint32_t(p[1]) << 16 |
                  std::uint32_t(p[2]) << 8 | p[3])
@@ -185,9 +160,9 @@ const char* TextTypeName(std::uint32_t type) {
 bool IsNumericClass(std::uint32_t c) { return c >= 6 && c <= 15; }
 
 const char* ArrayClassName(std::uint32_t c) {
-  static const char* names[] = {"?",      "cell",   "struct", "object", "char",  "sparse",
-                                "double", "single", "int8",   "uint8",  "int16", "uint16",
-                                "int32",  "uint32", "int64",  "uint64"};
+  static const char* const names[] = {"?",      "cell",   "struct", "object", "char",  "sparse",
+                                      "double", "single", "int8",   "uint8",  "int16", "uint16",
+                                      "int32",  "uint32", "int64",  "uint64"};
   return c < 16 ? names[c] : "?";
 }
 
@@ -475,7 +450,11 @@ void CheckMat5Elements(const std::string& path) {
       if (head.size() < 8) damaged(element, "", "its compressed data do not inflate");
       const std::uint32_t inner_type = ReadU32(head.data(), swap);
       const std::uint64_t inner = ReadU32(head.data() + 4, swap);
-      if (inner_type != kMiMatrix) continue;  // matio decides what else it reads
+      if (inner_type != kMiMatrix) {  // a compressed element holds one variable
+        damaged(element, "",
+                "its compressed data hold data type " + std::to_string(inner_type) +
+                    ", not a variable (miMATRIX, 14)");
+      }
       const long double room = static_cast<long double>(in.size()) * 1032.0L + 1024.0L;
       if (static_cast<long double>(inner) > room) {
         damaged(element, "",
@@ -547,10 +526,9 @@ void CheckMatHeader(const std::string& path) {
 DataTable ReadMatTable(const std::string& path, const std::vector<std::string>& wanted) {
   CheckInputFile(path);
   CheckMatHeader(path);
-  std::string log;
-  const MatLogCapture capture(&log);
   MatFile mat(Mat_Open(path.c_str(), MAT_ACC_RDONLY), &Mat_Close);
   if (!mat) throw InputError(path + ": not a MATLAB file that matio can read");
+  const bool v73 = Mat_GetVersion(mat.get()) == MAT_FT_MAT73;
   if (Mat_GetVersion(mat.get()) == MAT_FT_MAT5) CheckMat5Elements(path);
   const std::uintmax_t file_bytes = std::filesystem::file_size(path);
   DataTable table;
@@ -560,18 +538,28 @@ DataTable ReadMatTable(const std::string& path, const std::vector<std::string>& 
   if (char** dir = Mat_GetDir(mat.get(), &n_vars)) {
     for (std::size_t i = 0; i < n_vars; ++i) table.names.push_back(dir[i]);
   }
-  if (!log.empty()) throw InputError(path + ": damaged MATLAB file (matio: " + log + ")");
+  // A v7.3 file HDF5 cannot open (cut short, say) shows no variable at all.
+  if (v73 && table.names.empty()) {
+    throw InputError(path +
+                     ": damaged MATLAB file (a v7.3 file in which matio finds no variable: HDF5 "
+                     "cannot read it, cut short?)");
+  }
   std::string first;  // the first variable read, for length messages
   for (const std::string& name : wanted) {
     if (table.columns.count(name)) continue;
+    const bool listed =
+        std::find(table.names.begin(), table.names.end(), name) != table.names.end();
+    matio_classes class_type = MAT_C_EMPTY;
     {  // declared size against the file size before reading (deflate packs <= 1032:1)
       MatVar info(Mat_VarReadInfo(mat.get(), name.c_str()), &Mat_VarFree);
       if (!info) {
-        if (!log.empty()) {
-          throw InputError(path + ": damaged MATLAB file (matio: " + log + ")");
+        if (listed) {
+          throw InputError(path + ": damaged MATLAB file (variable '" + name +
+                           "': listed, but matio cannot read its header)");
         }
         continue;
       }
+      class_type = info->class_type;
       long double bytes = static_cast<long double>(ElementBytes(info->class_type));
       for (int d = 0; d < info->rank; ++d) bytes *= static_cast<long double>(info->dims[d]);
       const long double room = static_cast<long double>(file_bytes) *
@@ -585,11 +573,14 @@ DataTable ReadMatTable(const std::string& path, const std::vector<std::string>& 
       }
     }
     MatVar var(Mat_VarRead(mat.get(), name.c_str()), &Mat_VarFree);
-    if (!log.empty()) {
-      throw InputError(path + ": damaged MATLAB file (matio, reading variable '" + name +
-                       "': " + log + ")");
+    if (!var) {  // its header was read: a class matio does not read, or damaged data
+      if (!IsNumericClass(static_cast<std::uint32_t>(class_type))) {
+        throw InputError(path + ": variable '" + name + "': not numeric (class " +
+                         ClassName(class_type) + ")");
+      }
+      throw InputError(path + ": damaged MATLAB file (variable '" + name +
+                       "': matio cannot read its data)");
     }
-    if (!var) continue;
     std::vector<double> values;
     const std::string problem = ToVector(*var, &values);
     if (!problem.empty()) throw InputError(path + ": variable '" + name + "': " + problem);
@@ -604,5 +595,7 @@ DataTable ReadMatTable(const std::string& path, const std::vector<std::string>& 
   }
   return table;
 }
+
+void SilenceMatioDiagnostics() { Mat_LogClose(); }
 
 }  // namespace triadcal
