@@ -45,7 +45,7 @@ constexpr AngleEntry kAngles[] = {{"alpha_x", 1, 0}, {"alpha_y", 0, 1}, {"beta_x
 
 // The gyro block's parameters (gyro.Kx ...), in a few words.
 std::string GyroParameterPhrase(const std::string& n) {
-  static const char* axis[3] = {"x", "y", "z"};
+  static const char* const axis[3] = {"x", "y", "z"};
   const std::string b = n.substr(5);
   if (b.size() == 2 && b[0] == 'K') return "gyro scale factor " + n + " (gain of the " + b.substr(1) + " rate reading)";
   if (b.rfind("W0", 0) == 0) return "gyro bias " + n;
@@ -64,7 +64,7 @@ std::string GyroParameterPhrase(const std::string& n) {
 
 // What a parameter does, in a few words (base parameters; effects by name).
 std::string ParameterPhrase(const std::string& n) {
-  static const char* axis[3] = {"x", "y", "z"};
+  static const char* const axis[3] = {"x", "y", "z"};
   if (n.rfind("gyro.", 0) == 0) return GyroParameterPhrase(n);
   if (n.size() == 2 && n[0] == 'K' && n[1] >= 'x' && n[1] <= 'z') {
     return "scale factor " + n + " (gain of the " + n.substr(1) + " reading)";
