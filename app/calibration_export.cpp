@@ -108,6 +108,9 @@ void RefuseUncarried(const Calibration& cal) {
 }  // namespace
 
 bool ExportCarries(const EffectSpec& effect) {
+  // The gyro's effects make its correction nonlinear in the readings: the
+  // exported forms (a matrix and an offset) cannot hold them; apply does.
+  if (effect.stage == EffectStage::kGyro) return false;
   if (effect.stage != EffectStage::kSensor) return true;  // does not act on W: left out
   switch (effect.zero_offset_signal) {
     case ZeroOffsetSignal::kTime_s:      // kDriftPerS * t_s

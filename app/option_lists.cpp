@@ -41,6 +41,11 @@ std::vector<Effect> ParseEffectList(const std::string& list, const RunData& data
                        " needs a temp_C column, which this run does not have (columns.temp_C "
                        "in run.yaml)");
     }
+    if (spec.stage == EffectStage::kGyro && !data.has_gyro()) {
+      throw InputError(option + ": " + spec.name +
+                       " acts on the gyro, which this run does not have (gx gy gz columns and a "
+                       "gyro block in run.yaml)");
+    }
   }
   return effects;
 }

@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -16,6 +17,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/io/file_util.h"
@@ -28,6 +30,7 @@
 namespace triadcal {
 namespace {
 
+namespace fs = std::filesystem;
 using testing_fixtures::RunTriadcal;
 
 // Every gyro parameter non-zero; no noise anywhere (the angles, readings and
@@ -43,12 +46,12 @@ const char kGyroTruth[] =
     "        gyro.Gxx: 0.02, gyro.Gxy: 0.05, gyro.Gxz: -0.03, gyro.Gyx: 0.01, gyro.Gyy: -0.04,\n"
     "        gyro.Gyz: 0.02, gyro.Gzx: -0.01, gyro.Gzy: 0.03, gyro.Gzz: 0.06}\n";
 
-std::string ScenarioText(bool gyro) {
+std::string ScenarioText(bool gyro, const std::string& effects = "") {
   return std::string(
              "seed: 3\n"
              "profile: {amplitude_deg: [360, 90], period_s: [30, 12], duration_s: 20, "
              "rate_hz: 50}\n") +
-         (gyro ? kGyroTruth : "truth: {Kx: 171.5}\n") +
+         effects + (gyro ? kGyroTruth : "truth: {Kx: 171.5}\n") +
          "noise: {accel_mV: 0, angle_arcsec: 0" + (gyro ? ", gyro_dps: 0" : "") +
          "}\n"
          "run:\n"
@@ -98,8 +101,8 @@ class CliGyroApply : public testing_fixtures::TempDirTest {
   std::string Err() const { return Path("err.txt"); }
 
   // Simulates the scenario into DIR; returns DIR/run.yaml.
-  std::string Simulate(bool gyro, const std::string& dir) {
-    const std::string scen = WriteText(dir + ".yaml", ScenarioText(gyro));
+  std::string Simulate(bool gyro, const std::string& dir, const std::string& effects = "") {
+    const std::string scen = WriteText(dir + ".yaml", ScenarioText(gyro, effects));
     const auto r = RunTriadcal("simulate " + scen + " -o " + Path(dir), Err());
     EXPECT_EQ(r.status, 0) << r.err;
     return Path(dir + "/run.yaml");
@@ -148,6 +151,63 @@ TEST_F(CliGyroApply, CorrectedRatesAreTheTrueInputRate) {
   // (The raw readings differ from the rate by the biases alone by 0.2 deg/s.)
   EXPECT_LE(worst_dps, 1e-9);
   EXPECT_GT(largest_dps, 10.0);  // the bench turns
+}
+
+// The gyro's effects (gyro_model.h) injected by simulate: apply inverts them
+// with the rest of the readings model, to rounding; export, whose forms are a
+// matrix and an offset, refuses them by name in one line, writing nothing.
+const char kGyroEffects[] =
+    "effects: {gyro_scale_asymmetry: {dKx: 3000, dKy: -2000, dKz: 1500},\n"
+    "          gyro_nonlinearity: {k2_x: 0.3, k2_y: -0.2, k2_z: 0.5}}\n";
+
+TEST_F(CliGyroApply, GyroEffectsAreAppliedAndExportRefusesThem) {
+  const std::string run = Simulate(true, "sim", kGyroEffects);
+  std::string err;
+  const Applied a = Apply(Path("sim/truth.json"), run, "w.csv", &err);
+  EXPECT_EQ(err, "");
+  Scenario s = LoadScenario(Path("sim.yaml"));
+  const ModelConfig cfg = TruthModelConfig(s);
+  ASSERT_TRUE(cfg.layout.has(Effect::kGyroScaleAsymmetry));
+  ASSERT_TRUE(cfg.layout.has(Effect::kGyroNonlinearity));
+  const std::vector<double>& t = a.columns.at("t");
+  ASSERT_EQ(t.size(), s.profile.NumSamples());
+  double worst_dps = 0.0, worst_without_dps = 0.0;
+  // The same readings corrected as if the effects were not there.
+  Eigen::VectorXd plain = s.truth;
+  for (Effect e : {Effect::kGyroScaleAsymmetry, Effect::kGyroNonlinearity}) {
+    for (int q = 0; q < 3; ++q) plain[cfg.layout.offset(e) + q] = 0.0;
+  }
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    const BenchAngles<double> bench = s.profile.At(t[k]);
+    const BenchMotion<double> m = ComputeBenchMotion(cfg, s.truth.data(), bench);
+    const Eigen::Vector3d w = GyroInputRate_2(cfg, s.truth.data(), bench, m.C_L2);
+    const Eigen::Vector3d W = SpecificForce_g(cfg, m.C_L2,
+                                              MotionOfPoint(m, LeverArm_m(cfg, s.truth.data())).a_L);
+    const Eigen::Vector3d G = GyroReadings(cfg, s.truth.data(), w, W);
+    const Eigen::Vector3d w_plain = GyroRateFromReadings(cfg, plain.data(), G, W);
+    const std::vector<double>* omega[3] = {&a.columns.at("omega_x"), &a.columns.at("omega_y"),
+                                           &a.columns.at("omega_z")};
+    for (int i = 0; i < 3; ++i) {
+      worst_dps = std::max(worst_dps, std::abs((*omega[i])[k] - w[i] / kDegToRad));
+      worst_without_dps = std::max(worst_without_dps, std::abs(w_plain[i] - w[i]) / kDegToRad);
+    }
+  }
+  std::printf("apply with the gyro effects: worst %.3g deg/s (without them %.3g deg/s)\n",
+              worst_dps, worst_without_dps);
+  EXPECT_LE(worst_dps, 1e-9);
+  EXPECT_GT(worst_without_dps, 0.1);  // the effects matter at this size
+  for (const auto& [format, file] : std::vector<std::pair<std::string, std::string>>{
+           {"c", "cal.c"}, {"yaml", "cal.yaml"}, {"json-matrix", "cal.json"}}) {
+    const auto r =
+        RunTriadcal("export " + Path("sim/truth.json") + " --format " + format + " -o " +
+                        Path(file),
+                    Err());
+    EXPECT_EQ(r.status, 2) << format;
+    EXPECT_EQ(CountLines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("gyro_scale_asymmetry"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(Path(file))) << format;
+    EXPECT_FALSE(fs::exists(Path("cal.h"))) << format;
+  }
 }
 
 TEST_F(CliGyroApply, CalibrationWithTheGyroOnARunWithoutOne) {

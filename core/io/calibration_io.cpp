@@ -244,6 +244,13 @@ Calibration CalibrationFrom(const ParametersFile& file, const std::string& path)
     }
     return std::string();
   }();
+  for (Effect e : effects) {
+    if (GetEffectSpec(e).stage == EffectStage::kGyro && gyro_given.empty()) {
+      throw InputError(file.At() + GetEffectSpec(e).name +
+                       ": a gyro effect without the gyro's parameters (gyro.Kx..gyro.Gzz, SPEC "
+                       "section 10)");
+    }
+  }
   cal.layout = ParameterLayout(effects, /*gyro=*/!gyro_given.empty());
   cal.theta = Eigen::VectorXd::Zero(cal.layout.size());
   std::string unit_from;  // the entry that set cal.readings_unit

@@ -188,6 +188,39 @@ const std::vector<EffectSpec>& EffectCatalogue() {
       e.zero_offset_signal = ZeroOffsetSignal::kTimeCurvature_s2;
       c.push_back(e);
     }
+    {
+      // G_i = K_i m_i + dK_i |m_i| + W0_i + (G W)_i (gyro_model.h), dK in the
+      // gyro scale's unit (1, readings per input rate) x 1e-6.
+      EffectSpec e{Effect::kGyroScaleAsymmetry,
+                   "gyro_scale_asymmetry",
+                   "gyro scale K_i + dK_i for positive input rate, K_i - dK_i for negative",
+                   EffectStage::kGyro,
+                   {{"dKx", "ppm", 1e-6, 5000.0, -50000.0, 50000.0, 1000.0},
+                    {"dKy", "ppm", 1e-6, 5000.0, -50000.0, 50000.0, 1000.0},
+                    {"dKz", "ppm", 1e-6, 5000.0, -50000.0, 50000.0, 1000.0}}};
+      e.plausible_reason =
+          "MEMS gyros give a scale asymmetry below 0.5 % (datasheets: 'scale factor "
+          "asymmetry'); 5 % is a damaged or saturating sensor";
+      e.b1_analytic_jacobian = true;  // the accelerometer's residual does not depend on it
+      c.push_back(e);
+    }
+    {
+      // Scale K_i (1 + k2_i m_i^2): G_i = K_i m_i (1 + k2_i m_i^2) + ...; k2 in
+      // ppm per (deg/s)^2 (0.01: 900 ppm of scale at 300 deg/s).
+      constexpr double kPpmPerDps2 = 1e-6 / (kDegToRad * kDegToRad);
+      EffectSpec e{Effect::kGyroNonlinearity,
+                   "gyro_nonlinearity",
+                   "gyro scale rises with the input rate squared: K_i (1 + k2_i m_i^2)",
+                   EffectStage::kGyro,
+                   {{"k2_x", "ppm/(deg/s)^2", kPpmPerDps2, 0.1, -1.0, 1.0, 0.01},
+                    {"k2_y", "ppm/(deg/s)^2", kPpmPerDps2, 0.1, -1.0, 1.0, 0.01},
+                    {"k2_z", "ppm/(deg/s)^2", kPpmPerDps2, 0.1, -1.0, 1.0, 0.01}}};
+      e.plausible_reason =
+          "MEMS gyros give a scale nonlinearity of 0.1-0.2 % of full scale (0.01 ppm/(deg/s)^2 "
+          "is 900 ppm at 300 deg/s); 1 ppm/(deg/s)^2 is 9 % at 300 deg/s";
+      e.b1_analytic_jacobian = true;  // the accelerometer's residual does not depend on it
+      c.push_back(e);
+    }
     return c;
   }();
   return catalogue;
@@ -201,6 +234,8 @@ const char* StageName(EffectStage stage) {
       return "geometry";
     case EffectStage::kSensor:
       return "sensor";
+    case EffectStage::kGyro:
+      return "gyro";
   }
   return "?";
 }

@@ -21,6 +21,7 @@
 //   bench angles --[angle stage]--> recorded angles
 //   bench angles --[geometry stage]--> motion of the sensing points
 //   specific force --[sensor stage]--> readings
+//   input rate --[gyro stage]--> gyro readings (only with the gyro block)
 //
 // angle stage
 //   angle_latency      lambda_rec(t) = lambda(t - tau)                 tau [ms]
@@ -46,6 +47,14 @@
 //                      that the paper's K_ij (every term has W_i) lack (IEEE Std
 //                      1293's K_pp - K_oo and K_po; K_pp + K_oo is W0_i and K_ii
 //                      while |W| = 1 g)                                [1/g]
+// gyro stage (the gyro's readings model, gyro_model.h; read only when the layout
+// has the gyro block)
+//   gyro_scale_asymmetry  G_i = K_i m_i + dK_i |m_i| + ...: scale K_i + dK_i for
+//                         positive input rate, K_i - dK_i for negative     [ppm]
+//   gyro_nonlinearity     scale K_i (1 + k2_i m_i^2): the scale factor's quadratic
+//                         term in rate (IEEE Std 952's K_2-of-scale, an odd, cubic
+//                         term of the output)                    [ppm/(deg/s)^2]
+//                         (m = Mg w, the misaligned input rate)
 #pragma once
 
 #include <string>
@@ -65,11 +74,14 @@ enum class Effect {
   kAngleScale,
   kCrossQuadratic,
   kThermalDriftQuadratic,
+  kGyroScaleAsymmetry,
+  kGyroNonlinearity,
 };
-constexpr int kNumEffects = 11;
+constexpr int kNumEffects = 13;
 
 // Where in the measurement chain an effect acts (see the diagram above).
-enum class EffectStage { kAngle, kGeometry, kSensor };
+enum class EffectStage { kAngle, kGeometry, kSensor, kGyro };
+constexpr int kNumEffectStages = 4;
 const char* StageName(EffectStage stage);
 
 // A sensor-stage effect that adds to the zero offsets as

@@ -22,6 +22,18 @@
 // specific force at O in g (bench_model.h). Inverse (exact: linear in w):
 //
 //   w_2 = Mg^-1 diag(K)^-1 (G - W0 - G W)
+//
+// The gyro-stage effects (effects.h) change the per-axis response to m = Mg w:
+//
+//   G_i = f_i(m_i) + W0_i + sum_j G_ij W_j,
+//   f_i(m) = K_i m (1 + k2_i m^2) + dK_i |m|
+//
+// (dK_i: gyro_scale_asymmetry, k2_i: gyro_nonlinearity, each 0 when off).
+// Inverse per axis, u_i = G_i - W0_i - (G W)_i: m takes the sign s of u / K
+// (f is monotonic while |dK| < |K|), and without k2 m = u / (K + s dK) exactly;
+// with k2, Newton's steps on K m + K k2 m^3 + s dK m = u from that start (k2 m^2
+// below 0.1 on any plausible gyro: the error squares each step, rounding after
+// 5, GyroAxisRate takes 6). Then w_2 = Mg^-1 m.
 #pragma once
 
 #include <Eigen/Core>
@@ -71,6 +83,41 @@ Vec3<T> GyroInputRate_2(const ModelConfig& cfg, const T* theta, const BenchAngle
   return w;
 }
 
+// Axis i's response coefficients: K_i, the effects' dK_i and k2_i (0 when off).
+template <typename T>
+struct GyroAxisResponse {
+  T K, dK, k2;
+  bool nonlinear;  // gyro_nonlinearity is on (k2 may be 0 and still be differentiated)
+};
+template <typename T>
+GyroAxisResponse<T> GyroAxis(const ParameterLayout& layout, const T* theta, int i) {
+  const int o_a = layout.offset(Effect::kGyroScaleAsymmetry);
+  const int o_q = layout.offset(Effect::kGyroNonlinearity);
+  return {theta[layout.gyro_offset() + kGKx + i], o_a >= 0 ? theta[o_a + i] : T(0.0),
+          o_q >= 0 ? theta[o_q + i] : T(0.0), o_q >= 0};
+}
+
+// f_i(m) above, without bias and g-sensitivity.
+template <typename T>
+T GyroAxisReading(const GyroAxisResponse<T>& a, const T& m) {
+  using std::abs;
+  return a.K * m * (T(1.0) + a.k2 * m * m) + a.dK * abs(m);
+}
+
+// Its inverse: u -> m (exact without k2; Newton's steps to rounding with it).
+template <typename T>
+T GyroAxisRate(const GyroAxisResponse<T>& a, const T& u) {
+  const T s = (u < T(0.0)) != (a.K < T(0.0)) ? T(-1.0) : T(1.0);  // m's sign
+  const T lin = a.K + s * a.dK;  // the scale on u's side
+  T m = u / lin;
+  if (!a.nonlinear) return m;
+  for (int step = 0; step < 6; ++step) {
+    const T Kk2 = a.K * a.k2;
+    m -= (lin * m + Kk2 * m * m * m - u) / (lin + T(3.0) * Kk2 * m * m);
+  }
+  return m;
+}
+
 // Input rate [rad/s] and specific force at O [g] -> gyro readings [rad/s].
 template <typename T>
 Vec3<T> GyroReadings(const ModelConfig& cfg, const T* theta, const Vec3<T>& w_2,
@@ -78,17 +125,20 @@ Vec3<T> GyroReadings(const ModelConfig& cfg, const T* theta, const Vec3<T>& w_2,
   const T* g = theta + cfg.layout.gyro_offset();
   const Vec3<T> m = GyroMisalignmentMatrix(g) * w_2;
   Vec3<T> out;
-  for (int i = 0; i < 3; ++i) out[i] = g[kGKx + i] * m[i] + g[kGW0x + i];
+  for (int i = 0; i < 3; ++i) {
+    out[i] = GyroAxisReading(GyroAxis(cfg.layout, theta, i), m[i]) + g[kGW0x + i];
+  }
   return out + GyroGSensitivity(g) * W_g;
 }
 
-// Exact inverse: gyro readings [rad/s] and W [g] -> input rate in frame 2 [rad/s].
+// Its inverse (exact, or to rounding with gyro_nonlinearity): gyro readings
+// [rad/s] and W [g] -> input rate in frame 2 [rad/s].
 template <typename T>
 Vec3<T> GyroRateFromReadings(const ModelConfig& cfg, const T* theta, const Vec3<T>& readings,
                              const Vec3<T>& W_g) {
   const T* g = theta + cfg.layout.gyro_offset();
   Vec3<T> u = readings - GyroGSensitivity(g) * W_g;
-  for (int i = 0; i < 3; ++i) u[i] = (u[i] - g[kGW0x + i]) / g[kGKx + i];
+  for (int i = 0; i < 3; ++i) u[i] = GyroAxisRate(GyroAxis(cfg.layout, theta, i), u[i] - g[kGW0x + i]);
   return GyroMisalignmentMatrix(g).inverse() * u;
 }
 

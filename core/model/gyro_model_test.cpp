@@ -53,6 +53,61 @@ TEST(GyroModel, RateFromReadingsInvertsReadingsAtRandomParameters) {
   }
 }
 
+// The gyro-stage effects (scale asymmetry up to 3 % of |K|, k2 up to 0.05 of
+// scale at 1000 deg/s, either sign): the inverse's Newton steps reach the
+// forward model's input rate to rounding, both ways, on both signs of every
+// axis's rate.
+TEST(GyroModel, RateFromReadingsInvertsReadingsWithGyroEffects) {
+  std::mt19937_64 rng(12);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 200; ++trial) {
+    GyroSetup s = RandomGyro(rng);
+    s.cfg.layout = ParameterLayout({Effect::kAngleLatency, Effect::kGyroScaleAsymmetry,
+                                    Effect::kEncoderHarmonic, Effect::kGyroNonlinearity},
+                                   true);
+    const Eigen::VectorXd g_block = s.theta.tail(kNumGyroParams);
+    s.theta = Eigen::VectorXd::Zero(s.cfg.layout.size());
+    s.theta.tail(kNumGyroParams) = g_block;
+    const int o_a = s.cfg.layout.offset(Effect::kGyroScaleAsymmetry);
+    const int o_q = s.cfg.layout.offset(Effect::kGyroNonlinearity);
+    const double m_max = 1000 * kDegToRad;
+    for (int i = 0; i < 3; ++i) {
+      s.theta[o_a + i] = 0.03 * std::abs(g_block[kGKx + i]) * u(rng);
+      s.theta[o_q + i] = 0.05 / (m_max * m_max) * u(rng);
+    }
+    const Eigen::Vector3d w_2(300 * kDegToRad * n(rng), 300 * kDegToRad * n(rng),
+                              300 * kDegToRad * n(rng));  // rad/s
+    const Eigen::Vector3d W_g(n(rng), n(rng), n(rng));
+    const Eigen::Vector3d g = GyroReadings(s.cfg, s.theta.data(), w_2, W_g);
+    const Eigen::Vector3d back = GyroRateFromReadings(s.cfg, s.theta.data(), g, W_g);
+    EXPECT_LT((back - w_2).cwiseAbs().maxCoeff(), 1e-12 * std::max(1.0, w_2.norm())) << trial;
+    const Eigen::Vector3d again = GyroReadings(
+        s.cfg, s.theta.data(), GyroRateFromReadings(s.cfg, s.theta.data(), g, W_g), W_g);
+    EXPECT_LT((again - g).cwiseAbs().maxCoeff(), 1e-12 * std::max(1.0, g.norm())) << trial;
+  }
+}
+
+// Each effect alone, at one axis: the scale is K + dK for a positive rate and
+// K - dK for a negative one; with k2 it is K (1 + k2 m^2).
+TEST(GyroModel, GyroEffectsGiveTheirScales) {
+  ModelConfig cfg;
+  cfg.layout = ParameterLayout({Effect::kGyroScaleAsymmetry, Effect::kGyroNonlinearity}, true);
+  Eigen::VectorXd th = Eigen::VectorXd::Zero(cfg.layout.size());
+  const int go = cfg.layout.gyro_offset();
+  for (int i = 0; i < 3; ++i) th[go + kGKx + i] = 1.0;
+  SetFromFileUnits(cfg.layout,
+                   {{"gyro_scale_asymmetry.dKx", 2000.0}, {"gyro_nonlinearity.k2_y", 0.01}}, &th);
+  const Eigen::Vector3d W = Eigen::Vector3d::Zero();
+  const double r = 100 * kDegToRad;
+  EXPECT_NEAR(GyroReadings<double>(cfg, th.data(), Eigen::Vector3d(r, 0, 0), W).x() / r, 1.002,
+              1e-12);
+  EXPECT_NEAR(GyroReadings<double>(cfg, th.data(), Eigen::Vector3d(-r, 0, 0), W).x() / -r, 0.998,
+              1e-12);
+  EXPECT_NEAR(GyroReadings<double>(cfg, th.data(), Eigen::Vector3d(0, -r, 0), W).y() / -r,
+              1.0 + 0.01e-6 * 100 * 100, 1e-12);
+}
+
 // With a nominal gyro (scale 1, nothing else) and no Earth's rate the
 // readings are the input rate, whose magnitude is sqrt(lambda1'^2 +
 // lambda2'^2) and whose x component is lambda2', whatever the angles.

@@ -59,6 +59,13 @@ Eigen::MatrixXd MountingMap(const RunDescription& run, const ParameterLayout& la
   }
   for (Effect e : layout.effects()) {
     const EffectSpec& spec = GetEffectSpec(e);
+    if (spec.stage == EffectStage::kGyro) {
+      // Platform reading i = s_i x IMU reading a with m_i = s_i m_a: s_i (K m_a +
+      // dK |m_a|) = K m_i + s_i dK |m_i|, and K m (1 + k2 m^2) keeps k2.
+      const int o = layout.offset(e);
+      T.block<3, 3>(o, o) = e == Effect::kGyroNonlinearity ? Pabs : P;
+      continue;
+    }
     if (spec.stage != EffectStage::kSensor) continue;
     if (e == Effect::kCrossQuadratic) {
       // Platform reading i is s_i times IMU reading a = source(i); IMU a's
@@ -106,7 +113,9 @@ bool IsTriadParameter(const ParameterLayout& layout, int i) {
   if (i < kDpsi) return true;
   if (i < kNumBaseParams) return false;
   if (layout.is_gyro(i)) return true;
-  return layout.info(i).effect && GetEffectSpec(*layout.info(i).effect).stage == EffectStage::kSensor;
+  if (!layout.info(i).effect) return false;
+  const EffectStage s = GetEffectSpec(*layout.info(i).effect).stage;
+  return s == EffectStage::kSensor || s == EffectStage::kGyro;
 }
 
 }  // namespace triadcal

@@ -25,7 +25,7 @@ namespace triadcal {
 // sensor-stage effect has no per-axis form.
 Eigen::MatrixXd MountingMap(const RunDescription& run, const ParameterLayout& layout);
 
-// True for the 21 triad parameters, the sensor-stage effects and the gyro
+// True for the 21 triad parameters, the sensor- and gyro-stage effects and the gyro
 // block: what belongs to the IMU rather than to the bench or the set-up.
 bool IsTriadParameter(const ParameterLayout& layout, int index);
 

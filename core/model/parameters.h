@@ -71,6 +71,8 @@ std::string InReadingsUnit(const std::string& unit, const std::string& readings_
 class ParameterLayout {
  public:
   ParameterLayout();  // base parameters only, readings in mV
+  // Effects of the gyro stage act only with the gyro block (without it their
+  // parameters are in theta but no model reads them; the commands refuse them).
   explicit ParameterLayout(const std::vector<Effect>& effects, bool gyro = false,
                            const std::string& readings_unit = kDefaultReadingsUnit);
   // The same parameters with the gyro block on or off.
@@ -121,8 +123,8 @@ class ParameterLayout {
   std::vector<ParameterInfo> info_;
   int offset_[kNumEffects];
   int gyro_offset_ = -1;
-  bool has_stage_[3] = {false, false, false};
-  std::vector<int> stage_params_[3];  // StageParams, made with the layout
+  bool has_stage_[kNumEffectStages] = {false, false, false, false};
+  std::vector<int> stage_params_[kNumEffectStages];  // StageParams, made with the layout
   std::vector<ZeroOffsetTerm> zero_offset_terms_;
   std::map<std::string, int> index_;
 };

@@ -342,7 +342,13 @@ Scenario LoadScenario(const std::string& yaml_path) {
   const std::vector<InjectedEffect> effects =
       ParseEffects(section("effects"), top.Child("effects"));
   std::vector<Effect> ids;
-  for (const InjectedEffect& e : effects) ids.push_back(e.id);
+  for (const InjectedEffect& e : effects) {
+    if (GetEffectSpec(e.id).stage == EffectStage::kGyro && !s.run.gyro) {
+      top.Child("effects").Fail(GetEffectSpec(e.id).name +
+                                " acts on the gyro, but the scenario has no run.gyro block");
+    }
+    ids.push_back(e.id);
+  }
   s.truth_layout = ParameterLayout(ids, /*gyro=*/s.run.gyro.has_value());
   s.truth = ParseTruth(section("truth"), top.Child("truth"), s.run, s.truth_layout, effects);
 

@@ -541,7 +541,11 @@ TEST(ScenarioErrors, EveryBadInputNamesFileKeyAndProblem) {
       {"effects: {angle_lag: {tau_ms: 2}}\n",
        f + ": effects: unknown effect 'angle_lag' (known: angle_latency, encoder_harmonic, "
            "axis_nonintersection, axis_nonperpendicularity, size_effect, thermal_drift, "
-           "thermal_drift_temp, scale_asymmetry, angle_scale, cross_quadratic, thermal_drift_quadratic)"},
+           "thermal_drift_temp, scale_asymmetry, angle_scale, cross_quadratic, "
+           "thermal_drift_quadratic, gyro_scale_asymmetry, gyro_nonlinearity)"},
+      {"effects: {gyro_nonlinearity: {k2_x: 0.1}}\n",
+       f + ": effects: gyro_nonlinearity acts on the gyro, but the scenario has no run.gyro "
+           "block"},
       {"effects: {angle_latency: {tau_s: 2}}\n",
        f + ": effects.angle_latency.tau_s: unknown key (allowed: tau, tau_ms)"},
       {"effects: {angle_latency: {tau: 2, tau_ms: 2}}\n",

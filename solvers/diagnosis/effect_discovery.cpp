@@ -139,6 +139,10 @@ std::vector<Effect> CatalogueCandidates(const RunData& data, const std::vector<E
       data.has_temp() && std::abs(Correlation(data.t_s, data.temp_C)) > 0.99;
   for (const EffectSpec& e : EffectCatalogue()) {
     if (std::find(current.begin(), current.end(), e.id) != current.end()) continue;
+    // The loop's score tests and likelihood ratios are the accelerometer's
+    // (effect_information.cpp): the gyro's effects are not candidates yet; a
+    // fit takes them with --effects.
+    if (e.stage == EffectStage::kGyro) continue;
     if (e.needs.temp_C && !data.has_temp()) continue;
     if (e.zero_offset_signal == ZeroOffsetSignal::kTime_s && temp_linear_in_time) {
       const std::string same = SameZeroOffsetSignal(ZeroOffsetSignal::kTempRise_C);

@@ -53,6 +53,9 @@ Scenario InjectTypical(const EffectSpec& e, std::uint64_t seed) {
 
 TEST(EffectRecovery, EveryRegisteredEffectIsRecoveredWithinItsSigma) {
   for (const EffectSpec& e : EffectCatalogue()) {
+    // The gyro's effects need a run with a gyro: gyro_term_test.cpp
+    // (FitRecoversEachGyroEffect).
+    if (e.stage == EffectStage::kGyro) continue;
     SCOPED_TRACE("effect " + e.name);
     double sum_z2 = 0.0, worst = 0.0;
     int n = 0;
@@ -116,6 +119,36 @@ TEST(EffectNeeds, FitRefusesAnEffectWhoseDataTheRunLacks) {
                        "run.yaml)\n");
   }
   EXPECT_GT(tested, 0);
+}
+
+// The gyro's effects on a run without a gyro: one line, exit 2, no output.
+TEST(EffectNeeds, FitRefusesAGyroEffectOnARunWithoutAGyro) {
+  namespace fs = std::filesystem;
+  const fs::path dir = testing_fixtures::OwnTempDir("effect_needs_gyro");
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string bin = TRIADCAL_BIN;
+  const std::string scen = std::string(TRIADCAL_SOURCE_DIR) + "/examples/noise-free/scenario.yaml";
+  ASSERT_EQ(
+      std::system(
+          (bin + " simulate " + scen + " -o " + (dir / "run").string() + " > /dev/null").c_str()),
+      0);
+  int tested = 0;
+  for (const EffectSpec& e : EffectCatalogue()) {
+    if (e.stage != EffectStage::kGyro) continue;
+    ++tested;
+    const std::string cmd = bin + " fit " + (dir / "run" / "run.yaml").string() + " -o " +
+                            (dir / "out.json").string() + " --effects " + e.name + " 2> " +
+                            (dir / "err.txt").string() + " > /dev/null";
+    EXPECT_EQ(WEXITSTATUS(std::system(cmd.c_str())), 2) << e.name;
+    EXPECT_FALSE(fs::exists(dir / "out.json"));
+    std::ifstream in(dir / "err.txt");
+    const std::string err((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(err, "triadcal: error: --effects: " + e.name +
+                       " acts on the gyro, which this run does not have (gx gy gz columns and a "
+                       "gyro block in run.yaml)\n");
+  }
+  EXPECT_EQ(tested, 2);
 }
 
 }  // namespace

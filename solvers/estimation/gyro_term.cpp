@@ -139,10 +139,12 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
   const std::size_t count_in = std::min(count, E - 1 - first);
 
   const Mat3d Mg_inv = GyroMisalignmentMatrix(g).inverse();
-  Mat3d A = Mg_inv;  // Mg^-1 diag(K)^-1
-  for (int i = 0; i < 3; ++i) A.col(i) /= g[kGKx + i];
   const Mat3d Gs = GyroGSensitivity(g);
   const bool earth = !cfg.earth_rate_L.isZero();
+  // The gyro-stage effects (gyro_model.h): their first indices, or -1.
+  const int o_a = cfg.layout.offset(Effect::kGyroScaleAsymmetry);
+  const int o_q = cfg.layout.offset(Effect::kGyroNonlinearity);
+  const bool gyro_fx = o_a >= 0 || o_q >= 0;
 
   GyroPass pass;
   pass.theta = theta;
@@ -205,6 +207,7 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
     Eigen::Matrix<double, 3, 9> JI = Eigen::Matrix<double, 3, 9>::Zero();
     Eigen::Matrix<double, 3, kAngleJet> Ja = Eigen::Matrix<double, 3, kAngleJet>::Zero();
     Eigen::Matrix<double, 3, kSensorJet> Js = Eigen::Matrix<double, 3, kSensorJet>::Zero();
+    Eigen::Matrix<double, 3, 6> Je = Eigen::Matrix<double, 3, 6>::Zero();  // dK, k2 columns
     std::array<double, 6> mom = {0, 0, 0, 0, 0, 0};
     for (std::size_t k = k0; k <= k1; ++k) {
       const double w = TrapezoidWeight(d, k0, k1, k);
@@ -223,7 +226,20 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
         W = SpecificForceFromReadings_g<double>(cfg, th, d.readings_mV(k), ctx);
       }
       const Vec3d y = d.gyro(k) - Vec3d(g[kGW0x], g[kGW0y], g[kGW0z]) - Gs * W;
-      Vec3d rate = A * y;
+      // m = f^-1(y) per axis (gyro_model.h; m = y / K without gyro effects) and
+      // f'(m), which takes K's place in the derivatives.
+      Vec3d m_axes, slope = Vec3d(g[kGKx], g[kGKy], g[kGKz]);
+      if (gyro_fx) {
+        for (int i = 0; i < 3; ++i) {
+          const GyroAxisResponse<double> ax = GyroAxis(cfg.layout, th, i);
+          m_axes[i] = GyroAxisRate(ax, y[i]);
+          slope[i] = ax.K * (1.0 + 3.0 * ax.k2 * m_axes[i] * m_axes[i]) +
+                     (m_axes[i] < 0.0 ? -ax.dK : ax.dK);
+        }
+      } else {
+        m_axes = y.cwiseQuotient(slope);
+      }
+      Vec3d rate = Mg_inv * m_axes;
       if (earth) {
         const double l1 = d.lambda_rad[0][k] + th[kDthetaC];
         const double l2 = d.lambda_rad[1][k] + th[kDlambda2];
@@ -235,15 +251,19 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
       r += w * (P * rate);
       AddMoments(d, k, w * w, &mom);
       if (!with_jacobian) continue;
-      const Mat3d PA = w * P * A;
       const Mat3d PM = w * P * Mg_inv;
+      const Mat3d PA = PM * slope.cwiseInverse().asDiagonal();  // w P Mg^-1 diag(f')^-1
       Js.noalias() -= (PA * Gs) * dW;
       for (int i = 0; i < 3; ++i) {
+        // dm_i / d p = -(df_i / d p) / f'_i for p = K_i, dK_i, k2_i.
+        const double mi = m_axes[i];
         Jl.col(kGW0x + i) -= PA.col(i);
-        Jl.col(kGKx + i) -= PA.col(i) * (y[i] / g[kGKx + i]);
+        Jl.col(kGKx + i) -= PA.col(i) * (mi * (1.0 + (o_q >= 0 ? th[o_q + i] * mi * mi : 0.0)));
+        if (o_a >= 0) Je.col(i) -= PA.col(i) * std::abs(mi);
+        if (o_q >= 0) Je.col(3 + i) -= PA.col(i) * (g[kGKx + i] * mi * mi * mi);
         for (int j = 0; j < 3; ++j) Jl.col(kGGxx + 3 * i + j) -= PA.col(i) * W[j];
       }
-      const Vec3d w_dps = A * y;  // the gyro's rate before Earth's is taken off
+      const Vec3d w_dps = Mg_inv * m_axes;  // the gyro's rate before Earth's is taken off
       for (int a = 0; a < 6; ++a) {
         const AngleEntry& en = kAngleEntries[a];
         Jl.col(kGAlphaX + a) -= PM.col(en.row) * (en.sign * w_dps[en.col]);
@@ -281,6 +301,10 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
       J.col(kDlambda2) = Jl.col(kLocalDlambda2);
       for (int q = 0; q < na; ++q) J.col(angle_idx[q]) = Ja.col(q);
       for (int q = 0; q < ns; ++q) J.col(sensor_idx[q]) += Js.col(q);
+      for (int i = 0; i < 3; ++i) {
+        if (o_a >= 0) J.col(o_a + i) = Je.col(i);
+        if (o_q >= 0) J.col(o_q + i) = Je.col(3 + i);
+      }
       pass.J[i] = std::move(J);
       pass.J_info[i] = JI;
     }

@@ -313,6 +313,114 @@ TEST(GyroTerm, SharedTimeOffsetIsEstimated) {
   }
 }
 
+// The gyro-stage effects (gyro_model.h): d r / d theta by dK, k2 and the
+// columns their inverse changes (K, W0, G, the angles) against central
+// differences, at values off the truth; then the fit with each effect in the
+// data and in the layout recovers it within 4 sigma, and the gyro's residual
+// falls against the fit without it.
+TEST(GyroTerm, JacobianByTheGyroEffectsMatchesCentralDifferences) {
+  const std::vector<Effect> fx = {Effect::kGyroScaleAsymmetry, Effect::kGyroNonlinearity};
+  const GyroRun g = MakeGyroRun(50.0, 10.0, 0.05, 2, fx,
+                                {{"gyro_scale_asymmetry.dKx", 3000.0},
+                                 {"gyro_scale_asymmetry.dKy", -2000.0},
+                                 {"gyro_nonlinearity.k2_x", 0.3},
+                                 {"gyro_nonlinearity.k2_z", -0.2}});
+  const RunProblem p = BuildRunProblem(g.s.run, g.data, g.layout, 0.5, {});
+  Eigen::VectorXd th = g.truth;
+  const int go = g.layout.gyro_offset();
+  const int o_a = g.layout.offset(Effect::kGyroScaleAsymmetry);
+  const int o_q = g.layout.offset(Effect::kGyroNonlinearity);
+  th[go + kGKy] *= 1.01;
+  th[o_a + 2] += 1e-3;
+  th[o_q + 1] += 0.5 * g.layout.info(o_q).si_per_unit;
+  const GyroPass pass = EvaluateGyroPass(p, th, true, 1);
+  std::vector<int> cols = {kDlambda2, kKx, kW0y};
+  for (int j = 0; j < kNumGyroParams; ++j) cols.push_back(go + j);
+  for (int i = 0; i < 3; ++i) {
+    cols.push_back(o_a + i);
+    cols.push_back(o_q + i);
+  }
+  for (int c : cols) {
+    const double h = 1e-6 * std::max(std::abs(th[c]), c >= o_q && c < o_q + 3 ? 1e-3 : 1.0);
+    Eigen::VectorXd tp = th, tm = th;
+    tp[c] += h;
+    tm[c] -= h;
+    const GyroPass a = EvaluateGyroPass(p, tp, false, 1);
+    const GyroPass b = EvaluateGyroPass(p, tm, false, 1);
+    double worst = 0.0, scale = 0.0;
+    for (std::size_t e = 0; e < pass.r.size(); ++e) {
+      const Eigen::Vector3d num = (a.r[e] - b.r[e]) / (2.0 * h);
+      worst = std::max(worst, (num - pass.J[e].col(c)).cwiseAbs().maxCoeff());
+      scale = std::max(scale, num.cwiseAbs().maxCoeff());
+    }
+    EXPECT_GT(scale, 0.0) << g.layout.info(c).name;
+    EXPECT_LE(worst, 1e-5 * scale + 1e-12) << g.layout.info(c).name;
+  }
+}
+
+TEST(GyroTerm, FitRecoversEachGyroEffect) {
+  struct Case {
+    Effect effect;
+    NamedValues truth;
+  };
+  const std::vector<Case> cases = {
+      {Effect::kGyroScaleAsymmetry,
+       {{"gyro_scale_asymmetry.dKx", 3000.0}, {"gyro_scale_asymmetry.dKy", -2000.0},
+        {"gyro_scale_asymmetry.dKz", 1000.0}}},
+      {Effect::kGyroNonlinearity,
+       {{"gyro_nonlinearity.k2_x", 0.05}, {"gyro_nonlinearity.k2_y", -0.2},
+        {"gyro_nonlinearity.k2_z", 0.15}}}};
+  for (const Case& c : cases) {
+    const GyroRun g = MakeGyroRun(50.0, 90.0, 0.05, 41, {c.effect}, c.truth);
+    // The hold rule (at nominal, on the samples thinned) keeps none of k2 on
+    // this run, though the fit's sigma on y and z is 6-9 times below the
+    // prior's: freed here; the rule's figures are printed.
+    BatchOptions opt;
+    if (c.effect == Effect::kGyroNonlinearity) {
+      opt.holding.free = {"gyro_nonlinearity.k2_y", "gyro_nonlinearity.k2_z"};
+    }
+    const BatchResult with = SolveBatch(g.s.run, g.data, g.layout, opt);
+    const BatchResult without =
+        SolveBatch(g.s.run, g.data, g.layout.WithEffects({}), BatchOptions{});
+    ASSERT_TRUE(with.converged) << with.termination;
+    ASSERT_TRUE(without.converged) << without.termination;
+    const EffectSpec& spec = GetEffectSpec(c.effect);
+    for (int i = g.layout.offset(c.effect); i < g.layout.offset(c.effect) + 3; ++i) {
+      std::printf("  hold rule: %s information left %.3g (prior units, 10 kept)\n",
+                  g.layout.info(i).name.c_str(),
+                  with.conditional_information.size() ? with.conditional_information[i] : -1.0);
+    }
+    std::printf("%s: gyro noise %.4f -> %.4f deg/s, whitened rms %.3f -> %.3f, nll %.1f -> %.1f\n",
+                spec.name.c_str(), without.gyro.noise_rad_s.maxCoeff() / kDegToRad,
+                with.gyro.noise_rad_s.maxCoeff() / kDegToRad, without.gyro.whitened_rms,
+                with.gyro.whitened_rms, without.gyro.neg_log_likelihood,
+                with.gyro.neg_log_likelihood);
+    EXPECT_LT(with.gyro.neg_log_likelihood, without.gyro.neg_log_likelihood - 10.0);
+    EXPECT_NEAR(with.gyro.noise_rad_s.maxCoeff() / kDegToRad, 0.05, 0.01);
+    const int o = g.layout.offset(c.effect);
+    int estimated = 0;
+    for (int i = o; i < o + 3; ++i) {
+      const std::string& name = g.layout.info(i).name;
+      // The inner axis's (x) k2: its rate is one sine (47 deg/s peak), whose
+      // cube is 0.95 correlated with itself: not determined on this profile
+      // (considered at nominal, within its prior).
+      if (!IsEstimated(with, name)) {
+        std::printf("  %-26s not determined on this profile\n", name.c_str());
+        EXPECT_EQ(name, "gyro_nonlinearity.k2_x");
+        continue;
+      }
+      ++estimated;
+      const double sigma = std::sqrt(with.estimate.cov(i, i));
+      const double f = g.layout.info(i).si_per_unit;
+      std::printf("  %-26s %9.4g +- %.3g (truth %.4g) %s, z %.2f\n", name.c_str(),
+                  with.estimate.theta[i] / f, sigma / f, g.truth[i] / f,
+                  g.layout.info(i).unit.c_str(), (with.estimate.theta[i] - g.truth[i]) / sigma);
+      EXPECT_LT(std::abs(with.estimate.theta[i] - g.truth[i]) / sigma, 4.0) << name;
+    }
+    EXPECT_GE(estimated, 2);
+  }
+}
+
 }  // namespace
 }  // namespace triadcal
 
