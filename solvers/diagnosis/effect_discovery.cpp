@@ -139,10 +139,7 @@ std::vector<Effect> CatalogueCandidates(const RunData& data, const std::vector<E
       data.has_temp() && std::abs(Correlation(data.t_s, data.temp_C)) > 0.99;
   for (const EffectSpec& e : EffectCatalogue()) {
     if (std::find(current.begin(), current.end(), e.id) != current.end()) continue;
-    // The loop's score tests and likelihood ratios are the accelerometer's
-    // (effect_information.cpp): the gyro's effects are not candidates yet; a
-    // fit takes them with --effects.
-    if (e.stage == EffectStage::kGyro) continue;
+    if (e.stage == EffectStage::kGyro && !data.has_gyro()) continue;
     if (e.needs.temp_C && !data.has_temp()) continue;
     if (e.zero_offset_signal == ZeroOffsetSignal::kTime_s && temp_linear_in_time) {
       const std::string same = SameZeroOffsetSignal(ZeroOffsetSignal::kTempRise_C);
@@ -606,9 +603,16 @@ void Loop::TestRefit(const CandidateInformation& c, const ParameterLayout& aug,
   }
   t.refit = true;
   t.dof = k - held_new;
-  t.lr = 2.0 * (fit_.final_cost - r.cost_at_noise);
+  // The accelerometer's LR at the round's noise, scaled by its chi2/dof, and,
+  // with a gyro, the gyro's: both fits' negative log-likelihoods at the
+  // gyro noise of their maxima (a profile likelihood ratio; not scaled).
+  const double lr_accel = 2.0 * (fit_.final_cost - r.cost_at_noise);
+  const double lr_gyro = fit_.gyro.present && r.gyro.present
+                             ? 2.0 * (fit_.gyro.neg_log_likelihood - r.gyro.neg_log_likelihood)
+                             : 0.0;
+  t.lr = lr_accel + lr_gyro;
   t.chi2_per_dof_after = 2.0 * r.cost_at_noise / std::max(1, r.degrees_of_freedom);
-  t.statistic = std::max(0.0, t.lr) / std::max(1.0, t.chi2_per_dof_after);
+  t.statistic = std::max(0.0, lr_accel / std::max(1.0, t.chi2_per_dof_after) + lr_gyro);
   if (t.dof == 0) {
     t.p_value = 1.0;
     t.note = "not supported by this run's motion";

@@ -84,8 +84,11 @@ struct CandidateTest {
   Effect effect;
   int round = 0;
   int dof = 0;             // effect parameters the run supports
-  double lr = 0.0;         // 2 (cost_current - cost_with_effect)
-  double statistic = 0.0;  // lr / max(1, chi2/dof of the augmented fit)
+  // 2 (cost_current - cost_with_effect), with a gyro plus the gyro's
+  // 2 (nll_current - nll_with_effect) (effect_discovery.cpp TestRefit)
+  double lr = 0.0;
+  // the accelerometer's part / max(1, its chi2/dof of the augmented fit) + the gyro's
+  double statistic = 0.0;
   double p_value = 1.0;    // of the LR when refit, else of the score statistic
   double threshold = 0.0;  // alpha / candidates in the round
   double score = 0.0;      // score (LM) statistic from the current fit, scaled as the LR

@@ -8,6 +8,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "solvers/estimation/gyro_term.h"
 #include "solvers/estimation/run_evaluation.h"
 #include "solvers/estimation/parallel.h"
 #include "solvers/estimation/schur_covariance.h"
@@ -144,10 +145,11 @@ class CandidateAnalysis {
   // constraints.
   void Linearise() {
     const int threads = options_.threads > 0 ? options_.threads : DefaultThreads();
-    const ParameterLayout cur(current_);
+    gyro_ = fit_.gyro.present;
+    const ParameterLayout cur(current_, gyro_);
     std::vector<Effect> all = current_;
     all.insert(all.end(), candidates_.begin(), candidates_.end());
-    full_ = ParameterLayout(all);
+    full_ = ParameterLayout(all, gyro_);
     p_ = BuildRunProblem(run_, data_, full_, options_.epoch_s, options_.derivatives);
     if (fit_.noise_used_mV.minCoeff() > 0.0) p_.noise_mV = fit_.noise_used_mV;
     const std::size_t E = p_.epochs.size();
@@ -162,12 +164,40 @@ class CandidateAnalysis {
       const int k = static_cast<int>(GetEffectSpec(e).params.size());
       for (int q = 0; q < k; ++q) theta[full_.offset(e) + q] = 0.0;
     }
-    const RunPass weights = WeightsPass(p_, p_.prior.mean, threads);
-    const RunReduction red =
-        Reduce(p_, EvaluatePass(p_, theta, true, threads), weights, p_.noise_mV, threads);
+    // The accelerometer's part on the layout of what acts on it: without the
+    // gyro block and the gyro-stage effects (their columns there are zero),
+    // within the 64 parameters of its Jacobian (inertial_increments.cpp); the
+    // whole catalogue and the gyro block are 87.
+    std::vector<Effect> accel_effects;
+    for (Effect e : all) {
+      if (GetEffectSpec(e).stage != EffectStage::kGyro) accel_effects.push_back(e);
+    }
+    const bool split = gyro_ || accel_effects.size() != all.size();
+    RunProblem pa;
+    if (split) {
+      pa = BuildRunProblem(run_, data_, ParameterLayout(accel_effects), options_.epoch_s,
+                           options_.derivatives);
+      pa.noise_mV = p_.noise_mV;
+    }
+    const RunProblem& accel = split ? pa : p_;
+    std::vector<int> to_full(accel.cfg.layout.size());
+    Eigen::VectorXd theta_accel(accel.cfg.layout.size());
+    for (int i = 0; i < accel.cfg.layout.size(); ++i) {
+      to_full[i] = full_.IndexOf(accel.cfg.layout.info(i).name);
+      theta_accel[i] = theta[to_full[i]];
+    }
+    const RunPass weights = WeightsPass(accel, accel.prior.mean, threads);
+    const RunReduction red = Reduce(accel, EvaluatePass(accel, theta_accel, true, threads),
+                                    weights, accel.noise_mV, threads);
     const int nf = full_.size();
-    I_ = red.information;
-    g_ = red.gradient;
+    I_ = Eigen::MatrixXd::Zero(nf, nf);
+    g_ = Eigen::VectorXd::Zero(nf);
+    for (std::size_t i = 0; i < to_full.size(); ++i) {
+      g_[to_full[i]] = red.gradient[i];
+      for (std::size_t j = 0; j < to_full.size(); ++j) {
+        I_(to_full[i], to_full[j]) = red.information(i, j);
+      }
+    }
     for (int i = 0; i < nf; ++i) {
       I_(i, i) += 1.0 / (p_.prior.sigma[i] * p_.prior.sigma[i]);
       g_[i] += (theta[i] - p_.prior.mean[i]) / (p_.prior.sigma[i] * p_.prior.sigma[i]);
@@ -176,16 +206,25 @@ class CandidateAnalysis {
       I_ += c.c * c.c.transpose() / (c.sigma * c.sigma);
       g_ += c.c * (c.c.dot(theta) - c.value) / (c.sigma * c.sigma);
     }
+    // The gyro's part (gyro_term.h) as the fit has it: its negative
+    // log-likelihood at the noise of its maximum (from the fit's), with the
+    // weights' derivatives in the gradient. The gyro-stage candidates' columns
+    // are only here; the others reach it through W, the angles and dlambda2.
+    if (gyro_ && RunHasGyro(p_)) {
+      const GyroReduction gr = ReduceGyroAtBestNoise(EvaluateGyroPass(p_, theta, true, threads),
+                                                     fit_.gyro.noise_rad_s, kNumGyroParams,
+                                                     true, threads);
+      I_ += gr.information;
+      g_ += gr.gradient;
+    }
   }
 
   // The base parameters: the current layout's free ones (the fit's held and
   // considered parameters are not, the tests hold them), and every base
   // parameter with its prior (anchored: for the check that an effect does not
-  // ride on them, LooseConditional). (The gyro's parameters are not in these
-  // layouts: the tests are on the accelerometer's part, which they do not
-  // enter.)
+  // ride on them, LooseConditional). With a gyro, its block is among them.
   void Base() {
-    const ParameterLayout cur(current_);
+    const ParameterLayout cur(current_, gyro_);
     std::vector<int> held;
     for (const std::vector<std::string>* names : {&fit_.held, &fit_.consider}) {
       for (const std::string& h : *names) {
@@ -343,8 +382,13 @@ class CandidateAnalysis {
     const Eigen::VectorXd step = -Rows(I_, bs, bs).ldlt().solve(Entries(g_, bs));
     c.step_base = step.head(base_.size());
     c.step_effect = step.tail(k);
+    // The accelerometer's chi2/dof predicted with the effect; a gyro-stage
+    // effect's score is the gyro's, whose noise is at its maximum likelihood
+    // (its whitened residual unit by construction): not scaled.
     const double chi2_aug =
-        (2.0 * fit_.final_cost - c.score) / std::max(1, fit_.degrees_of_freedom - k);
+        GetEffectSpec(c.effect).stage == EffectStage::kGyro
+            ? 1.0
+            : (2.0 * fit_.final_cost - c.score) / std::max(1, fit_.degrees_of_freedom - k);
     c.statistic = c.score / std::max(1.0, chi2_aug);
     c.p_value = ChiSquareSurvival(c.statistic, k);
     std::vector<int> strong;
@@ -372,6 +416,7 @@ class CandidateAnalysis {
   const BatchResult& fit_;
   const std::vector<Effect>& candidates_;
   const BatchOptions& options_;
+  bool gyro_ = false;     // the fit has the gyro block (its part is in I_ and g_)
   ParameterLayout full_;  // current + candidates
   RunProblem p_;          // of full_, every parameter free
   Eigen::MatrixXd I_;     // information of data, priors and constraints (full_)
