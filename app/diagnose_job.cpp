@@ -184,6 +184,9 @@ void DiagnoseSettings::Validate() const {
     throw InputError("--max-effects: Value " + std::to_string(max_effects) +
                      " not in range 0 to 20");
   }
+  AngleDerivativeOptions window;
+  window.half_window_s = rate_window_s;
+  WithFlags({{"half_window_s", "--rate-window-s"}}, [&] { window.Check(); });
 }
 
 DiagnoseOutcome DiagnoseRun(const DiagnoseSettings& s, const std::string& run_yaml,
@@ -194,6 +197,7 @@ DiagnoseOutcome DiagnoseRun(const DiagnoseSettings& s, const std::string& run_ya
   opt.alpha = s.alpha;
   opt.max_effects = s.max_effects;
   opt.fit.epoch_s = s.epoch_s;
+  opt.fit.derivatives.half_window_s = s.rate_window_s;
   opt.fit.threads = s.threads;
   opt.candidates = ParseEffectList(s.candidates, "--candidates");
   opt.progress = session.stage;

@@ -27,6 +27,9 @@ struct DiagnoseSettings {
   double alpha = 0.01;     // false-selection rate per round, in (0, 1)
   int max_effects = 4;     // at most this many effects, 0 .. 20
   double epoch_s = kDefaultEpoch_s;
+  // Half window of the local cubic fit giving the bench rates (the latency's
+  // rate among them) [s], as `fit`'s.
+  double rate_window_s = AngleDerivativeOptions().half_window_s;
   int threads = 0;  // of the fits (0: all cores)
 
   // Throws InputError naming the option (as the command line's flag).

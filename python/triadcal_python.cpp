@@ -214,12 +214,13 @@ py::object FilterOut(const py::object& run_arg, const std::string& effects, doub
 
 // `triadcal diagnose` through its job (app/diagnose_job.h).
 py::object DiagnoseOut(const py::object& run_arg, const std::string& candidates, double alpha,
-                    int max_effects, double epoch_s, int threads) {
+                    int max_effects, double epoch_s, double rate_window_s, int threads) {
   DiagnoseSettings settings;
   settings.candidates = candidates;
   settings.alpha = alpha;
   settings.max_effects = max_effects;
   settings.epoch_s = epoch_s;
+  settings.rate_window_s = rate_window_s;
   settings.threads = threads;
   settings.Validate();
   return RunJob(run_arg, "diagnose", [&](const std::string& yaml, const LoadedRun& run,
@@ -346,7 +347,7 @@ PYBIND11_MODULE(triadcal, m) {
   m.def("diagnose", &triadcal::DiagnoseOut, "run"_a, py::kw_only(),
         "candidates"_a = diagnosing.candidates, "alpha"_a = diagnosing.alpha,
         "max_effects"_a = diagnosing.max_effects, "epoch_s"_a = diagnosing.epoch_s,
-        "threads"_a = diagnosing.threads,
+        "rate_window_s"_a = diagnosing.rate_window_s, "threads"_a = diagnosing.threads,
         "The closed loop of SPEC section 8 on a run (run.yaml path or dict), as `triadcal "
         "diagnose` runs it (the same job); returns its OUT as a dict (selected, could_hide, "
         "states, ...) with the provenance a written file carries.");

@@ -3,12 +3,15 @@
 // the printed ranking shows the Wald p-value.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "core/io/file_util.h"
 #include "tests/cli_scenarios.h"
 #include "tests/command_runner.h"
+#include "tests/cli_test.h"
 #include "tests/temp_dir_test.h"
 
 namespace triadcal {
@@ -55,6 +58,31 @@ TEST_F(DiagnoseCli, RefittedCandidateCarriesItsWaldTest) {
   EXPECT_GE(score_only, 1);
   const std::string text = ReadFile(Path("d.txt"));
   EXPECT_NE(text.find("Wald p"), std::string::npos) << text;
+}
+
+// diagnose takes --rate-window-s as fit does: with the loop off (--max-effects
+// 0) its "before" is fit's at the same window, and not the default window's;
+// a window out of range is the option's one-line error.
+class DiagnoseRateWindow : public testing_fixtures::CliTest {};
+
+TEST_F(DiagnoseRateWindow, ReachesTheFits) {
+  const std::string run = Path("run.yaml");
+  ASSERT_EQ(Run("fit " + run + " --rate-window-s 0.03 -o " + Path("fit.json")).exit_code, 0);
+  ASSERT_EQ(Run("fit " + run + " -o " + Path("fit_default.json")).exit_code, 0);
+  const testing_fixtures::CliResult d =
+      Run("diagnose " + run + " --max-effects 0 --rate-window-s 0.03 -o " + Path("d.json"));
+  ASSERT_EQ(d.exit_code, 0) << d.err;
+  const nlohmann::json fit = Out("fit.json"), other = Out("fit_default.json"), diag = Out("d.json");
+  for (const char* name : {"Kx", "alpha_y", "dpsi", "dx2"}) {
+    SCOPED_TRACE(name);
+    const double f = fit["parameters"][name]["value"], o = other["parameters"][name]["value"];
+    const double b = diag["before"]["parameters"][name]["value"];
+    EXPECT_NEAR(b, f, 1e-9 * (1.0 + std::abs(f)));
+    EXPECT_NE(b, o);
+  }
+  ExpectError("diagnose " + run + " --rate-window-s 5 -o " + Path("out.json"),
+              "--rate-window-s: Value 5 not in range 0.001000 to 2.000000 (see `triadcal diagnose "
+              "--help`)");
 }
 
 }  // namespace

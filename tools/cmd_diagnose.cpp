@@ -161,6 +161,10 @@ Command AddDiagnoseCommand(CLI::App& app) {
   c.app->add_option("--epoch-s", a->settings.epoch_s, "interval between epochs [s]")
       ->capture_default_str()
       ->check(kEpochRange);
+  c.app->add_option("--rate-window-s", a->settings.rate_window_s,
+                    "half window of the local cubic fit giving lambda' from the angles [s]")
+      ->capture_default_str()
+      ->check(kRateWindowRange);
   c.run = [a](Session& session) { return RunDiagnose(*a, session); };
   return c;
 }
