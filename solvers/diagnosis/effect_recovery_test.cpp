@@ -89,66 +89,56 @@ TEST(EffectRecovery, EveryRegisteredEffectIsRecoveredWithinItsSigma) {
   }
 }
 
+// `fit --effects NAME` on a noise-free simulated run without temp_C or a
+// gyro, for every catalogue effect `pick` names: exit 2, no output, and the
+// error line `why(effect)`. Returns how many effects were tried.
+int ExpectEffectsRefused(const std::string& folder, bool (*pick)(const EffectSpec&),
+                         const std::string& why) {
+  namespace fs = std::filesystem;
+  const fs::path dir = testing_fixtures::OwnTempDir(folder);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string bin = TRIADCAL_BIN;
+  const std::string scen = std::string(TRIADCAL_SOURCE_DIR) + "/examples/noise-free/scenario.yaml";
+  EXPECT_EQ(
+      std::system(
+          (bin + " simulate " + scen + " -o " + (dir / "run").string() + " > /dev/null").c_str()),
+      0);
+  int tested = 0;
+  for (const EffectSpec& e : EffectCatalogue()) {
+    if (!pick(e)) continue;
+    ++tested;
+    const std::string cmd = bin + " fit " + (dir / "run" / "run.yaml").string() + " -o " +
+                            (dir / "out.json").string() + " --effects " + e.name + " 2> " +
+                            (dir / "err.txt").string() + " > /dev/null";
+    EXPECT_EQ(WEXITSTATUS(std::system(cmd.c_str())), 2) << e.name;
+    EXPECT_FALSE(fs::exists(dir / "out.json"));
+    std::ifstream in(dir / "err.txt");
+    const std::string err((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(err, "triadcal: error: --effects: " + e.name + why + "\n");
+  }
+  return tested;
+}
+
 // What an effect needs (EffectSpec::needs) is checked before any fit: every
 // effect whose entry needs temp_C is refused on a run without it, with one
 // line, exit 2 and no output.
 TEST(EffectNeeds, FitRefusesAnEffectWhoseDataTheRunLacks) {
-  namespace fs = std::filesystem;
-  const fs::path dir = testing_fixtures::OwnTempDir("effect_needs");
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  const std::string bin = TRIADCAL_BIN;
-  const std::string scen = std::string(TRIADCAL_SOURCE_DIR) + "/examples/noise-free/scenario.yaml";
-  ASSERT_EQ(
-      std::system(
-          (bin + " simulate " + scen + " -o " + (dir / "run").string() + " > /dev/null").c_str()),
-      0);
-  int tested = 0;
-  for (const EffectSpec& e : EffectCatalogue()) {
-    if (!e.needs.temp_C) continue;
-    ++tested;
-    const std::string cmd = bin + " fit " + (dir / "run" / "run.yaml").string() + " -o " +
-                            (dir / "out.json").string() + " --effects " + e.name + " 2> " +
-                            (dir / "err.txt").string() + " > /dev/null";
-    EXPECT_EQ(WEXITSTATUS(std::system(cmd.c_str())), 2) << e.name;
-    EXPECT_FALSE(fs::exists(dir / "out.json"));
-    std::ifstream in(dir / "err.txt");
-    const std::string err((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    EXPECT_EQ(err, "triadcal: error: --effects: " + e.name +
-                       " needs a temp_C column, which this run does not have (columns.temp_C in "
-                       "run.yaml)\n");
-  }
-  EXPECT_GT(tested, 0);
+  EXPECT_GT(ExpectEffectsRefused(
+                "effect_needs", [](const EffectSpec& e) { return e.needs.temp_C; },
+                " needs a temp_C column, which this run does not have (columns.temp_C in "
+                "run.yaml)"),
+            0);
 }
 
 // The gyro's effects on a run without a gyro: one line, exit 2, no output.
 TEST(EffectNeeds, FitRefusesAGyroEffectOnARunWithoutAGyro) {
-  namespace fs = std::filesystem;
-  const fs::path dir = testing_fixtures::OwnTempDir("effect_needs_gyro");
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  const std::string bin = TRIADCAL_BIN;
-  const std::string scen = std::string(TRIADCAL_SOURCE_DIR) + "/examples/noise-free/scenario.yaml";
-  ASSERT_EQ(
-      std::system(
-          (bin + " simulate " + scen + " -o " + (dir / "run").string() + " > /dev/null").c_str()),
-      0);
-  int tested = 0;
-  for (const EffectSpec& e : EffectCatalogue()) {
-    if (e.stage != EffectStage::kGyro) continue;
-    ++tested;
-    const std::string cmd = bin + " fit " + (dir / "run" / "run.yaml").string() + " -o " +
-                            (dir / "out.json").string() + " --effects " + e.name + " 2> " +
-                            (dir / "err.txt").string() + " > /dev/null";
-    EXPECT_EQ(WEXITSTATUS(std::system(cmd.c_str())), 2) << e.name;
-    EXPECT_FALSE(fs::exists(dir / "out.json"));
-    std::ifstream in(dir / "err.txt");
-    const std::string err((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    EXPECT_EQ(err, "triadcal: error: --effects: " + e.name +
-                       " acts on the gyro, which this run does not have (gx gy gz columns and a "
-                       "gyro block in run.yaml)\n");
-  }
-  EXPECT_EQ(tested, 2);
+  EXPECT_EQ(ExpectEffectsRefused(
+                "effect_needs_gyro",
+                [](const EffectSpec& e) { return e.stage == EffectStage::kGyro; },
+                " acts on the gyro, which this run does not have (gx gy gz columns and a "
+                "gyro block in run.yaml)"),
+            2);
 }
 
 }  // namespace
