@@ -73,7 +73,7 @@ class LineSource {
   // Keeps the unread part, then reads the next block behind it (the buffer
   // grows only for a line longer than a block).
   void Fill() {
-    buf_.erase(0, begin_);
+    std::memmove(&buf_[0], buf_.data() + begin_, end_ - begin_);  // the unread part only
     end_ -= begin_;
     begin_ = 0;
     if (buf_.size() < end_ + kBlock) buf_.resize(end_ + kBlock);
