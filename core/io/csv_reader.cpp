@@ -31,6 +31,8 @@ class LineSource {
       if (size > 0) size_ = static_cast<std::size_t>(size);
       std::fseek(f_.get(), 0, SEEK_SET);
     }
+    // A small file in one read of its size (+1 to see its end), not a block.
+    if (size_ > 0 && size_ < kBlock) block_ = size_ + 1;
     Fill();
     if (end_ - begin_ >= 3 && std::memcmp(buf_.data(), "\xEF\xBB\xBF", 3) == 0) begin_ += 3;
   }
@@ -76,7 +78,7 @@ class LineSource {
     std::memmove(&buf_[0], buf_.data() + begin_, end_ - begin_);  // the unread part only
     end_ -= begin_;
     begin_ = 0;
-    if (buf_.size() < end_ + kBlock) buf_.resize(end_ + kBlock);
+    if (buf_.size() < end_ + block_) buf_.resize(end_ + block_);
     const std::size_t n = std::fread(&buf_[end_], 1, buf_.size() - end_, f_.get());
     if (std::ferror(f_.get())) throw InputError(path_ + ": read error");
     end_ += n;
@@ -88,6 +90,7 @@ class LineSource {
   std::string buf_;
   std::size_t begin_ = 0, end_ = 0;  // the unread bytes [begin_, end_) of buf_
   std::size_t size_ = 0;
+  std::size_t block_ = kBlock;
   bool eof_ = false;
 };
 
