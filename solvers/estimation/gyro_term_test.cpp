@@ -21,6 +21,23 @@
 namespace triadcal {
 namespace {
 
+// Column c of the gyro pass's Jacobian against central differences of step h:
+// the largest difference and the largest numeric derivative over the intervals.
+void CentralDifference(const RunProblem& p, const Eigen::VectorXd& th, const GyroPass& pass,
+                       int c, double h, double* worst, double* scale) {
+  Eigen::VectorXd tp = th, tm = th;
+  tp[c] += h;
+  tm[c] -= h;
+  const GyroPass a = EvaluateGyroPass(p, tp, false, 1);
+  const GyroPass b = EvaluateGyroPass(p, tm, false, 1);
+  for (std::size_t e = 0; e < pass.r.size(); ++e) {
+    const Eigen::Vector3d num = (a.r[e] - b.r[e]) / (2.0 * h);
+    *worst = std::max(*worst, (num - pass.J[e].col(c)).cwiseAbs().maxCoeff());
+    *scale = std::max(*scale, num.cwiseAbs().maxCoeff());
+  }
+}
+
+
 using testing_fixtures::GyroRun;
 using testing_fixtures::MakeGyroRun;
 using testing_fixtures::PaperScenario;
@@ -55,17 +72,8 @@ TEST(GyroTerm, JacobianMatchesCentralDifferences) {
   for (int j = 0; j < kNumGyroParams; ++j) cols.push_back(go + j);
   for (int c : cols) {
     const double h = 1e-6 * std::max(1.0, std::abs(th[c]));
-    Eigen::VectorXd tp = th, tm = th;
-    tp[c] += h;
-    tm[c] -= h;
-    const GyroPass a = EvaluateGyroPass(p, tp, false, 1);
-    const GyroPass b = EvaluateGyroPass(p, tm, false, 1);
     double worst = 0.0, scale = 0.0;
-    for (std::size_t e = 0; e < pass.r.size(); ++e) {
-      const Eigen::Vector3d num = (a.r[e] - b.r[e]) / (2.0 * h);
-      worst = std::max(worst, (num - pass.J[e].col(c)).cwiseAbs().maxCoeff());
-      scale = std::max(scale, num.cwiseAbs().maxCoeff());
-    }
+    CentralDifference(p, th, pass, c, h, &worst, &scale);
     EXPECT_LE(worst, 1e-6 * scale + 1e-12) << g.layout.info(c).name;
   }
 }
@@ -342,17 +350,8 @@ TEST(GyroTerm, JacobianByTheGyroEffectsMatchesCentralDifferences) {
   }
   for (int c : cols) {
     const double h = 1e-6 * std::max(std::abs(th[c]), c >= o_q && c < o_q + 3 ? 1e-3 : 1.0);
-    Eigen::VectorXd tp = th, tm = th;
-    tp[c] += h;
-    tm[c] -= h;
-    const GyroPass a = EvaluateGyroPass(p, tp, false, 1);
-    const GyroPass b = EvaluateGyroPass(p, tm, false, 1);
     double worst = 0.0, scale = 0.0;
-    for (std::size_t e = 0; e < pass.r.size(); ++e) {
-      const Eigen::Vector3d num = (a.r[e] - b.r[e]) / (2.0 * h);
-      worst = std::max(worst, (num - pass.J[e].col(c)).cwiseAbs().maxCoeff());
-      scale = std::max(scale, num.cwiseAbs().maxCoeff());
-    }
+    CentralDifference(p, th, pass, c, h, &worst, &scale);
     EXPECT_GT(scale, 0.0) << g.layout.info(c).name;
     EXPECT_LE(worst, 1e-5 * scale + 1e-12) << g.layout.info(c).name;
   }
