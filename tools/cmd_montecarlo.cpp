@@ -50,8 +50,10 @@ int RunMonteCarloCommand(MonteCarloArgs a, Session& session) {
   const auto t0 = std::chrono::steady_clock::now();
   a.first_seed = ParseSeed(a.first_seed_text, "--first-seed");
   if (a.runs > 0 && a.first_seed > UINT64_MAX - static_cast<std::uint64_t>(a.runs - 1)) {
-    throw InputError("--first-seed: seeds " + a.first_seed_text + " .. first-seed + " +
-                     std::to_string(a.runs) + " - 1 pass 18446744073709551615 (2^64 - 1)");
+    throw InputError("--first-seed: " + std::to_string(a.runs) + " runs from seed " +
+                     a.first_seed_text +
+                     " pass the largest seed 18446744073709551615 (2^64 - 1): at most " +
+                     std::to_string(UINT64_MAX - a.first_seed + 1) + " from there");
   }
   if (!a.report_html.empty()) CheckOutputPath(a.report_html, session, "--report");
   if (a.runs < 1) throw InputError("-n: at least 1 run, got " + std::to_string(a.runs));
