@@ -166,12 +166,6 @@ double OurUnitsPerSourceUnit(ChannelKind kind, const std::string& unit) {
   return 0.0;
 }
 
-double SiPerOurUnit(ChannelKind kind) {
-  return kind == ChannelKind::kAngle || kind == ChannelKind::kRate || kind == ChannelKind::kGyro
-             ? kDegToRad
-             : 1.0;
-}
-
 std::map<std::string, ColumnSource> ParseColumns(const YAML::Node& node, const YamlPlace& at) {
   std::map<std::string, ColumnSource> out;
   if (node.IsNull()) return out;

@@ -57,8 +57,6 @@ const ChannelInfo* FindChannel(const std::string& name);  // nullptr if unknown
 std::string DefaultUnit(ChannelKind kind);
 std::vector<std::string> AllowedUnits(ChannelKind kind);
 double OurUnitsPerSourceUnit(ChannelKind kind, const std::string& unit);
-// SI per our unit: kDegToRad for angles, rates and the gyro, 1 otherwise.
-double SiPerOurUnit(ChannelKind kind);
 
 // The optional text channel `label` (a position label per sample) is kept in
 // the same map under kLabelChannel, with only `source` set.

@@ -106,12 +106,6 @@ double WorstSigma(const DesignPoint& d, const std::vector<int>& indices) {
   return w;
 }
 
-double BestSigma(const DesignPoint& d, const std::vector<int>& indices) {
-  double b = 1e300;
-  for (int i : indices) b = std::min(b, d.sigma[i]);
-  return b;
-}
-
 bool Undetermined(const DesignPoint& d, const std::string& name) {
   return std::find(d.unobservable.begin(), d.unobservable.end(), name) != d.unobservable.end();
 }

@@ -69,7 +69,6 @@ DesignStudy RunDesignStudy(const Scenario& s, const ParameterLayout& layout,
 
 // Summaries of a design point over parameter indices (SI).
 double WorstSigma(const DesignPoint& d, const std::vector<int>& indices);
-double BestSigma(const DesignPoint& d, const std::vector<int>& indices);
 // True when the design does not determine the parameter (its sigma is the prior's).
 bool Undetermined(const DesignPoint& d, const std::string& name);
 bool AnyUndetermined(const DesignPoint& d, const ParameterLayout& layout,

@@ -182,12 +182,4 @@ std::vector<Eigen::VectorXd> EpochScores(const std::vector<ProcessBlock>& proces
   return scores;
 }
 
-Eigen::MatrixXd ThetaCovarianceBySchur(const std::vector<ProcessBlock>& process,
-                                       const std::vector<MeasurementBlock>& measurement,
-                                       const Eigen::MatrixXd& theta_rows) {
-  const int n = static_cast<int>(theta_rows.cols());
-  const Eigen::LDLT<Eigen::MatrixXd> ldlt(ThetaInformationBySchur(process, measurement, theta_rows));
-  return ldlt.solve(Eigen::MatrixXd::Identity(n, n));
-}
-
 }  // namespace triadcal

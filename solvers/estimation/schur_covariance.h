@@ -1,4 +1,4 @@
-// Covariance of theta in the batch problem by a Schur complement on theta.
+// The information of theta in the batch problem by a Schur complement on theta.
 //
 // The normal matrix H = J^T J of the batch problem is block-tridiagonal in the
 // trajectory states x_e (each process residual couples x_e and x_{e+1}) with a
@@ -10,7 +10,7 @@
 // Eliminating x_0, x_1, ... in turn (block forward elimination, an information
 // filter in disguise) costs O(E (6^3 + 6^2 n + 6 n^2)) instead of a sparse QR of
 // the whole Jacobian. Exact for the same Jacobian; a test compares it with
-// Ceres's Covariance.
+// the dense normal equations (schur_covariance_test.cpp).
 #pragma once
 
 #include <vector>
@@ -32,15 +32,10 @@ struct MeasurementBlock {  // residual couples x_e and theta
   Eigen::Matrix<double, 6, 1> r0 = Eigen::Matrix<double, 6, 1>::Zero();  // r = r0 + M x_e
 };
 
-// process[e] links epoch e and e+1 (E - 1 of them); measurement[e] is at epoch
-// e (E of them); theta_rows are the rows on theta alone (priors, constraints).
-Eigen::MatrixXd ThetaCovarianceBySchur(const std::vector<ProcessBlock>& process,
-                                       const std::vector<MeasurementBlock>& measurement,
-                                       const Eigen::MatrixXd& theta_rows);
-
 // The information of theta with the states eliminated, H_tt - H_tx H_xx^-1 H_xt
-// (its inverse is the covariance above; effect_discovery's score tests and
-// reliability analysis use the information itself).
+// (its inverse is the covariance above). process[e] links epoch e and e+1
+// (E - 1 of them); measurement[e] is at epoch e (E of them); theta_rows are
+// the rows on theta alone (priors, constraints).
 Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process,
                                         const std::vector<MeasurementBlock>& measurement,
                                         const Eigen::MatrixXd& theta_rows);

@@ -133,15 +133,6 @@ std::vector<std::vector<double>> ImuReadings(const RunDescription& run, const Ru
   return imu;
 }
 
-MountingFit FitMounting(const RunDescription& run, const RunData& data, const int (&source)[3],
-                        const double (&sign)[3], double z1_rad, double z2_rad,
-                        std::size_t max_samples) {
-  const std::vector<std::size_t> idx = Subsample(data.size(), max_samples);
-  const std::vector<std::vector<double>> imu = ImuReadings(run, data, idx);
-  return Fit(imu, idx, GravityProjection(run, data, idx, z1_rad, z2_rad), source, sign, z1_rad,
-             z2_rad);
-}
-
 namespace {
 
 // The samples a search uses and the IMU's own readings at them.

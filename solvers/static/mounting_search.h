@@ -44,11 +44,6 @@ std::vector<MountingFit> SearchMountings(const RunDescription& run, const RunDat
                                          double zero_range_rad, double zero_step_rad,
                                          std::size_t max_samples = 2000);
 
-// The fit of one mounting with zeros held at (z1, z2).
-MountingFit FitMounting(const RunDescription& run, const RunData& data, const int (&source)[3],
-                        const double (&sign)[3], double z1_rad, double z2_rad,
-                        std::size_t max_samples = 2000);
-
 // A warning line when the declared mounting (zeros near 0, within +-5 deg) fits
 // clearly worse (RMS over 3 times and 0.05 g more) than another; nullopt-like
 // empty string otherwise, or when the angles do not move enough to tell.
