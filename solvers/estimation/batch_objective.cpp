@@ -61,6 +61,11 @@ BatchObjective::Point BatchObjective::Evaluate(const Eigen::VectorXd& phi,
     pt.gyro_passes[r] = std::make_shared<const GyroPass>(
         EvaluateGyroPass(p, ThetaOf(r, phi), with_jacobian, threads_));
     const int fitted = p.cfg.layout.has_gyro() ? kNumGyroParams : 0;
+    if (gyro_noise_held_) {
+      pt.gyro[r] = ReduceGyroAtNoise(*pt.gyro_passes[r], p.gyro_noise_rad_s,
+                                     GyroNoiseDofShare(*pt.gyro_passes[r], fitted), threads_);
+      continue;
+    }
     pt.gyro[r] =
         ReduceGyroAtBestNoise(*pt.gyro_passes[r], gyro_noise_hint_[r], fitted, true, threads_);
     if (pt.gyro[r].noise_rad_s.allFinite()) gyro_noise_hint_[r] = pt.gyro[r].noise_rad_s;

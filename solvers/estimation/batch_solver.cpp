@@ -304,7 +304,8 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
     Eigen::MatrixXd A;
     Eigen::VectorXd b;
     PriorAndConstraintRows(pt, &A, &b);
-    const BatchObjective objective({LinkedRun{&pt, {}, {}}}, A, b, pt.prior.mean, threads);
+    BatchObjective objective({LinkedRun{&pt, {}, {}}}, A, b, pt.prior.mean, threads);
+    objective.HoldGyroNoise();
     MinimizerOptions mo;
     mo.max_iterations = 3;  // a point to linearise at, not an estimate
     mo.tolerance = 5e-3;
@@ -413,9 +414,10 @@ bool IsEstimated(const BatchResult& r, const std::string& name) {
 
 HoldDecision DecideHeldParameters(const RunDescription& run, const RunData& data,
                                   const ParameterLayout& layout, const BatchOptions& opt) {
-  RunDescription at_start = run;
-  at_start.noise_auto = false;
+  // The declared noise, or with auto the readings' own (the gyro's too).
+  RunDescription at_start = WithReadingNoise(run, data);
   at_start.noise_channel_mV = StartNoise(run, data, opt);
+  at_start.noise_mV = (*at_start.noise_channel_mV).maxCoeff();
   return ChooseHeldParameters(at_start, data, layout, opt.holding, opt.epoch_s, opt.derivatives,
                               opt.init_decimation_hz, opt.threads);
 }

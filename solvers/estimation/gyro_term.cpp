@@ -482,12 +482,16 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
   return out;
 }
 
-GyroReduction ReduceGyroAtBestNoise(const GyroPass& pass, const Eigen::Vector3d& start,
-                                    int fitted_parameters, bool theta_part, int threads) {
+double GyroNoiseDofShare(const GyroPass& pass, int fitted_parameters) {
   double dof = 0.0;
   for (char v : pass.valid) dof += v ? 3.0 : 0.0;
   dof = std::max(dof, 1.0);
-  const double rho = std::max(0.1, 1.0 - fitted_parameters / dof);
+  return std::max(0.1, 1.0 - fitted_parameters / dof);
+}
+
+GyroReduction ReduceGyroAtBestNoise(const GyroPass& pass, const Eigen::Vector3d& start,
+                                    int fitted_parameters, bool theta_part, int threads) {
+  const double rho = GyroNoiseDofShare(pass, fitted_parameters);
   // -log L in s = log sigma, by Newton's method on its central differences
   // (each a reduction without the Jacobian, O(E); 19 per step, independent:
   // on `threads`): quadratic convergence, so the profile is a smooth function

@@ -149,6 +149,11 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
 GyroReduction ReduceGyroAtNoise(const GyroPass& pass, const Eigen::Vector3d& noise_rad_s,
                                 double rho, int threads = 1);
 
+// The share of the gyro's degrees of freedom the noise estimate keeps with
+// fitted_parameters estimated (the restricted likelihood's weight of the
+// log-determinant), at least 0.1.
+double GyroNoiseDofShare(const GyroPass& pass, int fitted_parameters);
+
 // The noise at the maximum of the restricted likelihood (from `start`),
 // reduced there (ReduceGyroAtNoise with theta_part). Both take their
 // independent reductions (the central differences) on `threads`; the
