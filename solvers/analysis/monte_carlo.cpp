@@ -7,6 +7,7 @@
 #include <numeric>
 
 #include "core/model/errors.h"
+#include "core/model/sample_noise.h"
 #include "solvers/analysis/experiment_design.h"
 #include "solvers/estimation/parallel.h"
 
@@ -57,15 +58,14 @@ std::vector<MonteCarloRun> RunMonteCarloSeeds(const Scenario& s, const MonteCarl
     std::string filter_failure;
     FilterOptions fo = opt.filter;
     fo.progress = nullptr;
-    // The gyro's parameters stay out of the filter's state here (its readings
-    // unused): Monte Carlo judges the batch fit's gyro (method.md section 11).
-    fo.gyro = false;
-    for (int i = 0; i < layout.size(); ++i) {
-      if (layout.is_gyro(i)) fo.held.push_back(layout.info(i).name);
-    }
+    // Single-threaded inside (the seeds are the parallel work). With a gyro
+    // block the filter takes the gyro's increments as `filter` does (its
+    // parameters in the state), at the declared reading noise or, with
+    // `auto`, the readings' own (what `filter` runs at).
+    fo.threads = 1;
     if (want_filter) {
       try {
-        fr = RunFilterSmoother(q.run, data, layout, fo);
+        fr = RunFilterSmoother(WithReadingNoise(q.run, data), data, layout, fo);
       } catch (const std::exception& e) {
         filter_failure = e.what();
       }

@@ -4,7 +4,9 @@
 // For seeds s0 .. s0 + N - 1: the scenario with that seed (its truth_spread
 // drawn by SampleTruth), simulated (core/simulation/simulator.h), then estimated by the
 // EKF and the RTS smoother (one RunFilterSmoother: "ekf" is its first forward
-// pass, "rts" the smoothed result of the last pass) and by the batch solver
+// pass, "rts" the smoothed result of the last pass; with a gyro block the
+// gyro's increments are its measurements, as `filter` runs it, at the run's
+// reading noise or with `auto` the readings' own) and by the batch solver
 // (SolveBatch, started as `fit` starts). Per parameter and estimator, with
 // e_k = estimate_k - truth_k and sigma_k the estimator's own sigma:
 //
@@ -63,8 +65,8 @@ struct EstimatorStats {
   double pooled_rms_z = 0.0;
   // Runs in which the estimator did not estimate the parameter (the batch
   // solver's held or considered, BatchResult::held and ::consider; the
-  // filter's held, e.g. the gyro's: kept at its nominal value); they are left
-  // out of that parameter's statistics.
+  // filter's held, FilterOptions::held: kept at its nominal value); they are
+  // left out of that parameter's statistics.
   Eigen::VectorXi held_runs;
 };
 

@@ -149,9 +149,16 @@ void PrintMonteCarlo(const MonteCarloSettings& a, const MonteCarloResult& r,
               a.scenario.c_str(), a.runs, static_cast<unsigned long long>(a.first_seed),
               static_cast<unsigned long long>(a.first_seed + a.runs - 1), r.threads, r.seconds,
               r.crb_seconds);
-  std::printf("%-9s %-7s %9s", "", "", "");
+  // The columns as wide as the longest name and unit (the gyro's: gyro.alpha_x,
+  // (deg/s)/g).
+  int wn = 9, wu = 7;
+  for (int i = 0; i < n; ++i) {
+    wn = std::max(wn, static_cast<int>(L.info(i).name.size()));
+    wu = std::max(wu, static_cast<int>(L.info(i).unit.size()));
+  }
+  std::printf("%-*s %-*s %9s", wn, "", wu, "", "");
   for (const EstimatorStats& st : r.estimators) std::printf(" | %-33s", st.name.c_str());
-  std::printf("\n%-9s %-7s %9s", "parameter", "unit", "CRB");
+  std::printf("\n%-*s %-*s %9s", wn, "parameter", wu, "unit", "CRB");
   for (std::size_t j = 0; j < r.estimators.size(); ++j) {
     std::printf(" | %9s %9s %6s %6s", "scatter", "sigma", "/CRB", "rms z");
   }
@@ -159,7 +166,7 @@ void PrintMonteCarlo(const MonteCarloSettings& a, const MonteCarloResult& r,
   for (int i = 0; i < n; ++i) {
     const ParameterInfo& p = L.info(i);
     const double f = p.si_per_unit;
-    std::printf("%-9s %-7s %9.3g", p.name.c_str(), p.unit.c_str(), r.crb[i] / f);
+    std::printf("%-*s %-*s %9.3g", wn, p.name.c_str(), wu, p.unit.c_str(), r.crb[i] / f);
     std::string held;  // the estimators that left it out, and in how many runs
     for (const EstimatorStats& st : r.estimators) {
       if (st.runs > 0 && st.held_runs[i] >= st.runs) {
