@@ -75,21 +75,55 @@ Eigen::Matrix<double, 6, 1> CrossQuadratic(const Calibration& cal) {
 
 // The gyro block in deg/s (SPEC section 10): G = S w + b + Gs W with the
 // readings G and rate w in deg/s, W in g; S = diag(K) Mg (dimensionless).
+// With the gyro-stage effects (gyro_model.h) each axis's response to m = Mg w
+// is f_i(m) = K_i m (1 + k2_i m^2) + dK_i |m|; in deg/s k2_i is per (deg/s)^2.
 struct GyroMatrices {
   Eigen::Matrix3d S;            // diag(K) Mg [1]
   Eigen::Matrix3d S_inverse;    // Mg^-1 diag(K)^-1 [1]: the correction matrix
+  Eigen::Matrix3d Mg_inverse;   // Mg^-1 [1]
+  Eigen::Vector3d K;            // scale factors [1]
   Eigen::Vector3d b_dps;        // W0 [deg/s]
   Eigen::Matrix3d G_dps_per_g;  // g-sensitivity [(deg/s)/g]
+  Eigen::Vector3d dK;           // gyro_scale_asymmetry [1] (0 when off)
+  Eigen::Vector3d k2_per_dps2;  // gyro_nonlinearity [1/(deg/s)^2] (0 when off)
+  bool nonlinear = false;       // gyro_nonlinearity is on: the inverse takes Newton's steps
 };
 
 GyroMatrices GyroForm(const Calibration& cal) {
   const double* g = cal.theta.data() + cal.layout.gyro_offset();
   GyroMatrices m;
-  m.S = Eigen::Vector3d(g[kGKx], g[kGKy], g[kGKz]).asDiagonal() * GyroMisalignmentMatrix(g);
+  m.K = Eigen::Vector3d(g[kGKx], g[kGKy], g[kGKz]);
+  m.S = m.K.asDiagonal() * GyroMisalignmentMatrix(g);
   m.S_inverse = m.S.inverse();
+  m.Mg_inverse = GyroMisalignmentMatrix(g).inverse();
   m.b_dps = Eigen::Vector3d(g[kGW0x], g[kGW0y], g[kGW0z]) / kDegToRad;
   m.G_dps_per_g = GyroGSensitivity(g) / kDegToRad;
+  for (int i = 0; i < 3; ++i) {
+    const GyroAxisResponse<double> a = GyroAxis(cal.layout, cal.theta.data(), i);
+    m.dK[i] = a.dK;
+    m.k2_per_dps2[i] = a.k2 * kDegToRad * kDegToRad;  // k2 m^2 is the same number
+    m.nonlinear = a.nonlinear;
+  }
   return m;
+}
+
+// The gyro-stage effects of `cal` as the catalogue names them: per effect its
+// description and its parameters in file units, {"dKx": {"value", "unit"}, ...}
+// as in the calibration file.
+nlohmann::ordered_json GyroEffectsJson(const Calibration& cal) {
+  nlohmann::ordered_json effects = nlohmann::ordered_json::object();
+  for (const EffectSpec& e : EffectCatalogue()) {
+    if (e.stage != EffectStage::kGyro || !cal.layout.has(e.id)) continue;
+    const int o = cal.layout.offset(e.id);
+    nlohmann::ordered_json params = nlohmann::ordered_json::object();
+    for (std::size_t q = 0; q < e.params.size(); ++q) {
+      const ParamSpec& p = e.params[q];
+      params[p.name] = {{"value", cal.theta[o + static_cast<int>(q)] / p.si_per_unit},
+                        {"unit", p.unit}};
+    }
+    effects[e.name] = {{"description", e.description}, {"parameters", params}};
+  }
+  return effects;
 }
 
 // The unit of the readings the calibration was estimated from ("mV", "mg" or
@@ -108,9 +142,12 @@ void RefuseUncarried(const Calibration& cal) {
 }  // namespace
 
 bool ExportCarries(const EffectSpec& effect) {
-  // The gyro's effects make its correction nonlinear in the readings: the
-  // exported forms (a matrix and an offset) cannot hold them; apply does.
-  if (effect.stage == EffectStage::kGyro) return false;
+  // The gyro's per-axis response f_i(m) = K_i m (1 + k2_i m^2) + dK_i |m|
+  // (gyro_model.h): the C inverts it as GyroAxisRate does, the matrix forms
+  // give its coefficients. Another gyro-stage effect would need its own.
+  if (effect.stage == EffectStage::kGyro) {
+    return effect.id == Effect::kGyroScaleAsymmetry || effect.id == Effect::kGyroNonlinearity;
+  }
   if (effect.stage != EffectStage::kSensor) return true;  // does not act on W: left out
   switch (effect.zero_offset_signal) {
     case ZeroOffsetSignal::kTime_s:      // kDriftPerS * t_s
@@ -190,8 +227,11 @@ CExport ExportC(const Calibration& cal, const std::string& name, const std::stri
         name +
         "_apply) -> angular rate omega [deg/s] in the\n"
         " * triad frame: the exact inverse of the gyro's readings model (SPEC section 10)\n"
-        " *   omega = Mg^-1 diag(K)^-1 (g - W0 - G W)\n"
-        " * as `triadcal apply` computes it. */\n"
+        " *   u_i = g_i - W0_i - (G W)_i,   K_i m_i (1 + k2_i m_i^2) + dK_i |m_i| = u_i,\n"
+        " *   omega = Mg^-1 m\n"
+        " * (dK_i: gyro_scale_asymmetry, k2_i: gyro_nonlinearity, zero when absent; without\n"
+        " * them omega = Mg^-1 diag(K)^-1 (g - W0 - G W)), with Newton's steps on m_i as\n"
+        " * `triadcal apply` computes it. */\n"
         "void " +
         name + "_apply_gyro(const double g_dps[3], const double W_g[3], double omega_dps[3]);\n\n";
   }
@@ -310,18 +350,38 @@ static void Residual(const double* W, const double* u, double* F, double* J) {
 )";
   if (cal.layout.has_gyro()) {
     const GyroMatrices gm = GyroForm(cal);
-    s += "\n/* The gyro: correction matrix Mg^-1 diag(K)^-1 (dimensionless), bias W0\n"
-         " * [deg/s] and g-sensitivity G [(deg/s)/g], row by row. */\n";
-    s += "static const double kGyroCorrection[9] = " + Matrix3(gm.S_inverse) + ";\n";
+    s += "\n/* The gyro: scale factors K_i (dimensionless), inverse misalignment Mg^-1,\n"
+         " * bias W0 [deg/s] and g-sensitivity G [(deg/s)/g], matrices row by row. */\n";
+    s += "static const double kGyroScale[3] = " + Array3(gm.K.data()) + ";\n";
+    s += "static const double kGyroMgInverse[9] = " + Matrix3(gm.Mg_inverse) + ";\n";
     s += "static const double kGyroBias[3] = " + Array3(gm.b_dps.data()) + ";\n";
-    s += "static const double kGyroG[9] = " + Matrix3(gm.G_dps_per_g) + ";\n\n";
+    s += "static const double kGyroG[9] = " + Matrix3(gm.G_dps_per_g) + ";\n";
+    s += "/* The gyro-stage effects (zero when absent): scale asymmetry dK_i (dimensionless;\n"
+         " * gyro_scale_asymmetry) and the scale's quadratic term k2_i [1/(deg/s)^2]\n"
+         " * (gyro_nonlinearity). */\n";
+    s += "static const double kGyroAsymmetry[3] = " + Array3(gm.dK.data()) + ";\n";
+    s += "static const double kGyroK2[3] = " + Array3(gm.k2_per_dps2.data()) + ";\n";
+    s += std::string("static const int kGyroHasNonlinearity = ") + (gm.nonlinear ? "1" : "0") +
+         ";\n\n";
     s += "void " + name +
          "_apply_gyro(const double g_dps[3], const double W_g[3], double omega_dps[3]) {\n";
-    s += R"(  double GW[3], v[3];
-  int i;
+    s += R"(  double GW[3], m[3];
+  int i, it;
   MulVec(kGyroG, W_g, GW);
-  for (i = 0; i < 3; ++i) v[i] = g_dps[i] - kGyroBias[i] - GW[i];
-  MulVec(kGyroCorrection, v, omega_dps);
+  for (i = 0; i < 3; ++i) {
+    const double u = g_dps[i] - kGyroBias[i] - GW[i];
+    /* m takes the sign of u / K (the response is monotonic while |dK| < |K|). */
+    const double s = ((u < 0.0) != (kGyroScale[i] < 0.0)) ? -1.0 : 1.0;
+    const double lin = kGyroScale[i] + s * kGyroAsymmetry[i];
+    const double Kk2 = kGyroScale[i] * kGyroK2[i];
+    m[i] = u / lin;
+    if (kGyroHasNonlinearity) {
+      for (it = 0; it < 6; ++it) {
+        m[i] -= (lin * m[i] + Kk2 * m[i] * m[i] * m[i] - u) / (lin + 3.0 * Kk2 * m[i] * m[i]);
+      }
+    }
+  }
+  MulVec(kGyroMgInverse, m, omega_dps);
 }
 )";
   }
@@ -390,6 +450,19 @@ nlohmann::ordered_json MatrixForm(const Calibration& cal) {
         {"S_inverse", Rows(gm.S_inverse)},
         {"b_dps", Vec(gm.b_dps)},
         {"G_dps_per_g", Rows(gm.G_dps_per_g)}};
+    const nlohmann::ordered_json effects = GyroEffectsJson(cal);
+    if (!effects.empty()) {
+      // The per-axis response the effects change (S and S_inverse above are
+      // the model without them).
+      j["gyro"]["effects_model"] =
+          "g_i = f_i(m_i) + b_i + (G W)_i, m = Mg omega [deg/s], f_i(m) = K_i m (1 + k2_i m^2) + "
+          "dK_i |m| (dK_i = 1e-6 x gyro_scale_asymmetry.dK_i [ppm], k2_i = 1e-6 x "
+          "gyro_nonlinearity.k2_i [ppm/(deg/s)^2], 0 when absent); correction: u_i = g_i - b_i "
+          "- (G W)_i, m_i = f_i^-1(u_i) (monotonic while |dK_i| < |K_i|), omega = Mg_inverse m";
+      j["gyro"]["K"] = Vec(gm.K);
+      j["gyro"]["Mg_inverse"] = Rows(gm.Mg_inverse);
+      j["gyro"]["effects"] = effects;
+    }
   }
   return j;
 }

@@ -9,10 +9,13 @@
 //                thermal_drift_temp, scale_asymmetry, cross_quadratic). Geometry and angle
 //                effects do not act on W and are left out, as in `apply`.
 //                With the gyro (SPEC section 10) a second function applies
-//                it: gyro readings [deg/s] and W [g] -> angular rate [deg/s].
+//                it: gyro readings [deg/s] and W [g] -> angular rate [deg/s],
+//                including the gyro-stage effects (gyro_scale_asymmetry,
+//                gyro_nonlinearity) with the same Newton steps as gyro_model.h
+//                GyroAxisRate.
 //   yaml, json   the plain matrix form (MatrixForm below).
 //
-// Every sensor-stage effect of the catalogue that `apply` inverts is either
+// Every sensor- and gyro-stage effect of the catalogue that `apply` inverts is either
 // carried by every exported form or refused (ExportRefusal below): a form that
 // left one out would differ from `apply` without saying so.
 #pragma once
@@ -42,8 +45,10 @@ CExport ExportC(const Calibration& cal, const std::string& name, const std::stri
 // Whether the exported forms carry a sensor-stage effect of the catalogue: the
 // zero-offset effects whose signal the C function's arguments give (t_s:
 // thermal_drift; temp_C - temp_ref_C: thermal_drift_temp), scale_asymmetry and
-// cross_quadratic. Not carried: thermal_drift_quadratic, whose signal is
-// defined over the span of the run it is applied to (firmware has no run).
+// cross_quadratic; and the gyro-stage effects that change the gyro's per-axis
+// response (gyro_scale_asymmetry, gyro_nonlinearity). Not carried:
+// thermal_drift_quadratic, whose signal is defined over the span of the run it
+// is applied to (firmware has no run).
 // Geometry and angle effects do not act on W: true (left out, as in `apply`).
 bool ExportCarries(const EffectSpec& effect);
 
@@ -69,6 +74,12 @@ std::string ExportRefusal(const Calibration& cal);
 //   g = S_g w + b_g + G W              g readings, w rate [deg/s], W [g]
 //   S_g = diag(K_g) Mg                 [1]; S_inverse = Mg^-1 diag(K_g)^-1,
 //   b_g = W0_g [deg/s], G [(deg/s)/g]  the correction w = S_g^-1 (g - b_g - G W)
+//
+// and with the gyro-stage effects "effects_model", "K", "Mg_inverse" and
+// "effects" (each effect of the catalogue by name: its description and its
+// parameters {"value", "unit"} in file units):
+//
+//   g_i = f_i((Mg w)_i) + b_i + (G W)_i,  f_i(m) = K_i m (1 + k2_i m^2) + dK_i |m|
 //
 // Throws InputError when `cal` has an effect the exported forms do not carry.
 nlohmann::ordered_json MatrixForm(const Calibration& cal);

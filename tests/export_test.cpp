@@ -1,7 +1,8 @@
 // `triadcal export`: the exported C99 code, compiled with `cc -std=c99 -Wall
 // -Wextra -pedantic -Werror`, gives what `triadcal apply` gives to 1e-9 g on a
 // simulated run with every K_ij non-zero (with and without the sensor-stage
-// effects) and on the Ferraris real run, and with the gyro to 1e-9 deg/s; the
+// effects) and on the Ferraris real run, and with the gyro (and its effects)
+// to 1e-9 deg/s; the
 // matrix form reproduces the readings model (the gyro's too); bad options give
 // their exact message.
 #include <gtest/gtest.h>
@@ -322,13 +323,17 @@ TEST_F(ExportTest, CMatchesApplyWithTheSensorStageEffects) {
   EXPECT_LE(LargestDifference(Path("sim/truth.json"), run), 1e-9);
 }
 
-// Every sensor-stage effect of the catalogue, alone at its typical size: each
-// exported form carries it (the C gives what apply gives, the matrix forms name
-// it) or export refuses it by name (exit 2, no file). None is silently left out.
-TEST_F(ExportTest, EverySensorStageEffectIsCarriedOrRefusedByName) {
-  int carried = 0, refused = 0;
+// Every sensor- and gyro-stage effect of the catalogue, alone at its typical
+// size (a gyro-stage one on the gyro run of kGyroScenario, whose z gyro is
+// reversed): each exported form carries it (the C gives what apply gives, to
+// 1e-9 g and 1e-9 deg/s, from the truth and for a gyro-stage effect from a fit
+// with --effects; the matrix forms name it) or export refuses it by name
+// (exit 2, no file). None is silently left out.
+TEST_F(ExportTest, EverySensorAndGyroStageEffectIsCarriedOrRefusedByName) {
+  int carried = 0, refused = 0, gyro_carried = 0;
   for (const EffectSpec& e : EffectCatalogue()) {
-    if (e.stage != EffectStage::kSensor) continue;
+    if (e.stage != EffectStage::kSensor && e.stage != EffectStage::kGyro) continue;
+    const bool gyro = e.stage == EffectStage::kGyro;
     SCOPED_TRACE(e.name);
     std::string params;
     for (const ParamSpec& p : e.params) {
@@ -337,9 +342,15 @@ TEST_F(ExportTest, EverySensorStageEffectIsCarriedOrRefusedByName) {
       params += (params.empty() ? "" : ", ") + p.name + ": " + buf;
     }
     fs::remove_all(Path("sim"));
+    const std::string effects = "effects: {" + e.name + ": {" + params + "}}\n";
     const std::string run =
-        Simulate(Scenario("effects: {" + e.name + ": {" + params + "}}\n" +
-                          (e.needs.temp_C ? "temperature: {start_C: 20, rate_C_per_h: 10}\n" : "")));
+        gyro ? Simulate("seed: 7\n"
+                        "profile: {amplitude_deg: [360, 90], period_s: [30, 12], duration_s: 30, "
+                        "rate_hz: 200}\n" +
+                        std::string(kGyroScenario) + effects)
+             : Simulate(Scenario(effects + (e.needs.temp_C
+                                                ? "temperature: {start_C: 20, rate_C_per_h: 10}\n"
+                                                : "")));
     const std::string truth = Path("sim/truth.json");
     ASSERT_TRUE(LoadCalibration(truth).layout.has(e.id));
     const std::string refusal = ExportRefusal(LoadCalibration(truth));
@@ -361,14 +372,46 @@ TEST_F(ExportTest, EverySensorStageEffectIsCarriedOrRefusedByName) {
         EXPECT_FALSE(fs::exists(Path(e.name + ".h"))) << format;
       }
     }
-    if (refusal.empty()) {
-      ++carried;
-      EXPECT_LE(LargestDifference(truth, run), 1e-9);
-    } else {
+    if (!refusal.empty()) {
       ++refused;
+      continue;
     }
+    ++carried;
+    if (!gyro) {
+      EXPECT_LE(LargestDifference(truth, run), 1e-9);
+      continue;
+    }
+    ++gyro_carried;
+    // The json-matrix names the effect's parameters as the catalogue does.
+    const nlohmann::json m = nlohmann::json::parse(ReadFile(Path(e.name + ".json-matrix")));
+    const int o = LoadCalibration(truth).layout.offset(e.id);
+    for (std::size_t q = 0; q < e.params.size(); ++q) {
+      const nlohmann::json& p = m["gyro"]["effects"][e.name]["parameters"][e.params[q].name];
+      ASSERT_TRUE(p.is_object()) << e.params[q].name;
+      EXPECT_EQ(p["unit"], e.params[q].unit);
+      EXPECT_NEAR(p["value"].get<double>(),
+                  LoadCalibration(truth).theta[o + static_cast<int>(q)] / e.params[q].si_per_unit,
+                  1e-12 * std::abs(TypicalValue(e, e.params[q], 175.8)));
+    }
+    double gyro_dps = 1e300;
+    EXPECT_LE(LargestDifference(truth, run, &gyro_dps), 1e-9);
+    EXPECT_LE(gyro_dps, 1e-9);
+    // A fit with the effect: its OUT carries the effect's parameters, and so
+    // does its export.
+    for (const char* file : {"applied.csv", "cal.c", "cal.h", "fit.json"}) fs::remove(Path(file));
+    const auto f =
+        RunTriadcal("fit " + run + " --effects " + e.name + " -o " + Path("fit.json"), Err());
+    ASSERT_EQ(f.status, 0) << f.err;
+    ASSERT_TRUE(LoadCalibration(Path("fit.json")).layout.has(e.id));
+    gyro_dps = 1e300;
+    EXPECT_LE(LargestDifference(Path("fit.json"), run, &gyro_dps), 1e-9);
+    EXPECT_LE(gyro_dps, 1e-9);
+    for (const char* file : {"applied.csv", "cal.c", "cal.h"}) fs::remove(Path(file));
   }
-  EXPECT_GE(carried, 4);  // thermal_drift, thermal_drift_temp, scale_asymmetry, cross_quadratic
+  // thermal_drift, thermal_drift_temp, scale_asymmetry, cross_quadratic and
+  // gyro_scale_asymmetry, gyro_nonlinearity
+  EXPECT_GE(carried, 6);
+  EXPECT_GE(gyro_carried, 2);
   EXPECT_GE(refused, 1);  // thermal_drift_quadratic
 }
 
