@@ -10,10 +10,12 @@
 # docs/reliability.md.
 #
 # Four groups of tests are run apart or not at all (docs/reliability.md):
-#   - GyroTerm.NormalisedErrorsOverTwentySeeds, 20 fits of a statistical check
-#     (173 s under ASan, 20 s without): its path, the fit with a gyro, runs
-#     under ASan in GyroTerm.FitRecoversTheGyroWithinItsSigma and
-#     SharedTimeOffsetIsEstimated;
+#   - the statistical tests (label statistical, tests/CMakeLists.txt):
+#     GyroTerm.NormalisedErrorsOverTwentySeeds, 20 fits (173 s under ASan, 20 s
+#     without), and CliGyroEffectsSeeds.EachGyroEffectOverTenSeeds, 20
+#     simulations and fits: their paths, the fit with a gyro and its effects,
+#     run under ASan in GyroTerm.FitRecoversTheGyroWithinItsSigma,
+#     SharedTimeOffsetIsEstimated and FitRecoversEachGyroEffect;
 #   - the two MPI tests (OnTwoMpiRanks): Open MPI's own allocations, suppressed
 #     by fuzz/lsan_mpi.supp with full unwinding;
 #   - python_pytest: the system python3 is not built with ASan, so the runtime
@@ -52,8 +54,8 @@ if [ $# -gt 0 ]; then
 fi
 status=0
 ctest --test-dir build-asan --output-on-failure -j2 \
-  -LE '^install$' \
-  -E 'OnTwoMpiRanks|^python_pytest$|NormalisedErrorsOverTwentySeeds' || status=1
+  -LE '^(install|statistical)$' \
+  -E 'OnTwoMpiRanks|^python_pytest$' || status=1
 ASAN_OPTIONS=$ASAN_OPTIONS:fast_unwind_on_malloc=0 LSAN_OPTIONS=suppressions=$supp/lsan_mpi.supp \
   ctest --test-dir build-asan --output-on-failure -R 'OnTwoMpiRanks' || status=1
 echo "python module under ASan (pytest, runtime preloaded):"
