@@ -86,35 +86,30 @@ bool NeedsRatesAtEverySample(const ParameterLayout& layout) {
   return false;
 }
 
-std::vector<BenchAngles<double>> EstimateAngleDerivatives(const RunData& run,
-                                                          const AngleDerivativeOptions& opt,
-                                                          const std::vector<std::size_t>* only) {
+std::vector<BenchAngles<double>> EstimateAngleDerivativesAt(const RunData& run,
+                                                            const AngleDerivativeOptions& opt,
+                                                            const std::vector<std::size_t>& at) {
   opt.Check();
-  const std::size_t n = run.size();
-  std::vector<BenchAngles<double>> out(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    for (int i = 0; i < 2; ++i) out[k].axis[i].angle = run.lambda_rad[i][k];
-  }
   const double h = opt.half_window_s;
-  auto window = [&](std::size_t k, std::size_t* lo, std::size_t* hi) {
+  std::vector<BenchAngles<double>> out(at.size());
+  for (std::size_t j = 0; j < at.size(); ++j) {
+    const std::size_t k = at[j];
     const double t0 = run.t_s[k];
-    *lo = std::lower_bound(run.t_s.begin(), run.t_s.begin() + k, t0 - h) - run.t_s.begin();
-    *hi = std::upper_bound(run.t_s.begin() + k, run.t_s.end(), t0 + h) - run.t_s.begin();
-  };
-  if (only) {
-    for (std::size_t k : *only) {
-      std::size_t lo, hi;
-      window(k, &lo, &hi);
-      FitAt(run, k, lo, hi, h, &out[k]);
-    }
-    return out;
-  }
-  for (std::size_t k = 0; k < n; ++k) {
-    std::size_t lo, hi;
-    window(k, &lo, &hi);
-    FitAt(run, k, lo, hi, h, &out[k]);
+    const std::size_t lo =
+        std::lower_bound(run.t_s.begin(), run.t_s.begin() + k, t0 - h) - run.t_s.begin();
+    const std::size_t hi =
+        std::upper_bound(run.t_s.begin() + k, run.t_s.end(), t0 + h) - run.t_s.begin();
+    for (int i = 0; i < 2; ++i) out[j].axis[i].angle = run.lambda_rad[i][k];
+    FitAt(run, k, lo, hi, h, &out[j]);
   }
   return out;
+}
+
+std::vector<BenchAngles<double>> EstimateAngleDerivatives(const RunData& run,
+                                                          const AngleDerivativeOptions& opt) {
+  std::vector<std::size_t> every(run.size());
+  for (std::size_t k = 0; k < every.size(); ++k) every[k] = k;
+  return EstimateAngleDerivativesAt(run, opt, every);
 }
 
 double RateNoiseGain(double dt_s, const AngleDerivativeOptions& opt) {

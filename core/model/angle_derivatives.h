@@ -37,12 +37,15 @@ struct AngleDerivativeOptions {
 // Per sample: recorded angle (as is), rate and angular acceleration of both
 // axes. With rate columns, the rate is taken from the file and the acceleration
 // is the local-fit derivative of the rate.
-// With `only` given, rates and accelerations are estimated at those sample
-// indices alone (the others keep their angle with rate = accel = 0): the base
-// model needs lambda' only at the measurement epochs.
-std::vector<BenchAngles<double>> EstimateAngleDerivatives(
-    const RunData& run, const AngleDerivativeOptions& opt,
-    const std::vector<std::size_t>* only = nullptr);
+std::vector<BenchAngles<double>> EstimateAngleDerivatives(const RunData& run,
+                                                          const AngleDerivativeOptions& opt);
+
+// The same at the listed samples alone, one entry per index in `at` (the base
+// model needs lambda' only at the measurement epochs: a long run is not
+// held again sample by sample).
+std::vector<BenchAngles<double>> EstimateAngleDerivativesAt(const RunData& run,
+                                                            const AngleDerivativeOptions& opt,
+                                                            const std::vector<std::size_t>& at);
 
 // True when the model needs lambda', lambda'' at every sample (effects of the
 // angle stage, and the size effect's per-axis kinematics in block B1).

@@ -71,17 +71,24 @@ TEST(AngleDerivativesWithRates, RecordedRatesAreKeptAndQuadraticRatesDifferentia
   }
 }
 
-TEST(AngleDerivatives, OnlyTheListedSamplesGetDerivatives) {
+TEST(AngleDerivatives, AtTheListedSamplesOnly) {
   RunData d = IrregularRun(100.0, 1.0, 3);
   for (int i = 0; i < 2; ++i) {
     for (double t : d.t_s) d.lambda_rad[i].push_back(0.4 * t * t);
   }
   const std::vector<std::size_t> only = {0, 17, d.size() - 1};
-  const std::vector<BenchAngles<double>> b = EstimateAngleDerivatives(d, {0.1}, &only);
-  for (std::size_t k = 0; k < d.size(); ++k) {
-    const bool listed = k == 0 || k == 17 || k == d.size() - 1;
-    EXPECT_NEAR(b[k].axis[0].rate, listed ? 0.8 * d.t_s[k] : 0.0, 1e-9) << k;
-    EXPECT_NEAR(b[k].axis[1].accel, listed ? 0.8 : 0.0, 1e-7) << k;
+  const std::vector<BenchAngles<double>> b = EstimateAngleDerivativesAt(d, {0.1}, only);
+  const std::vector<BenchAngles<double>> every = EstimateAngleDerivatives(d, {0.1});
+  ASSERT_EQ(b.size(), only.size());
+  for (std::size_t j = 0; j < only.size(); ++j) {
+    const std::size_t k = only[j];
+    EXPECT_NEAR(b[j].axis[0].rate, 0.8 * d.t_s[k], 1e-9) << k;
+    EXPECT_NEAR(b[j].axis[1].accel, 0.8, 1e-7) << k;
+    for (int i = 0; i < 2; ++i) {  // the same numbers as at every sample
+      EXPECT_EQ(b[j].axis[i].angle, every[k].axis[i].angle) << k;
+      EXPECT_EQ(b[j].axis[i].rate, every[k].axis[i].rate) << k;
+      EXPECT_EQ(b[j].axis[i].accel, every[k].axis[i].accel) << k;
+    }
   }
 }
 

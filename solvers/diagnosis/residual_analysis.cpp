@@ -42,7 +42,7 @@ using NamedSeries = std::pair<std::string, std::vector<double>>;
 
 // What a residual is correlated with: the kinematic signals (and the
 // temperature) at the samples `mids`, from the recorded angles' derivatives
-// there (rec, indexed by sample).
+// there (rec[j] at sample mids[j]).
 std::vector<NamedSeries> KinematicSignals(const ModelConfig& cfg, const Eigen::VectorXd& th,
                                           const RunData& data, const std::vector<std::size_t>& mids,
                                           const std::vector<BenchAngles<double>>& rec) {
@@ -62,8 +62,9 @@ std::vector<NamedSeries> KinematicSignals(const ModelConfig& cfg, const Eigen::V
                          "Wz"};
   const int n_sig = 14;
   std::vector<std::vector<double>> sig(n_sig + 1);
-  for (std::size_t mid : mids) {
-    const BenchAngles<double>& r = rec[mid];
+  for (std::size_t j = 0; j < mids.size(); ++j) {
+    const std::size_t mid = mids[j];
+    const BenchAngles<double>& r = rec[j];
     const BenchAngles<double> b = BenchAnglesFromRecorded<double>(cfg, th.data(), r);
     const BenchMotion<double> m = ComputeBenchMotion(cfg, th.data(), b);
     const Eigen::Vector3d W = SpecificForce_g(cfg, m.C_L2, Eigen::Vector3d::Zero().eval());
@@ -219,7 +220,7 @@ ResidualReport AnalyzeResiduals(const RunDescription& run, const RunData& data,
   std::vector<std::size_t> mids;
   for (std::size_t e = 1; e < E; ++e)
     mids.push_back((fit.epoch_samples[e - 1] + fit.epoch_samples[e]) / 2);
-  const std::vector<BenchAngles<double>> rec = EstimateAngleDerivatives(data, {}, &mids);
+  const std::vector<BenchAngles<double>> rec = EstimateAngleDerivativesAt(data, {}, mids);
   const std::vector<NamedSeries> signals = KinematicSignals(cfg, th, data, mids, rec);
 
   const std::size_t M = E - 1;
@@ -227,7 +228,7 @@ ResidualReport AnalyzeResiduals(const RunDescription& run, const RunData& data,
   std::vector<double> white[6];
   for (std::size_t j = 0; j < M; ++j) {
     const std::size_t e = j + 1;
-    const BenchAngles<double> b = BenchAnglesFromRecorded<double>(cfg, th.data(), rec[mids[j]]);
+    const BenchAngles<double> b = BenchAnglesFromRecorded<double>(cfg, th.data(), rec[j]);
     const BenchMotion<double> m = ComputeBenchMotion(cfg, th.data(), b);
     const double T = fit.epoch_t[e] - fit.epoch_t[e - 1];
     const Eigen::Vector3d a_triad =
@@ -273,7 +274,7 @@ ResidualReport AnalyzeGyroResiduals(const RunDescription& run, const RunData& da
   const std::size_t M = gy.mid_samples.size();
   if (!gy.present || M < 8) return rep;
   const ModelConfig cfg = MakeModelConfig(run, layout, data);
-  const std::vector<BenchAngles<double>> rec = EstimateAngleDerivatives(data, {}, &gy.mid_samples);
+  const std::vector<BenchAngles<double>> rec = EstimateAngleDerivativesAt(data, {}, gy.mid_samples);
   const std::vector<NamedSeries> signals =
       KinematicSignals(cfg, fit.estimate.theta, data, gy.mid_samples, rec);
 

@@ -201,7 +201,7 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
     for (int q = 0; q < ns; ++q) th_sensor[sensor_idx[q]].v[q] = 1.0;
   }
   auto bench_at = [&](std::size_t k) {
-    return BenchAnglesAt(cfg, th_jet, angle_idx, p.series.recorded[k]);
+    return BenchAnglesAt(cfg, th_jet, angle_idx, p.series.Recorded(k));
   };
   pass.r.resize(count_in);
   pass.valid.assign(count_in, 1);
@@ -224,7 +224,9 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
     Eigen::Matrix<double, 3, kSensorJet> Js = Eigen::Matrix<double, 3, kSensorJet>::Zero();
     Eigen::Matrix<double, 3, 6> Je = Eigen::Matrix<double, 3, 6>::Zero();  // dK, k2 columns
     std::array<double, 6> mom = {0, 0, 0, 0, 0, 0};
+    SampleSeries::Walk recorded(p.series, k0);
     for (std::size_t k = k0; k <= k1; ++k) {
+      const BenchAngleSample b = BenchAnglesAt(cfg, th_jet, angle_idx, recorded.Next());
       const double w = TrapezoidWeight(d, k0, k1, k);
       const SampleContext ctx{d.t_s[k], d.has_temp() ? d.temp_C[k] : 0.0};
       // The specific force at O from the accelerometers, at theta.
@@ -261,7 +263,6 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
         const Mat3d C_L2 = Rz<double>(th[kDpsi]) * Ry<double>(l1) * Rx<double>(l2);
         rate -= C_L2.transpose() * cfg.earth_rate_L;
       }
-      const BenchAngleSample b = bench_at(k);
       const Mat3d P = Rx<double>(b.angle[1] + th[kDlambda2]);
       r += w * (P * rate);
       AddMoments(d, k, w * w, &mom);

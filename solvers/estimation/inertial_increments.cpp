@@ -4,10 +4,39 @@
 
 #include "core/model/b1_jacobian.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 namespace triadcal {
+
+namespace {
+
+BenchAngles<double> WithoutDerivatives(const RunData& run, std::size_t k) {
+  BenchAngles<double> b;
+  for (int i = 0; i < 2; ++i) b.axis[i] = AxisState<double>{run.lambda_rad[i][k], 0.0, 0.0};
+  return b;
+}
+
+}  // namespace
+
+BenchAngles<double> SampleSeries::Recorded(std::size_t k) const {
+  if (at.empty()) return derivatives[k];
+  const auto it = std::lower_bound(at.begin(), at.end(), k);
+  if (it != at.end() && *it == k) return derivatives[it - at.begin()];
+  return WithoutDerivatives(*run, k);
+}
+
+SampleSeries::Walk::Walk(const SampleSeries& s, std::size_t k0)
+    : s_(s), k_(k0), j_(std::lower_bound(s.at.begin(), s.at.end(), k0) - s.at.begin()) {}
+
+BenchAngles<double> SampleSeries::Walk::Next() {
+  const std::size_t k = k_++;
+  if (s_.at.empty()) return s_.derivatives[k];
+  if (j_ < s_.at.size() && s_.at[j_] == k) return s_.derivatives[j_++];
+  return WithoutDerivatives(*s_.run, k);
+}
+
 namespace {
 
 template <int N>
@@ -22,9 +51,10 @@ void AccumulateWithJacobian(const ModelConfig& cfg, const Eigen::VectorXd& theta
   Eigen::Matrix<double, 3, N> dv = Eigen::Matrix<double, 3, N>::Zero();
   Eigen::Matrix<double, 3, N> ds = Eigen::Matrix<double, 3, N>::Zero();
   const RunData& run = *s.run;
+  SampleSeries::Walk recorded(s, k0);
   for (std::size_t k = k0; k <= k1; ++k) {
     const SampleContext ctx{run.t_s[k], run.has_temp() ? run.temp_C[k] : 0.0};
-    const Vec3<J> a = AccelerationFromReadings_L<J>(cfg, th.data(), s.recorded[k],
+    const Vec3<J> a = AccelerationFromReadings_L<J>(cfg, th.data(), recorded.Next(),
                                                     run.readings_mV(k), ctx);
     const double wa = alpha[k - k0], wb = beta[k - k0];
     for (int r = 0; r < 3; ++r) {
@@ -58,13 +88,14 @@ IntervalIncrement IntegrateInterval(const ModelConfig& cfg, const Eigen::VectorX
     beta[j + 1] += 0.5 * dt * remain + dt * dt / 6.0;
   }
   for (Eigen::Matrix<double, 6, 6>& w : inc.channel_weight) w.setZero();
+  SampleSeries::Walk recorded_for_noise(s, k0);
   for (std::size_t j = 0; j <= m && with_noise; ++j) {
     const double a2 = alpha[j] * alpha[j], ab = alpha[j] * beta[j], b2 = beta[j] * beta[j];
     inc.sum_alpha2 += a2;
     inc.sum_alpha_beta += ab;
     inc.sum_beta2 += b2;
     const BenchAngles<double> b =
-        BenchAnglesFromRecorded<double>(cfg, theta.data(), s.recorded[k0 + j]);
+        BenchAnglesFromRecorded<double>(cfg, theta.data(), recorded_for_noise.Next());
     const Eigen::Matrix3d C_L2 = ComputeBenchMotion<double>(cfg, theta.data(), b).C_L2;
     if (j == 0 || j == m) {
       (j == 0 ? inc.first_weight : inc.last_weight) << alpha[j], beta[j];
@@ -85,10 +116,11 @@ IntervalIncrement IntegrateInterval(const ModelConfig& cfg, const Eigen::VectorX
     w.bottomLeftCorner<3, 3>() = w.topRightCorner<3, 3>().transpose();
   }
   const int n = static_cast<int>(theta.size());
+  SampleSeries::Walk recorded(s, k0);
   if (!with_jacobian) {
     for (std::size_t k = k0; k <= k1; ++k) {
       const SampleContext ctx{run.t_s[k], run.has_temp() ? run.temp_C[k] : 0.0};
-      const Vec3<double> a = AccelerationFromReadings_L<double>(cfg, theta.data(), s.recorded[k],
+      const Vec3<double> a = AccelerationFromReadings_L<double>(cfg, theta.data(), recorded.Next(),
                                                                 run.readings_mV(k), ctx);
       inc.dv_mps += alpha[k - k0] * a;
       inc.ds_m += beta[k - k0] * a;
@@ -102,7 +134,7 @@ IntervalIncrement IntegrateInterval(const ModelConfig& cfg, const Eigen::VectorX
     Eigen::Vector3d a;
     for (std::size_t k = k0; k <= k1; ++k) {
       const SampleContext ctx{run.t_s[k], run.has_temp() ? run.temp_C[k] : 0.0};
-      AccelerationWithJacobian(cfg, theta.data(), s.recorded[k], run.readings_mV(k), ctx, &a, Jk);
+      AccelerationWithJacobian(cfg, theta.data(), recorded.Next(), run.readings_mV(k), ctx, &a, Jk);
       inc.dv_mps += alpha[k - k0] * a;
       inc.ds_m += beta[k - k0] * a;
       inc.ddv_dtheta += alpha[k - k0] * Jk;

@@ -48,10 +48,29 @@ struct IntervalIncrement {
   Eigen::Vector2d first_weight = Eigen::Vector2d::Zero(), last_weight = Eigen::Vector2d::Zero();
 };
 
-// Per-sample data the increments need, prepared once per run.
+// Per-sample data the increments need, prepared once per run: the run, and
+// the recorded angles' rates and accelerations (EstimateAngleDerivatives)
+// where the model needs them. The base model needs them at the measurement
+// epochs alone (`at`): elsewhere a sample's angles are the run's own with
+// rate and acceleration 0, and nothing is held per sample.
 struct SampleSeries {
   const RunData* run = nullptr;
-  std::vector<BenchAngles<double>> recorded;  // angles, rates, accelerations
+  std::vector<std::size_t> at;  // ascending sample indices; empty: every sample
+  std::vector<BenchAngles<double>> derivatives;  // at each of `at` (or every sample)
+
+  // Sample k's recorded angles with their rates and accelerations.
+  BenchAngles<double> Recorded(std::size_t k) const;
+
+  // Samples k0, k0 + 1, ... in turn (Recorded without a search per sample).
+  class Walk {
+   public:
+    Walk(const SampleSeries& s, std::size_t k0);
+    BenchAngles<double> Next();
+
+   private:
+    const SampleSeries& s_;
+    std::size_t k_, j_;  // the next sample, and the first of `at` not before it
+  };
 };
 
 // Increments over samples k0..k1 (inclusive) at theta; with_jacobian fills the

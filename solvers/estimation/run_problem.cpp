@@ -94,8 +94,12 @@ RunProblem BuildRunProblem(const RunDescription& run, const RunData& data,
     throw InputError(run.data_path + ": run too short (" + std::to_string(p.epochs.size()) +
                      " epochs of " + std::to_string(epoch_s) + " s; at least 3 needed)");
   }
-  p.series.recorded = EstimateAngleDerivatives(
-      data, derivatives, NeedsRatesAtEverySample(layout) ? nullptr : &p.epochs);
+  if (NeedsRatesAtEverySample(layout)) {
+    p.series.derivatives = EstimateAngleDerivatives(data, derivatives);
+  } else {
+    p.series.at = p.epochs;
+    p.series.derivatives = EstimateAngleDerivativesAt(data, derivatives, p.series.at);
+  }
   p.prior = MakePrior(run, layout);
   p.n = layout.size();
   p.theta_held = p.prior.mean;

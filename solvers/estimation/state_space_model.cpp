@@ -102,7 +102,7 @@ ProcessStep StateSpaceModel::Process(std::size_t e, const Eigen::VectorXd& theta
 
 MeasurementStep StateSpaceModel::Measurement(std::size_t e, const Eigen::VectorXd& theta,
                                              bool with_jacobian, bool with_noise) const {
-  const BenchAngles<double>& recorded = p_.series.recorded[p_.epochs[e]];
+  const BenchAngles<double> recorded = p_.series.Recorded(p_.epochs[e]);
   const Eigen::VectorXd theta_acc = theta.head(n_acc_);
   const ReferenceSample ref = EvaluateReference(acc_cfg_, theta_acc, recorded, with_jacobian);
   MeasurementStep m;
