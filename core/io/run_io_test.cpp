@@ -169,6 +169,51 @@ TEST_F(RunIoTest, CsvOfSeveralReadBlocks) {
                 FormatDouble(run.t_s[row]) + "'");
 }
 
+// Past 64 KB the reader parses the lines it holds on two threads, split at a
+// line end near the middle: the rows come back in order, comment and blank
+// lines in the first half move the line numbers of the second, and an error
+// names its file line in either half (the first half's when both have one).
+TEST_F(RunIoTest, CsvParsedOnTwoThreads) {
+  const RunData run = MakeRun(3000, false, false);
+  WriteRunCsv(run, Path("run.csv"), "two halves");
+  std::vector<std::string> lines;
+  {
+    const std::string text = ReadFile(Path("run.csv"));
+    ASSERT_GT(text.size(), std::size_t{1} << 16);
+    std::size_t at = 0;
+    while (at < text.size()) {
+      const std::size_t eol = text.find('\n', at);
+      lines.push_back(text.substr(at, eol - at));
+      at = eol + 1;
+    }
+  }
+  lines.insert(lines.begin() + 100, "# a comment in the first half");
+  lines.insert(lines.begin() + 200, "");
+  auto write = [&](const std::string& name, const std::vector<std::string>& v) {
+    std::string text;
+    for (const std::string& l : v) text += l + "\n";
+    WriteText(name, text);
+  };
+  write("halves.csv", lines);
+  RunWarnings warnings;
+  ExpectSameRun(run, LoadRunData(Describe("halves.csv"), &warnings));
+  // Errors: line index j is file line j + 1.
+  auto spoil = [](std::string* line) {
+    *line = "x" + *line;
+    return line->substr(0, line->find(','));
+  };
+  std::vector<std::string> bad = lines;
+  const std::size_t late = lines.size() - 50;
+  const std::string late_t = spoil(&bad[late]);
+  write("bad.csv", bad);
+  EXPECT_EQ(ErrorOf(Describe("bad.csv")), Path("bad.csv") + ":" + std::to_string(late + 1) +
+                                              ": column 't': not a number: '" + late_t + "'");
+  const std::string early_t = spoil(&bad[150]);
+  write("bad.csv", bad);
+  EXPECT_EQ(ErrorOf(Describe("bad.csv")),
+            Path("bad.csv") + ":151: column 't': not a number: '" + early_t + "'");
+}
+
 // One file column may feed two channels (the reader hands a column over to
 // the last channel that reads it, and copies it for the others).
 TEST_F(RunIoTest, OneColumnFeedsTwoChannels) {
