@@ -56,11 +56,16 @@ std::string CommandLineOf(int argc, char** argv) {
 }
 
 void Provenance::RecordInput(const std::string& role, const std::string& path) {
+  RecordInput(role, path, Sha256OfFile(path));
+}
+
+void Provenance::RecordInput(const std::string& role, const std::string& path,
+                             const std::string& sha256) {
   const std::string abs = AbsolutePath(path);
   for (const json& in : inputs_) {
     if (in["role"] == role && in["path"] == abs) return;
   }
-  inputs_.push_back({{"role", role}, {"path", abs}, {"sha256", Sha256OfFile(path)}});
+  inputs_.push_back({{"role", role}, {"path", abs}, {"sha256", sha256}});
 }
 
 void Provenance::RecordSensor(const std::string& serial, const std::string& model) {

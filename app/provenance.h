@@ -31,6 +31,8 @@ class Provenance {
   // its absolute path and its SHA-256 (read now: what the command used). An
   // input recorded twice (same role and path) is kept once.
   void RecordInput(const std::string& role, const std::string& path);
+  // The same with the file's SHA-256 taken by the caller (while it read it).
+  void RecordInput(const std::string& role, const std::string& path, const std::string& sha256);
   // The sensor of run.yaml's `sensor:` key (empty strings: not given).
   void RecordSensor(const std::string& serial, const std::string& model);
 

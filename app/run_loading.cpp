@@ -1,9 +1,11 @@
 #include "app/run_loading.h"
 
+#include <future>
 #include <utility>
 
 #include "core/io/run_description_io.h"
 #include "core/io/run_io.h"
+#include "core/io/sha256.h"
 #include "solvers/static/mounting_search.h"
 
 namespace triadcal {
@@ -18,6 +20,10 @@ LoadedRun LoadRun(RunDescription description, Session* session) {
   LoadedRun r;
   r.description = std::move(description);
   session->provenance.RecordSensor(r.description.sensor_serial, r.description.sensor_model);
+  // The data file's checksum (provenance) is taken on a second thread while
+  // the file is parsed: both read it from the page cache.
+  std::future<std::string> checksum = std::async(
+      std::launch::async, [path = r.description.data_path] { return Sha256OfFile(path); });
   RunWarnings warnings;
   r.data = LoadRunData(r.description, &warnings);
   r.warnings = std::move(warnings.lines);
@@ -26,7 +32,7 @@ LoadedRun LoadRun(RunDescription description, Session* session) {
   if (session->warning) {
     for (const std::string& w : r.warnings) session->warning(w);
   }
-  session->RecordInput("data", r.description.data_path);
+  session->RecordInput("data", r.description.data_path, checksum.get());
   return r;
 }
 

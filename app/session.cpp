@@ -7,6 +7,12 @@ void Session::RecordInput(const std::string& role, const std::string& path) {
   NoteInput(path);
 }
 
+void Session::RecordInput(const std::string& role, const std::string& path,
+                          const std::string& sha256) {
+  provenance.RecordInput(role, path, sha256);
+  NoteInput(path);
+}
+
 void Session::NoteInput(const std::string& path) const {
   if (output_guard) output_guard->NoteInput(path);
 }

@@ -41,6 +41,8 @@ struct Session {
   // An input file loaded: recorded in the provenance (its role and path) and
   // noted in the output guard, so that no output replaces it.
   void RecordInput(const std::string& role, const std::string& path);
+  // The same with the file's SHA-256 taken by the caller.
+  void RecordInput(const std::string& role, const std::string& path, const std::string& sha256);
   // A file loaded that the provenance does not list (a runs file, a manifest,
   // an OUT a report or a merge reads, the point of `observability --at`):
   // noted in the output guard only. Nothing without a guard.
