@@ -109,17 +109,18 @@ void BatchMinimizer::IterationZero(const Eigen::VectorXd& phi0) {
     rho_.push_back(NoiseDofShare(current_.reductions[r], FittedFor(r)));
   }
   if (current_.finite()) {
-    MaximiseNoise(&current_, &noise_);
+    MaximiseNoise(&current_, &noise_, ThetaPart::kGradientAndInformation);
   } else {
     objective_.Reweight(&current_, noise_);  // the point returned has every part
   }
 }
 
-void BatchMinimizer::MaximiseNoise(BatchObjective::Point* pt,
-                                   std::vector<Eigen::Vector3d>* noise) const {
+void BatchMinimizer::MaximiseNoise(BatchObjective::Point* pt, std::vector<Eigen::Vector3d>* noise,
+                                   ThetaPart theta_part) const {
   // Newton's method in s = log sigma at pt's theta (each run's noise apart:
   // at fixed theta they do not interact), with halving where -log L would
-  // rise; reductions without the theta part, then one with it at the result.
+  // rise; reductions without the theta part, then one with theta_part at the
+  // result.
   if (noisy_.empty()) return;
   double f = Objective(*pt);
   for (int step = 0; step < kNoiseSteps; ++step) {
@@ -162,7 +163,7 @@ void BatchMinimizer::MaximiseNoise(BatchObjective::Point* pt,
     }
     if (!lowered) break;  // at the maximum to rounding
   }
-  objective_.Reweight(pt, *noise);
+  objective_.Reweight(pt, *noise, theta_part);
 }
 
 bool BatchMinimizer::ComputeStep() {
@@ -254,9 +255,11 @@ bool BatchMinimizer::TryStep() {
   // The trial's noise at its conditional maximum there (the step's own
   // change of log sigma is Newton's on an exponential, and overshoots where
   // a channel's residual changed much): -log L profiled over the noise.
+  // The trial's cost first, its theta part once it is accepted and the
+  // current point's is no longer needed (one point's blocks held at a time).
   std::vector<Eigen::Vector3d> noise = noise_;
-  BatchObjective::Point trial = objective_.Evaluate(phi, noise, true, FullUnlessNoisy());
-  if (trial.finite()) MaximiseNoise(&trial, &noise);
+  BatchObjective::Point trial = objective_.Evaluate(phi, noise, true, ThetaPart::kNone);
+  if (trial.finite()) MaximiseNoise(&trial, &noise, ThetaPart::kNone);
   summary_.iterations += 1;
   summary_.passes += 1;
   const double before = Objective(current_), after = Objective(trial);
@@ -267,14 +270,19 @@ bool BatchMinimizer::TryStep() {
                 summary_.iterations, before, after, predicted_, summary_.newton_decrement);
   Say(line);
   if (trial.finite() && actual > 0.0) {
-    MeasureCurvature(trial, noise);
-    const double rho = actual / predicted_;
-    mu_ = std::max(mu_ * std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3)), 1e-12);
-    nu_ = 2.0;
-    current_ = std::move(trial);
-    noise_ = noise;
-    summary_.accepted += 1;
-    return true;
+    current_.reductions.clear();  // the curvature reweights current_'s passes
+    objective_.Reweight(&trial, noise);
+    if (trial.finite()) {
+      MeasureCurvature(trial, noise);
+      const double rho = actual / predicted_;
+      mu_ = std::max(mu_ * std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3)), 1e-12);
+      nu_ = 2.0;
+      current_ = std::move(trial);
+      noise_ = noise;
+      summary_.accepted += 1;
+      return true;
+    }
+    objective_.Reweight(&current_, noise_);  // a gradient not finite: refused after all
   }
   mu_ = std::max(mu_ * nu_, 1e-4);
   nu_ *= 2.0;

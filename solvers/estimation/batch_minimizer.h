@@ -106,8 +106,10 @@ class BatchMinimizer {
   // Its gradient in the free unknowns and their Gauss-Newton information.
   void Model(const BatchObjective::Point& pt, Eigen::VectorXd* g, Eigen::MatrixXd* H) const;
   double NoiseFloor(int run, int channel) const;
-  // The noises of the runs that estimate them at their maximum at pt.
-  void MaximiseNoise(BatchObjective::Point* pt, std::vector<Eigen::Vector3d>* noise) const;
+  // The noises of the runs that estimate them at their maximum at pt, its
+  // reductions formed there with theta_part.
+  void MaximiseNoise(BatchObjective::Point* pt, std::vector<Eigen::Vector3d>* noise,
+                     ThetaPart theta_part) const;
 
   const BatchObjective& objective_;
   std::vector<int> free_;

@@ -171,11 +171,22 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
   // 3. The theta part at the optimal states: the whitened Jacobians (the
   // process whitening's derivative by K_i acts on the residual there), the
   // gradient J_theta^T r (J_x^T r = 0 at the optimal states) and the
-  // information with the states eliminated.
+  // information with the states eliminated. The gradient alone keeps no
+  // Jacobian: each epoch's share is summed in order.
+  const bool information = theta_part == ThetaPart::kGradientAndInformation;
+  std::vector<Eigen::VectorXd> share_m, share_p;  // without the information: N^T r0, C^T r0
+  if (!information) {
+    share_m.resize(E);
+    share_p.resize(E);
+  }
   ParallelFor(E, threads, [&](std::size_t e) {
     const MeasurementStep& m = pass.measurement[e];
     mb[e].N = -wp.LR[e] * m.H;
     mb[e].r0 = wp.LR[e] * out.measurement_residual[e];
+    if (!information) {
+      share_m[e].noalias() = mb[e].N.transpose() * mb[e].r0;
+      mb[e].N.resize(6, 0);
+    }
     if (e + 1 == E) return;
     const ProcessStep& s = pass.process[e];
     const Vec6& r = out.process_residual[e + 1];
@@ -193,15 +204,25 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
                       (2.0 * h) * (-2.0 * var[i] / theta[kKx + i]);
       pb[e].C.col(kKx + i) += dL * r;
     }
+    if (!information) {
+      share_p[e].noalias() = pb[e].C.transpose() * pb[e].r0;
+      pb[e].C.resize(6, 0);
+    }
   });
-  if (theta_part == ThetaPart::kGradientAndInformation) {
+  if (information) {
     out.information = ThetaInformationBySchur(pb, mb, Eigen::MatrixXd::Zero(0, n));
   }
   out.gradient = Eigen::VectorXd::Zero(n);
   for (std::size_t e = 0; e < E; ++e) {
-    out.gradient.noalias() += mb[e].N.transpose() * mb[e].r0;
-    if (e + 1 < E) out.gradient.noalias() += pb[e].C.transpose() * pb[e].r0;
+    if (information) {
+      out.gradient.noalias() += mb[e].N.transpose() * mb[e].r0;
+      if (e + 1 < E) out.gradient.noalias() += pb[e].C.transpose() * pb[e].r0;
+    } else {
+      out.gradient += share_m[e];
+      if (e + 1 < E) out.gradient += share_p[e];
+    }
   }
+  if (!information) return out;
   out.process_blocks = std::move(pb);
   out.measurement_blocks = std::move(mb);
   return out;

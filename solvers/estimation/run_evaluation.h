@@ -111,7 +111,7 @@ struct RunReduction {
   // ending at epoch e, zero at e = 0) and measurement (index e).
   std::vector<Vec6> process_residual, measurement_residual;
   // The whitened blocks at the optimal states (r0 = the residual there), for
-  // the epoch scores (HAC) and the expected autocorrelation; with the Jacobian only.
+  // the epoch scores (HAC) and the expected autocorrelation; with the information only.
   std::vector<ProcessBlock> process_blocks;
   std::vector<MeasurementBlock> measurement_blocks;
 };
