@@ -105,10 +105,13 @@ bool B1HasAnalyticJacobian(const ParameterLayout& layout) {
   return true;
 }
 
-// flatten: everything it calls is inlined into it. GCC left the 9-wide Jets'
-// arithmetic of the size effect as calls (a fit with size_effect on the real
-// slow run: solve 1.97 -> 1.19 s, the same numbers). Not under the address
-// sanitizer: instrumenting the flattened function took GCC over 14 minutes.
+// flatten: everything they call is inlined into them. GCC left the 9-wide
+// Jets' arithmetic of the size effect as calls (a fit with size_effect on the
+// real slow run: solve 1.97 -> 1.19 s, the same numbers). The angle stage and
+// the size effect are apart from the base model's path (noinline): flattened
+// into it they made one 94-kB function with an 18-kB stack frame, that the
+// base model ran through for every sample. Not under the address sanitizer:
+// instrumenting the flattened function took GCC over 14 minutes.
 #if defined(__SANITIZE_ADDRESS__)
 #define TRIADCAL_FLATTEN
 #elif defined(__has_feature)
@@ -119,52 +122,65 @@ bool B1HasAnalyticJacobian(const ParameterLayout& layout) {
 #ifndef TRIADCAL_FLATTEN
 #define TRIADCAL_FLATTEN __attribute__((flatten))
 #endif
-TRIADCAL_FLATTEN void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
-                              const BenchAngles<double>& rec, const Eigen::Vector3d& z_in,
-                              const SampleContext& ctx, Eigen::Vector3d* a_out,
-                              Eigen::Ref<Eigen::MatrixXd> J) {
+#if defined(__GNUC__)
+#define TRIADCAL_NOINLINE __attribute__((noinline))
+#else
+#define TRIADCAL_NOINLINE
+#endif
+
+namespace {
+
+// Angle stage: the bench angles from the recorded ones (*b), and the
+// derivatives of their six quantities (angle, rate, acceleration of each
+// axis) by the angle-stage parameters (*db, Jets over those alone).
+TRIADCAL_FLATTEN TRIADCAL_NOINLINE void AngleStage(const ModelConfig& cfg, const double* th,
+                                                   const BenchAngles<double>& rec,
+                                                   BenchAngles<double>* b,
+                                                   Eigen::Matrix<double, 6, kJetParams>* db) {
+  const ParameterLayout& layout = cfg.layout;
+  const std::vector<int>& angle_params = layout.StageParams(EffectStage::kAngle);
+  const std::array<SmallJet, kMaxParams> t = SeededTheta<SmallJet>(
+      th, layout.size(), angle_params.data(), static_cast<int>(angle_params.size()));
+  const BenchAngles<SmallJet> bj = BenchAnglesFromRecorded<SmallJet>(cfg, t.data(), rec);
+  for (int i = 0; i < 2; ++i) {
+    const AxisState<SmallJet>& a = bj.axis[i];
+    b->axis[i] = AxisState<double>{a.angle.a, a.rate.a, a.accel.a};
+    db->row(3 * i) = a.angle.v.transpose();
+    db->row(3 * i + 1) = a.rate.v.transpose();
+    db->row(3 * i + 2) = a.accel.v.transpose();
+  }
+}
+
+// The size effect's correction of the readings and its derivatives.
+struct SizeCorrection {
+  Eigen::Vector3d z;  // the readings less D
+  ThetaRows3 dD;      // 3 x n, empty without the size effect or at r = 0
+  Eigen::Matrix3d dD_r = Eigen::Matrix3d::Zero();  // at r = 0: row i is dD_i/dr_i
+  bool r_zero = false;
+};
+
+// Size effect: accelerometer i senses W_i at its own point; B1 removes
+// D_i = R_i(W_i) - R_i(W_O) from reading i first (AccelerationFromReadings_L).
+// dD/dtheta: by W through Jets of the geometry (the bench-angle quantities
+// and the geometric parameters), and by the sensor parameters written out.
+// With r = 0 (the score tests of `diagnose` linearise there) D vanishes for
+// every other parameter value, and only its columns by r remain:
+// dD_i/dr_i = grad R_i(W_O) dW/dp (ForceGradientByPoint).
+TRIADCAL_FLATTEN TRIADCAL_NOINLINE void SizeEffect(const ModelConfig& cfg, const double* th,
+                                                   const BenchAngles<double>& b,
+                                                   const Eigen::Matrix<double, 6, kJetParams>& db,
+                                                   SizeCorrection* out) {
   const ParameterLayout& layout = cfg.layout;
   const int n = layout.size();
   const double g = cfg.g_mps2;
-  // One fill when J is contiguous (a Ref's setZero goes column by column, a
-  // memset call each: 8 % of a 40-min fit's time).
-  if (J.outerStride() == J.rows()) {
-    std::fill_n(J.data(), J.size(), 0.0);
-  } else {
-    J.setZero();
-  }
-
-  // Angle stage: the bench angles from the recorded ones, and the derivatives
-  // of their six quantities (angle, rate, acceleration of each axis) by the
-  // angle-stage parameters (Jets over those alone).
-  BenchAngles<double> b = rec;
   const std::vector<int>& angle_params = layout.StageParams(EffectStage::kAngle);
-  Eigen::Matrix<double, 6, kJetParams> db = Eigen::Matrix<double, 6, kJetParams>::Zero();
-  if (!angle_params.empty()) {
-    const std::array<SmallJet, kMaxParams> t = SeededTheta<SmallJet>(th, n, angle_params.data(), static_cast<int>(angle_params.size()));
-    const BenchAngles<SmallJet> bj = BenchAnglesFromRecorded<SmallJet>(cfg, t.data(), rec);
-    for (int i = 0; i < 2; ++i) {
-      const AxisState<SmallJet>& a = bj.axis[i];
-      b.axis[i] = AxisState<double>{a.angle.a, a.rate.a, a.accel.a};
-      db.row(3 * i) = a.angle.v.transpose();
-      db.row(3 * i + 1) = a.rate.v.transpose();
-      db.row(3 * i + 2) = a.accel.v.transpose();
-    }
-  }
-
-  // Size effect: accelerometer i senses W_i at its own point; B1 removes
-  // D_i = R_i(W_i) - R_i(W_O) from reading i first (AccelerationFromReadings_L).
-  // dD/dtheta: by W through Jets of the geometry (the bench-angle quantities
-  // and the geometric parameters), and by the sensor parameters written out.
-  // With r = 0 (the score tests of `diagnose` linearise there) D vanishes for
-  // every other parameter value, and only its columns by r remain:
-  // dD_i/dr_i = grad R_i(W_O) dW/dp (ForceGradientByPoint).
-  Eigen::Vector3d z = z_in;
-  ThetaRows3 dD;  // 3 x n, empty without the size effect or at r = 0
-  Eigen::Matrix3d dD_r = Eigen::Matrix3d::Zero();  // at r = 0: row i is dD_i/dr_i
+  Eigen::Vector3d& z = out->z;
+  ThetaRows3& dD = out->dD;
+  Eigen::Matrix3d& dD_r = out->dD_r;
   const int o_s = layout.offset(Effect::kSizeEffect);
-  bool r_zero = o_s >= 0;
+  bool r_zero = true;
   for (int q = 0; q < 6 && r_zero; ++q) r_zero = th[o_s + q] == 0.0;
+  out->r_zero = r_zero;
   if (r_zero) {
     const BenchMotion<double> m = ComputeBenchMotion(cfg, th, b);
     const Vec3<double> W_O =
@@ -177,7 +193,7 @@ TRIADCAL_FLATTEN void AccelerationWithJacobian(const ModelConfig& cfg, const dou
       ReadingWithoutOffset(layout, th, i, W_O, &grad_O, 0.0, scratch);
       dD_r.row(i) = grad_O * dW_dr;
     }
-  } else if (o_s >= 0) {
+  } else {
     // Jets over what the bench's motion depends on: dpsi, d, eps and the six
     // bench-angle quantities. The points' positions (O at R, accelerometer i
     // at R + r_i) enter their accelerations linearly, so the columns of R
@@ -251,6 +267,34 @@ TRIADCAL_FLATTEN void AccelerationWithJacobian(const ModelConfig& cfg, const dou
       dD.row(i) = drow;
     }
   }
+}
+
+}  // namespace
+
+TRIADCAL_FLATTEN void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
+                              const BenchAngles<double>& rec, const Eigen::Vector3d& z_in,
+                              const SampleContext& ctx, Eigen::Vector3d* a_out,
+                              Eigen::Ref<Eigen::MatrixXd> J) {
+  const ParameterLayout& layout = cfg.layout;
+  const double g = cfg.g_mps2;
+  // One fill when J is contiguous (a Ref's setZero goes column by column, a
+  // memset call each: 8 % of a 40-min fit's time).
+  if (J.outerStride() == J.rows()) {
+    std::fill_n(J.data(), J.size(), 0.0);
+  } else {
+    J.setZero();
+  }
+
+  BenchAngles<double> b = rec;
+  const std::vector<int>& angle_params = layout.StageParams(EffectStage::kAngle);
+  Eigen::Matrix<double, 6, kJetParams> db = Eigen::Matrix<double, 6, kJetParams>::Zero();
+  if (!angle_params.empty()) AngleStage(cfg, th, rec, &b, &db);
+
+  SizeCorrection size;
+  size.z = z_in;
+  const int o_s = layout.offset(Effect::kSizeEffect);
+  if (o_s >= 0) SizeEffect(cfg, th, b, db, &size);
+  const Eigen::Vector3d& z = size.z;
 
   // C = C_L1 C_12 with C_12 = Rz(eps) Rx Rz(-eps) (ComputeBenchMotion).
   const Mat3<double> Rzp = Rz(th[kDpsi]);
@@ -329,10 +373,12 @@ TRIADCAL_FLATTEN void AccelerationWithJacobian(const ModelConfig& cfg, const dou
   }
   // The size effect's correction enters as u_i = (z_i - D_i - W0_i) / s_i:
   // dF/dD_i = 1 / s_i e_i, so da/dD_i = T.col(i) / s_i.
-  if (dD.size() > 0) {
-    for (int i = 1; i < 3; ++i) J += (T.col(i) / s[i]) * dD.row(i);
-  } else if (r_zero) {
-    for (int i = 1; i < 3; ++i) J.middleCols<3>(o_s + 3 * (i - 1)) += (T.col(i) / s[i]) * dD_r.row(i);
+  if (size.dD.size() > 0) {
+    for (int i = 1; i < 3; ++i) J += (T.col(i) / s[i]) * size.dD.row(i);
+  } else if (size.r_zero) {
+    for (int i = 1; i < 3; ++i) {
+      J.middleCols<3>(o_s + 3 * (i - 1)) += (T.col(i) / s[i]) * size.dD_r.row(i);
+    }
   }
 }
 
