@@ -163,7 +163,8 @@ void BatchMinimizer::MaximiseNoise(BatchObjective::Point* pt, std::vector<Eigen:
     }
     if (!lowered) break;  // at the maximum to rounding
   }
-  objective_.Reweight(pt, *noise, theta_part);
+  // Without a theta part, pt is reduced at *noise already.
+  if (theta_part != ThetaPart::kNone) objective_.Reweight(pt, *noise, theta_part);
 }
 
 bool BatchMinimizer::ComputeStep() {

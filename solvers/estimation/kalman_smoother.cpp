@@ -68,7 +68,7 @@ Eigen::VectorXd Propagate(const Interval& in, const Eigen::VectorXd& x, int n) {
 Eigen::MatrixXd PropagateCov(const Interval& in, const Eigen::MatrixXd& P, int n) {
   const Eigen::MatrixXd F = TransitionMatrix(in, n);
   Eigen::MatrixXd Pp = F * P * F.transpose();
-  Pp.topLeftCorner<6, 6>() += in.step.Q;
+  Pp.topLeftCorner<6, 6>() += in.step.noise->Q;
   return 0.5 * (Pp + Pp.transpose());
 }
 

@@ -27,8 +27,9 @@ Eigen::Vector3d ChannelVariance(const RunProblem& p, const Eigen::VectorXd& thet
 Mat6 ProcessCovariance(const RunProblem& p, const ProcessStep& s, const Eigen::VectorXd& theta,
                        const Eigen::Vector3d& noise_mV) {
   const Eigen::Vector3d var = ChannelVariance(p, theta, noise_mV);
-  Mat6 Q = s.Q_iso;
-  for (int i = 0; i < 3; ++i) Q += var[i] * s.channel_weight[i];
+  const ProcessNoise& q = *s.noise;
+  Mat6 Q = q.Q_iso;
+  for (int i = 0; i < 3; ++i) Q += var[i] * q.channel_weight[i];
   return Q;
 }
 
@@ -91,7 +92,7 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
     mb[e].r0.setZero();  // x = h: the measurement residual is zero there
     if (e + 1 < E) {
       const ProcessStep& s = pass.process[e];
-      const ProcessStep& w = wp.process[e];
+      const ProcessNoise& w = *wp.process[e].noise;
       Mat6 Q = w.Q_iso;
       for (int i = 0; i < 3; ++i) Q += var[i] * w.channel_weight[i];
       LQ[e] = WhiteningOf(Q);
@@ -132,11 +133,11 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
   };
   std::vector<Parts> comp(E - 1);
   ParallelFor(E - 1, threads, [&](std::size_t e) {
-    const ProcessStep& s = wp.process[e];
-    Mat6 Q = s.Q_iso, Q_ref = s.Q_iso;
+    const ProcessNoise& qn = *wp.process[e].noise;
+    Mat6 Q = qn.Q_iso, Q_ref = qn.Q_iso;
     for (int i = 0; i < 3; ++i) {
-      Q += var[i] * s.channel_weight[i];
-      Q_ref += var_ref[i] * s.channel_weight[i];
+      Q += var[i] * qn.channel_weight[i];
+      Q_ref += var_ref[i] * qn.channel_weight[i];
     }
     const Eigen::LDLT<Mat6> ldlt(Q), ldlt_ref(Q_ref);
     const Vec6 w = ldlt.solve(out.process_residual[e + 1]);
@@ -144,8 +145,8 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
     std::array<Mat6, 3> A;
     std::array<Vec6, 3> QiQinv_r, QinvQiw;
     for (int i = 0; i < 3; ++i) {
-      A[i] = ldlt_ref.solve(var_ref[i] * s.channel_weight[i]);
-      QiQinv_r[i] = var[i] * (s.channel_weight[i] * w);
+      A[i] = ldlt_ref.solve(var_ref[i] * qn.channel_weight[i]);
+      QiQinv_r[i] = var[i] * (qn.channel_weight[i] * w);
       QinvQiw[i] = ldlt.solve(QiQinv_r[i]);
       c.q[i] = w.dot(QiQinv_r[i]);
       c.N[i] = A[i].trace();
@@ -190,7 +191,7 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
     if (e + 1 == E) return;
     const ProcessStep& s = pass.process[e];
     const Vec6& r = out.process_residual[e + 1];
-    const ProcessStep& w = wp.process[e];
+    const ProcessNoise& w = *wp.process[e].noise;
     pb[e].C = -LQ[e] * s.U;
     pb[e].r0 = LQ[e] * r;
     Mat6 Q = w.Q_iso;

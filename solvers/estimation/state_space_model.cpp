@@ -83,20 +83,23 @@ ProcessStep StateSpaceModel::Process(std::size_t e, const Eigen::VectorXd& theta
     s.U = FreeColumns(Widen(U));
   }
   if (!with_noise) return s;
+  auto noise = std::make_shared<ProcessNoise>();
+  ProcessNoise& q = *noise;
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
-  s.Q.block<3, 3>(0, 0) = p_.isotropic_var * inc.sum_alpha2 * I;
-  s.Q.block<3, 3>(0, 3) = s.Q.block<3, 3>(3, 0) = p_.isotropic_var * inc.sum_alpha_beta * I;
-  s.Q.block<3, 3>(3, 3) = p_.isotropic_var * inc.sum_beta2 * I;
-  s.Q_iso = s.Q;
-  s.first_channel = inc.first_channel;
-  s.last_channel = inc.last_channel;
-  s.first_weight = inc.first_weight;
-  s.last_weight = inc.last_weight;
+  q.Q.block<3, 3>(0, 0) = p_.isotropic_var * inc.sum_alpha2 * I;
+  q.Q.block<3, 3>(0, 3) = q.Q.block<3, 3>(3, 0) = p_.isotropic_var * inc.sum_alpha_beta * I;
+  q.Q.block<3, 3>(3, 3) = p_.isotropic_var * inc.sum_beta2 * I;
+  q.Q_iso = q.Q;
+  q.first_channel = inc.first_channel;
+  q.last_channel = inc.last_channel;
+  q.first_weight = inc.first_weight;
+  q.last_weight = inc.last_weight;
   const Eigen::Vector3d var = ChannelVariance(theta);
   for (int i = 0; i < 3; ++i) {
-    s.channel_weight[i] = inc.channel_weight[i];
-    s.Q += var[i] * inc.channel_weight[i];
+    q.channel_weight[i] = inc.channel_weight[i];
+    q.Q += var[i] * inc.channel_weight[i];
   }
+  s.noise = std::move(noise);
   return s;
 }
 
@@ -118,8 +121,10 @@ Mat6 StateSpaceModel::ProcessCrossCovariance(const ProcessStep& a, const Process
                                              const Eigen::VectorXd& theta) const {
   const Eigen::Vector3d var = ChannelVariance(theta);
   Mat6 C = Mat6::Zero();
-  for (int i = 0; i < 3; ++i) C += var[i] * a.last_channel[i] * b.first_channel[i].transpose();
-  const Eigen::Matrix2d w = a.last_weight * b.first_weight.transpose();
+  const ProcessNoise& qa = *a.noise;
+  const ProcessNoise& qb = *b.noise;
+  for (int i = 0; i < 3; ++i) C += var[i] * qa.last_channel[i] * qb.first_channel[i].transpose();
+  const Eigen::Matrix2d w = qa.last_weight * qb.first_weight.transpose();
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
   C.block<3, 3>(0, 0) += p_.isotropic_var * w(0, 0) * I;
   C.block<3, 3>(0, 3) += p_.isotropic_var * w(0, 1) * I;
@@ -136,8 +141,9 @@ std::vector<Vec6> StateSpaceModel::WhitenProcessSequence(const std::vector<Proce
   Mat6 S_prev = Mat6::Zero();
   Vec6 nu_prev = Vec6::Zero();
   for (std::size_t e = 0; e < residuals.size(); ++e) {
-    Mat6 Q = steps[e].Q_iso;
-    for (int i = 0; i < 3; ++i) Q += var[i] * steps[e].channel_weight[i];
+    const ProcessNoise& q = *steps[e].noise;
+    Mat6 Q = q.Q_iso;
+    for (int i = 0; i < 3; ++i) Q += var[i] * q.channel_weight[i];
     Mat6 S = Q;
     Vec6 nu = residuals[e];
     if (e > 0) {

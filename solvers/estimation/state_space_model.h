@@ -41,6 +41,7 @@
 #pragma once
 
 #include <array>
+#include <memory>
 #include <cstddef>
 #include <vector>
 
@@ -53,11 +54,8 @@ namespace triadcal {
 using Mat6 = Eigen::Matrix<double, 6, 6>;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 
-// Interval e -> e+1 linearised at theta_lin.
-struct ProcessStep {
-  double T_s = 0.0;
-  Vec6 u = Vec6::Zero();  // (dv [m/s], ds [m]) at theta_lin
-  Eigen::MatrixXd U;      // 6 x n_free, du/dtheta (empty when not asked)
+// The noise of interval e -> e+1 (asked for with with_noise).
+struct ProcessNoise {
   Mat6 Q = Mat6::Zero();  // covariance of w_e
   // Q's make-up, to evaluate it at another theta or noise: the isotropic
   // part and each channel's weight per unit variance (Q = Q_iso + sum_i
@@ -67,6 +65,16 @@ struct ProcessStep {
   // The shares of the first and last sample in the noise (inertial_increments.h).
   std::array<Vec6, 3> first_channel, last_channel;
   Eigen::Vector2d first_weight = Eigen::Vector2d::Zero(), last_weight = Eigen::Vector2d::Zero();
+};
+
+// Interval e -> e+1 linearised at theta_lin.
+struct ProcessStep {
+  double T_s = 0.0;
+  Vec6 u = Vec6::Zero();  // (dv [m/s], ds [m]) at theta_lin
+  Eigen::MatrixXd U;      // 6 x n_free, du/dtheta (empty when not asked)
+  // The noise, when asked (null otherwise: a pass of Jacobians at a trial
+  // point holds none, 1.8 kB an interval).
+  std::shared_ptr<const ProcessNoise> noise;
   Mat6 F() const;         // transition of x
 };
 

@@ -199,7 +199,7 @@ TEST(StateSpaceModel, SequenceWhiteningRemovesTheSharedSampleCorrelation) {
     for (std::size_t j = 0; j < steps; ++j) {
       const ProcessStep noisy = model.Process(first + j, theta, false);
       r.push_back(noisy.u - st[j].u);
-      each.push_back(WhiteningOf(st[j].Q) * r.back());
+      each.push_back(WhiteningOf(st[j].noise->Q) * r.back());
     }
     const std::vector<Vec6> seq = model.WhitenProcessSequence(st, r, theta);
     for (std::size_t j = 1; j < steps; ++j) {
