@@ -220,8 +220,17 @@ bool BatchMinimizer::ComputeStep() {
   return true;
 }
 
+Eigen::VectorXd BatchMinimizer::GradientAtTrialNoise(
+    const BatchObjective::Point& trial, const std::vector<Eigen::Vector3d>& trial_noise) const {
+  BatchObjective::Point at = objective_.AtNoise(current_, trial_noise, ThetaPart::kGradient);
+  objective_.ReweightGyro(&at, trial);
+  Eigen::VectorXd g0(free_.size());
+  for (std::size_t a = 0; a < free_.size(); ++a) g0[a] = at.gradient[free_[a]];
+  return g0;
+}
+
 void BatchMinimizer::MeasureCurvature(const BatchObjective::Point& trial,
-                                      const std::vector<Eigen::Vector3d>& trial_noise) {
+                                      const Eigen::VectorXd& g0) {
   // What the step showed of -log L's curvature beyond Gauss-Newton's: the
   // change of the gradient along it, y = g(theta_trial) - g(theta), both at
   // the trial's noise (the current point reweighted: a reduction, no pass),
@@ -232,10 +241,7 @@ void BatchMinimizer::MeasureCurvature(const BatchObjective::Point& trial,
   // d^T B d + y y^T / y^T d, S = B+ - H at the new point. A misfit's
   // residual curvature made Gauss-Newton converge linearly (real fast roll
   // run: 13 steps with the noise held, 5 with S).
-  BatchObjective::Point at = objective_.AtNoise(current_, trial_noise, ThetaPart::kGradient);
-  objective_.ReweightGyro(&at, trial);
-  Eigen::VectorXd g0(free_.size()), g1;
-  for (std::size_t a = 0; a < free_.size(); ++a) g0[a] = at.gradient[free_[a]];
+  Eigen::VectorXd g1;
   Eigen::MatrixXd H1;
   Model(trial, &g1, &H1);
   const Eigen::VectorXd y = g1 - g0;
@@ -272,9 +278,10 @@ bool BatchMinimizer::TryStep() {
   Say(line);
   if (trial.finite() && actual > 0.0) {
     current_.reductions.clear();  // the curvature reweights current_'s passes
+    const Eigen::VectorXd g0 = GradientAtTrialNoise(trial, noise);
     objective_.Reweight(&trial, noise);
     if (trial.finite()) {
-      MeasureCurvature(trial, noise);
+      MeasureCurvature(trial, g0);
       const double rho = actual / predicted_;
       mu_ = std::max(mu_ * std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3)), 1e-12);
       nu_ = 2.0;

@@ -97,8 +97,13 @@ class BatchMinimizer {
   // False when converged (or stopped: summary_.termination says why).
   bool ComputeStep();
   bool TryStep();
-  void MeasureCurvature(const BatchObjective::Point& trial,
-                        const std::vector<Eigen::Vector3d>& trial_noise);
+  // The current point's gradient in the free unknowns at the trial's noise
+  // (the current point reweighted: a reduction, no pass), before the trial's
+  // theta part is formed (one point's blocks held at a time).
+  Eigen::VectorXd GradientAtTrialNoise(const BatchObjective::Point& trial,
+                                       const std::vector<Eigen::Vector3d>& trial_noise) const;
+  // g0: GradientAtTrialNoise.
+  void MeasureCurvature(const BatchObjective::Point& trial, const Eigen::VectorXd& g0);
   void Say(const std::string& line) const;
   // -log L up to a constant: the cost and each estimated noise's
   // log-determinant (run_evaluation.h).

@@ -616,15 +616,16 @@ class BatchSolve {
     const auto t_cov = std::chrono::steady_clock::now();
     const int n = p_.n;
     const std::size_t E = p_.epochs.size();
-    const RunReduction& red = pt_.reductions[0];
+    RunReduction& red = pt_.reductions[0];
     const Eigen::MatrixXd Iaa = Sub(pt_.information, est_, est_);
     const Eigen::MatrixXd cov_a = Eigen::LDLT<Eigen::MatrixXd>(Iaa).solve(
         Eigen::MatrixXd::Identity(est_.size(), est_.size()));
     // The whitened process Jacobians over the estimated parameters: the
     // autocorrelation the fit itself leaves in the residuals.
     std::vector<Eigen::MatrixXd> C(E - 1);
-    std::vector<ProcessBlock> pb = red.process_blocks;
-    std::vector<MeasurementBlock> mb = red.measurement_blocks;
+    // The minimum's blocks, narrowed in place: the covariance is their last use.
+    std::vector<ProcessBlock> pb = std::move(red.process_blocks);
+    std::vector<MeasurementBlock> mb = std::move(red.measurement_blocks);
     for (std::size_t e = 0; e < E; ++e) {
       Eigen::MatrixXd N(6, est_.size());
       for (std::size_t k = 0; k < est_.size(); ++k) N.col(k) = mb[e].N.col(est_[k]);
