@@ -262,14 +262,18 @@ bool BatchMinimizer::TryStep() {
   // The trial's noise at its conditional maximum there (the step's own
   // change of log sigma is Newton's on an exponential, and overshoots where
   // a channel's residual changed much): -log L profiled over the noise.
-  // The trial's cost first, its theta part once it is accepted and the
-  // current point's is no longer needed (one point's blocks held at a time).
+  // One point's blocks are held at a time: the current point's reductions
+  // are dropped meanwhile (formed again if the step is refused: a
+  // reduction, no pass), the trial's theta part is formed once it is
+  // accepted.
+  const double before = Objective(current_);
+  current_.reductions.clear();
   std::vector<Eigen::Vector3d> noise = noise_;
   BatchObjective::Point trial = objective_.Evaluate(phi, noise, true, ThetaPart::kNone);
   if (trial.finite()) MaximiseNoise(&trial, &noise, ThetaPart::kNone);
   summary_.iterations += 1;
   summary_.passes += 1;
-  const double before = Objective(current_), after = Objective(trial);
+  const double after = Objective(trial);
   const double actual = before - after;
   char line[200];
   std::snprintf(line, sizeof(line),
@@ -277,8 +281,10 @@ bool BatchMinimizer::TryStep() {
                 summary_.iterations, before, after, predicted_, summary_.newton_decrement);
   Say(line);
   if (trial.finite() && actual > 0.0) {
-    current_.reductions.clear();  // the curvature reweights current_'s passes
+    // The current point gives way (its passes too) before the trial's theta part is formed.
     const Eigen::VectorXd g0 = GradientAtTrialNoise(trial, noise);
+    const Eigen::VectorXd phi_current = current_.phi;
+    current_ = BatchObjective::Point{};
     objective_.Reweight(&trial, noise);
     if (trial.finite()) {
       MeasureCurvature(trial, g0);
@@ -290,7 +296,10 @@ bool BatchMinimizer::TryStep() {
       summary_.accepted += 1;
       return true;
     }
-    objective_.Reweight(&current_, noise_);  // a gradient not finite: refused after all
+    // A gradient not finite: refused after all, the current point evaluated again.
+    current_ = objective_.Evaluate(phi_current, noise_, true, ThetaPart::kGradientAndInformation);
+  } else {
+    objective_.Reweight(&current_, noise_);
   }
   mu_ = std::max(mu_ * nu_, 1e-4);
   nu_ *= 2.0;
