@@ -245,9 +245,10 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
   }
   CheckTimeNotDecreasing(table, t);
 
-  // Repeated time stamps: keep the first sample of each.
-  const std::vector<std::size_t> keep = FirstOfEqualTimes(t.values);
-  if (keep.size() < table.rows) {
+  // Repeated time stamps: keep the first sample of each (an index per
+  // sample only when there are some).
+  if (std::adjacent_find(t.values.begin(), t.values.end()) != t.values.end()) {
+    const std::vector<std::size_t> keep = FirstOfEqualTimes(t.values);
     for (ChannelValues* c : all) KeepRows(keep, c);
     KeepRows(keep, &labels);
     Warn(warnings, DuplicateWarning(table.rows - keep.size()));

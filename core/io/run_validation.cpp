@@ -122,21 +122,22 @@ std::optional<std::string> DuplicateWarning(std::size_t n_dropped) {
 
 std::optional<std::string> GapWarning(const std::vector<double>& t_s) {
   if (t_s.size() < 3) return std::nullopt;
-  std::vector<double> dt(t_s.size() - 1);
-  for (std::size_t k = 1; k < t_s.size(); ++k) dt[k - 1] = t_s[k] - t_s[k - 1];
-  std::vector<double> sorted = dt;
+  // One copy of the intervals, for the median; each is formed again below.
+  auto dt = [&t_s](std::size_t k) { return t_s[k + 1] - t_s[k]; };
+  std::vector<double> sorted(t_s.size() - 1);
+  for (std::size_t k = 0; k < sorted.size(); ++k) sorted[k] = dt(k);
   std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
   const double median = sorted[sorted.size() / 2];
   std::size_t count = 0, largest_at = 0;
-  for (std::size_t k = 0; k < dt.size(); ++k) {
-    if (dt[k] > 1.5 * median) {
+  for (std::size_t k = 0; k < sorted.size(); ++k) {
+    if (dt(k) > 1.5 * median) {
       ++count;
-      if (dt[k] > dt[largest_at] || dt[largest_at] <= 1.5 * median) largest_at = k;
+      if (dt(k) > dt(largest_at) || dt(largest_at) <= 1.5 * median) largest_at = k;
     }
   }
   if (count == 0) return std::nullopt;
   return std::to_string(count) + " gaps in time (intervals > 1.5x the median interval " +
-         Num(median) + " s); the largest is " + Num(dt[largest_at]) +
+         Num(median) + " s); the largest is " + Num(dt(largest_at)) +
          " s, after t = " + Num(t_s[largest_at]) + " s";
 }
 
