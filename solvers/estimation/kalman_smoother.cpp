@@ -156,7 +156,7 @@ PassResult ForwardPass(const StateSpaceModel& model, GyroMeasurements* gyro, int
     Eigen::MatrixXd H(6, N);
     H.leftCols(6).setIdentity();
     H.rightCols(n) = -m.H;
-    const Mat6& R = m.R;
+    const Mat6 R = m.R;
     const Eigen::MatrixXd PHt = P * H.transpose();
     const Mat6 S = H * PHt + R;
     const Eigen::LLT<Mat6> llt(S);

@@ -82,7 +82,7 @@ struct ProcessStep {
 struct MeasurementStep {
   Vec6 h = Vec6::Zero();  // (V_DU [m/s], S_DU [m])
   Eigen::MatrixXd H;      // 6 x n_free, dh/dtheta (empty when not asked)
-  Mat6 R = Mat6::Zero();  // covariance of v_e (zero when not asked)
+  Eigen::MatrixXd R;      // 6 x 6 covariance of v_e (empty when not asked)
 };
 
 class StateSpaceModel {
