@@ -3,6 +3,7 @@
 #include <future>
 #include <utility>
 
+#include "core/io/file_util.h"
 #include "core/io/run_description_io.h"
 #include "core/io/run_io.h"
 #include "core/io/sha256.h"
@@ -21,9 +22,13 @@ LoadedRun LoadRun(RunDescription description, Session* session) {
   r.description = std::move(description);
   session->provenance.RecordSensor(r.description.sensor_serial, r.description.sensor_model);
   // The data file's checksum (provenance) is taken on a second thread while
-  // the file is parsed: both read it from the page cache.
-  std::future<std::string> checksum = std::async(
-      std::launch::async, [path = r.description.data_path] { return Sha256OfFile(path); });
+  // the file is parsed: both read it from the page cache. Not a path that is
+  // no readable file (a FIFO would block the thread; LoadRunData says what
+  // it is).
+  const std::string& path = r.description.data_path;
+  std::future<std::string> checksum =
+      std::async(InputFileProblem(path).empty() ? std::launch::async : std::launch::deferred,
+                 [path] { return Sha256OfFile(path); });
   RunWarnings warnings;
   r.data = LoadRunData(r.description, &warnings);
   r.warnings = std::move(warnings.lines);
@@ -32,7 +37,7 @@ LoadedRun LoadRun(RunDescription description, Session* session) {
   if (session->warning) {
     for (const std::string& w : r.warnings) session->warning(w);
   }
-  session->RecordInput("data", r.description.data_path, checksum.get());
+  session->RecordInput("data", path, checksum.get());
   return r;
 }
 
