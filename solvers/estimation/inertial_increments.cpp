@@ -72,7 +72,10 @@ void AccumulateWithJacobian(const ModelConfig& cfg, const Eigen::VectorXd& theta
 
 IntervalIncrement IntegrateInterval(const ModelConfig& cfg, const Eigen::VectorXd& theta,
                                     const SampleSeries& s, std::size_t k0, std::size_t k1,
-                                    bool with_jacobian, bool with_noise) {
+                                    bool with_jacobian, bool with_noise, bool with_values) {
+  if (!with_values && with_jacobian) {
+    throw std::logic_error("IntegrateInterval: a Jacobian needs the values");
+  }
   const RunData& run = *s.run;
   IntervalIncrement inc;
   const std::size_t m = k1 - k0;
@@ -115,6 +118,7 @@ IntervalIncrement IntegrateInterval(const ModelConfig& cfg, const Eigen::VectorX
   for (Eigen::Matrix<double, 6, 6>& w : inc.channel_weight) {
     w.bottomLeftCorner<3, 3>() = w.topRightCorner<3, 3>().transpose();
   }
+  if (!with_values) return inc;
   const int n = static_cast<int>(theta.size());
   SampleSeries::Walk recorded(s, k0);
   if (!with_jacobian) {

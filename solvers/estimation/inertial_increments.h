@@ -78,10 +78,13 @@ struct SampleSeries {
 // bench_model.h). with_noise fills the noise weights (sum_*, channel_weight,
 // first_* and last_*): the batch solver takes them from one reference pass
 // (run_evaluation.h) and skips them at every other point, where they would
-// cost a bench-motion evaluation per sample.
+// cost a bench-motion evaluation per sample. Without with_values (and without
+// with_jacobian) the noise weights alone: the reference pass uses no
+// increment, and they would cost a readings inverse per sample.
 IntervalIncrement IntegrateInterval(const ModelConfig& cfg, const Eigen::VectorXd& theta,
                                     const SampleSeries& series, std::size_t k0, std::size_t k1,
-                                    bool with_jacobian, bool with_noise = true);
+                                    bool with_jacobian, bool with_noise = true,
+                                    bool with_values = true);
 
 // Variance of one acceleration sample [m^2/s^4] that acts alike on every axis
 // of L: the angle noise rotating g, and a floor of 1e-6 m/s^2 that keeps

@@ -48,7 +48,10 @@ RunPass Pass(const RunProblem& p, const Eigen::VectorXd& theta, bool with_jacobi
   pass.measurement.resize(E);
   if (with_noise) pass.LR.resize(E);
   ParallelFor(E, threads, [&](std::size_t e) {
-    if (e + 1 < E) pass.process[e] = model.Process(e, theta, with_jacobian, with_noise);
+    // The weights' pass (with the noise) needs no increments.
+    if (e + 1 < E) {
+      pass.process[e] = model.Process(e, theta, with_jacobian, with_noise, !with_noise);
+    }
     pass.measurement[e] = model.Measurement(e, theta, with_jacobian, with_noise);
     if (with_noise) pass.LR[e] = WhiteningOf(pass.measurement[e].R);
   });
@@ -69,6 +72,7 @@ RunPass WeightsPass(const RunProblem& p, const Eigen::VectorXd& theta_ref, int t
 RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& weights,
                     const Eigen::Vector3d& noise_mV, int threads, ThetaPart theta_part) {
   if (!weights.with_noise) throw std::logic_error("Reduce: the weights' pass has no noise weights");
+  if (pass.with_noise) throw std::logic_error("Reduce: the weights' pass has no increments");
   const RunPass& wp = weights;
   const std::size_t E = pass.measurement.size();
   const int n = pass.with_jacobian ? static_cast<int>(pass.theta.size()) : 0;

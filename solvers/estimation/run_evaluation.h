@@ -81,7 +81,8 @@ RunPass EvaluatePass(const RunProblem& p, const Eigen::VectorXd& theta, bool wit
                      int threads);
 
 // The reference pass of the noise weights' shape (above), at theta_ref (the
-// nominal values): the values and the noise weights, no Jacobian.
+// nominal values): the noise weights and the reference motion, no increments
+// (ProcessStep::u left zero) and no Jacobian.
 RunPass WeightsPass(const RunProblem& p, const Eigen::VectorXd& theta_ref, int threads);
 
 // The run at theta with its trajectory solved for, at a reading noise.

@@ -70,10 +70,11 @@ Eigen::MatrixXd StateSpaceModel::FreeColumns(const Eigen::MatrixXd& J) const {
 }
 
 ProcessStep StateSpaceModel::Process(std::size_t e, const Eigen::VectorXd& theta,
-                                     bool with_jacobian, bool with_noise) const {
+                                     bool with_jacobian, bool with_noise, bool with_values) const {
   const Eigen::VectorXd theta_acc = theta.head(n_acc_);
-  const IntervalIncrement inc = IntegrateInterval(acc_cfg_, theta_acc, p_.series, p_.epochs[e],
-                                                  p_.epochs[e + 1], with_jacobian, with_noise);
+  const IntervalIncrement inc =
+      IntegrateInterval(acc_cfg_, theta_acc, p_.series, p_.epochs[e], p_.epochs[e + 1],
+                        with_jacobian, with_noise, with_values);
   ProcessStep s;
   s.T_s = inc.T_s;
   s.u << inc.dv_mps, inc.ds_m;
