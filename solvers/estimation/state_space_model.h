@@ -110,8 +110,8 @@ class StateSpaceModel {
   Eigen::MatrixXd ExpandCovariance(const Eigen::MatrixXd& cov_free) const;
 
   // Interval e -> e+1 at the full theta. with_jacobian fills U, with_noise
-  // Q and its make-up (without it they are zero); without with_values (the
-  // noise weights' reference pass) the increment u is left zero.
+  // its noise, Q and its make-up (without it ProcessStep::noise is null);
+  // without with_values (the noise weights' reference pass) u is left zero.
   ProcessStep Process(std::size_t e, const Eigen::VectorXd& theta, bool with_jacobian,
                       bool with_noise = true, bool with_values = true) const;
   // Epoch e at the full theta. with_jacobian fills H, with_noise R.
