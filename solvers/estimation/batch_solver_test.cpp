@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <stdexcept>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -58,6 +59,8 @@ TEST(RunEvaluation, GradientsMatchCentralDifferences) {
   theta[kDx2] += 0.003;
   const Eigen::Vector3d noise(2.0, 2.5, 1.8);
   const RunReduction at = Reduce(p, EvaluatePass(p, theta, true, 1), ref, noise, 1);
+  // The weights' pass holds no increments: it is no pass to reduce.
+  EXPECT_THROW(Reduce(p, ref, ref, noise, 1), std::logic_error);
   auto cost = [&](const Eigen::VectorXd& th) {
     return Reduce(p, EvaluatePass(p, th, false, 1), ref, noise, 1).cost;
   };

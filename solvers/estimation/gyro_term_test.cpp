@@ -190,6 +190,16 @@ TEST(GyroTerm, NoiseIsAtTheLikelihoodMaximum) {
       EXPECT_GE(ReduceGyro(pass, s, best.rho, false).neg_log_l, best.neg_log_l - 1e-9) << i;
     }
   }
+  // From starts 90 times too small and 60 times too large (the common scale's
+  // jump, then Newton's steps): the same maximum.
+  for (double start : {1e-5, 5e-2}) {
+    const GyroReduction far =
+        ReduceGyroAtBestNoise(pass, Eigen::Vector3d::Constant(start), 21, false);
+    const double rel = ((far.noise_rad_s - best.noise_rad_s).array() / best.noise_rad_s.array())
+                           .abs()
+                           .maxCoeff();
+    EXPECT_LT(rel, 1e-6) << "start " << start;
+  }
 }
 
 // The Cramer-Rao bound of the gyro's parameters from its readings model alone
