@@ -381,6 +381,9 @@ class Loop {
   DiagnosisResult res_;             // the result being built
   std::vector<Effect> candidates_;  // neither selected nor absorbing yet
 
+  // What every fit and score analysis of the loop shares (fit_opt_.shared).
+  SharedRunWork shared_;
+
   // Progress: every fit reports into [span_begin_, span_end_].
   double span_begin_ = 0.0, span_end_ = 0.15;
   BatchOptions fit_opt_;
@@ -416,6 +419,7 @@ Loop::Loop(const RunDescription& run, const RunData& data, const DiagnoseOptions
       opt_.fraction(span_begin_ + (span_end_ - span_begin_) * f);
     };
   }
+  if (!fit_opt_.shared) fit_opt_.shared = &shared_;
   last_threshold_ = opt_.alpha / std::max<std::size_t>(1, candidates_.size());
 }
 

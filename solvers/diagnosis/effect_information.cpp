@@ -150,7 +150,8 @@ class CandidateAnalysis {
     std::vector<Effect> all = current_;
     all.insert(all.end(), candidates_.begin(), candidates_.end());
     full_ = ParameterLayout(all, gyro_);
-    p_ = BuildRunProblem(run_, data_, full_, options_.epoch_s, options_.derivatives);
+    p_ = BuildRunProblem(run_, data_, full_, options_.epoch_s, options_.derivatives,
+                         options_.shared);
     if (fit_.noise_used_mV.minCoeff() > 0.0) p_.noise_mV = fit_.noise_used_mV;
     const std::size_t E = p_.epochs.size();
     if (fit_.process_residual.size() != E || fit_.measurement_residual.size() != E) {
@@ -176,7 +177,7 @@ class CandidateAnalysis {
     RunProblem pa;
     if (split) {
       pa = BuildRunProblem(run_, data_, ParameterLayout(accel_effects), options_.epoch_s,
-                           options_.derivatives);
+                           options_.derivatives, options_.shared);
       pa.noise_mV = p_.noise_mV;
     }
     const RunProblem& accel = split ? pa : p_;
@@ -186,9 +187,12 @@ class CandidateAnalysis {
       to_full[i] = full_.IndexOf(accel.cfg.layout.info(i).name);
       theta_accel[i] = theta[to_full[i]];
     }
-    const RunPass weights = WeightsPass(accel, accel.prior.mean, threads);
+    const std::shared_ptr<const RunPass> weights =
+        options_.shared ? options_.shared->Weights(accel, threads)
+                        : std::make_shared<const RunPass>(
+                              WeightsPass(accel, accel.prior.mean, threads));
     const RunReduction red = Reduce(accel, EvaluatePass(accel, theta_accel, true, threads),
-                                    weights, accel.noise_mV, threads);
+                                    *weights, accel.noise_mV, threads);
     const int nf = full_.size();
     I_ = Eigen::MatrixXd::Zero(nf, nf);
     g_ = Eigen::VectorXd::Zero(nf);

@@ -14,8 +14,10 @@ bool BatchObjective::Point::finite() const {
 }
 
 BatchObjective::BatchObjective(std::vector<LinkedRun> runs, Eigen::MatrixXd A, Eigen::VectorXd b,
-                               const Eigen::VectorXd& weights_phi, int threads)
-    : runs_(std::move(runs)), A_(std::move(A)), b_(std::move(b)), threads_(threads) {
+                               const Eigen::VectorXd& weights_phi, int threads,
+                               std::vector<std::shared_ptr<const RunPass>> weights)
+    : runs_(std::move(runs)), weights_(std::move(weights)), A_(std::move(A)), b_(std::move(b)),
+      threads_(threads) {
   m_ = static_cast<int>(A_.cols());
   for (const LinkedRun& r : runs_) {
     if (!r.problem) throw std::logic_error("BatchObjective: a run without its problem");
@@ -25,7 +27,10 @@ BatchObjective::BatchObjective(std::vector<LinkedRun> runs, Eigen::MatrixXd A, E
     }
   }
   for (int r = 0; r < this->runs(); ++r) {
-    weights_.push_back(WeightsPass(*runs_[r].problem, ThetaOf(r, weights_phi), threads_));
+    if (static_cast<int>(weights_.size()) <= r) {
+      weights_.push_back(std::make_shared<const RunPass>(
+          WeightsPass(*runs_[r].problem, ThetaOf(r, weights_phi), threads_)));
+    }
     has_gyro_.push_back(RunHasGyro(*runs_[r].problem));
     gyro_noise_hint_.push_back(runs_[r].problem->gyro_noise_rad_s);
   }
@@ -78,7 +83,7 @@ void BatchObjective::Reweight(Point* pt, const std::vector<Eigen::Vector3d>& noi
                               ThetaPart theta_part) const {
   pt->reductions.clear();
   for (int r = 0; r < runs(); ++r) {
-    pt->reductions.push_back(Reduce(*runs_[r].problem, *pt->passes[r], weights_[r], noise[r],
+    pt->reductions.push_back(Reduce(*runs_[r].problem, *pt->passes[r], *weights_[r], noise[r],
                                     threads_, theta_part));
   }
   Assemble(pt);

@@ -38,9 +38,11 @@ class BatchObjective {
  public:
   // rows: A (k x m) and b (k): the whitened priors and constraints over phi.
   // The noise weights' shape of every evaluation is the one at weights_phi
-  // (the nominal values; run_evaluation.h): one pass without Jacobians here.
+  // (the nominal values; run_evaluation.h): one pass without Jacobians here,
+  // unless `weights` gives each run's (SharedRunWork::Weights).
   BatchObjective(std::vector<LinkedRun> runs, Eigen::MatrixXd A, Eigen::VectorXd b,
-                 const Eigen::VectorXd& weights_phi, int threads);
+                 const Eigen::VectorXd& weights_phi, int threads,
+                 std::vector<std::shared_ptr<const RunPass>> weights = {});
 
   struct Point {
     Eigen::VectorXd phi;
@@ -102,13 +104,13 @@ class BatchObjective {
   void HoldGyroNoise() { gyro_noise_held_ = true; }
 
   // Run r's reference pass of the noise weights (run_evaluation.h).
-  const RunPass& weights(int r) const { return weights_[r]; }
+  const RunPass& weights(int r) const { return *weights_[r]; }
 
  private:
   void Assemble(Point* pt) const;
 
   std::vector<LinkedRun> runs_;
-  std::vector<RunPass> weights_;  // per run, at weights_phi
+  std::vector<std::shared_ptr<const RunPass>> weights_;  // per run, at weights_phi
   std::vector<bool> has_gyro_;    // per run
   // The gyros' noise at the last evaluation: where the next one's profile
   // starts (the objective is evaluated by one minimiser at a time).

@@ -465,7 +465,7 @@ class BatchSolve {
     if (opt_.sigma != "auto" && opt_.sigma != "white" && opt_.sigma != "hac") {
       throw OptionError("sigma", "unknown '" + opt_.sigma + "' (auto, white, hac)");
     }
-    p_ = BuildRunProblem(run_, data_, layout_, opt_.epoch_s, opt_.derivatives);
+    p_ = BuildRunProblem(run_, data_, layout_, opt_.epoch_s, opt_.derivatives, opt_.shared);
     res_.prior = p_.prior;
     res_.epochs = static_cast<int>(p_.epochs.size());
     res_.noise_declared_mV = run_.ChannelNoise_mV();
@@ -538,8 +538,10 @@ class BatchSolve {
   bool Minimise() {
     t_solve_ = std::chrono::steady_clock::now();
     PriorAndConstraintRows(p_, &A_, &b_);
+    std::vector<std::shared_ptr<const RunPass>> weights;
+    if (opt_.shared) weights.push_back(opt_.shared->Weights(p_, threads_));
     objective_.emplace(std::vector<LinkedRun>{LinkedRun{&p_, {}, {}}}, A_, b_, p_.prior.mean,
-                       threads_);
+                       threads_, std::move(weights));
     MinimizerOptions mo;
     mo.max_iterations = opt_.max_iterations;
     mo.tolerance = opt_.tolerance;

@@ -162,6 +162,10 @@ struct BatchOptions {
   // When set, the decision of step 1 is not made but taken from here (a
   // refit of the loop keeps what the fit it starts from decided).
   const HoldDecision* decision = nullptr;
+  // When set, the run's layout-independent work (the angles' derivatives,
+  // the noise weights' reference pass) comes from here, formed by the first
+  // fit that needs it: the fits of diagnose's loop share one (run_problem.h).
+  SharedRunWork* shared = nullptr;
   // Estimate the reading noise of each channel with theta (maximum
   // likelihood; run.yaml's noise_mV is the start). Off: the noise stays as
   // given (declared, or noise_override).

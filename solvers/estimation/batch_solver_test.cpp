@@ -307,6 +307,39 @@ TEST(BatchSolver, EstimatesAnEffect) {
   }
 }
 
+// The layout-independent work of one run (SharedRunWork), formed once and
+// shared by fits of several layouts, gives each fit exactly what it forms
+// alone; a fit on other epochs forms its own instead of taking the first's.
+TEST(BatchSolver, SharedRunWorkGivesEachLayoutItsOwnFit) {
+  const Scenario s = PaperScenario(50.0, 30.0, 2.0, 15.0, 4);
+  const RunData data = Simulate(s);
+  SharedRunWork shared;
+  const ParameterLayout latency({Effect::kAngleLatency});
+  const RunProblem a = BuildRunProblem(s.run, data, latency, 0.5, {}, &shared);
+  const RunProblem b = BuildRunProblem(s.run, data, ParameterLayout({Effect::kAngleLatency, Effect::kThermalDrift}), 0.5, {}, &shared);
+  EXPECT_EQ(a.series.derivatives.get(), b.series.derivatives.get());  // every sample: shared
+  const RunProblem c = BuildRunProblem(s.run, data, ParameterLayout(), 0.5, {}, &shared);
+  EXPECT_NE(a.series.derivatives.get(), c.series.derivatives.get());  // at the epochs: its own
+  EXPECT_EQ(shared.Weights(a, 1).get(), shared.Weights(b, 1).get());
+  const RunProblem d = BuildRunProblem(s.run, data, latency, 0.25, {}, &shared);
+  EXPECT_NE(shared.Weights(a, 1).get(), shared.Weights(d, 1).get());
+
+  for (const ParameterLayout& layout : {ParameterLayout(), latency}) {
+    for (double epoch_s : {0.5, 0.25}) {
+      BatchOptions alone;
+      alone.epoch_s = epoch_s;
+      BatchOptions with = alone;
+      with.shared = &shared;
+      const BatchResult r0 = SolveBatch(s.run, data, layout, alone);
+      const BatchResult r1 = SolveBatch(s.run, data, layout, with);
+      EXPECT_EQ(r0.estimate.theta, r1.estimate.theta) << layout.size() << " " << epoch_s;
+      EXPECT_EQ(r0.estimate.cov, r1.estimate.cov) << layout.size() << " " << epoch_s;
+      EXPECT_EQ(r0.noise_used_mV, r1.noise_used_mV);
+      EXPECT_EQ(r0.passes, r1.passes);
+    }
+  }
+}
+
 // Noise declared 4x too small and 3x too large: the fit estimates it with the
 // parameters, per channel, and sigma rest on the estimate.
 TEST(BatchSolver, EstimatesTheNoiseWhateverWasDeclared) {

@@ -21,9 +21,9 @@ BenchAngles<double> WithoutDerivatives(const RunData& run, std::size_t k) {
 }  // namespace
 
 BenchAngles<double> SampleSeries::Recorded(std::size_t k) const {
-  if (at.empty()) return derivatives[k];
+  if (at.empty()) return (*derivatives)[k];
   const auto it = std::lower_bound(at.begin(), at.end(), k);
-  if (it != at.end() && *it == k) return derivatives[it - at.begin()];
+  if (it != at.end() && *it == k) return (*derivatives)[it - at.begin()];
   return WithoutDerivatives(*run, k);
 }
 
@@ -32,8 +32,8 @@ SampleSeries::Walk::Walk(const SampleSeries& s, std::size_t k0)
 
 BenchAngles<double> SampleSeries::Walk::Next() {
   const std::size_t k = k_++;
-  if (s_.at.empty()) return s_.derivatives[k];
-  if (j_ < s_.at.size() && s_.at[j_] == k) return s_.derivatives[j_++];
+  if (s_.at.empty()) return (*s_.derivatives)[k];
+  if (j_ < s_.at.size() && s_.at[j_] == k) return (*s_.derivatives)[j_++];
   return WithoutDerivatives(*s_.run, k);
 }
 

@@ -21,6 +21,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <memory>
 #include <vector>
 
 #include "core/model/bench_model.h"
@@ -56,7 +57,9 @@ struct IntervalIncrement {
 struct SampleSeries {
   const RunData* run = nullptr;
   std::vector<std::size_t> at;  // ascending sample indices; empty: every sample
-  std::vector<BenchAngles<double>> derivatives;  // at each of `at` (or every sample)
+  // At each of `at` (or every sample); shared by the problems of one run's
+  // layouts (SharedRunWork, run_problem.h).
+  std::shared_ptr<const std::vector<BenchAngles<double>>> derivatives;
 
   // Sample k's recorded angles with their rates and accelerations.
   BenchAngles<double> Recorded(std::size_t k) const;

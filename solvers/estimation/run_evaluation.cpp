@@ -69,6 +69,19 @@ RunPass WeightsPass(const RunProblem& p, const Eigen::VectorXd& theta_ref, int t
   return Pass(p, theta_ref, false, true, threads);
 }
 
+std::shared_ptr<const RunPass> SharedRunWork::Weights(const RunProblem& p, int threads) {
+  const Eigen::VectorXd nominal = p.prior.mean.head(kNumBaseParams);
+  WeightsEntry& w = weights_;
+  if (!w.pass || w.data != p.series.run || w.epochs != p.epochs || w.nominal != nominal ||
+      w.sigma_angle != p.sigma_angle || w.sigma_rate != p.sigma_rate ||
+      w.isotropic_var != p.isotropic_var) {
+    w = WeightsEntry{p.series.run, p.epochs, nominal, p.sigma_angle, p.sigma_rate,
+                     p.isotropic_var,
+                     std::make_shared<const RunPass>(WeightsPass(p, p.prior.mean, threads))};
+  }
+  return w.pass;
+}
+
 RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& weights,
                     const Eigen::Vector3d& noise_mV, int threads, ThetaPart theta_part) {
   if (!weights.with_noise) throw std::logic_error("Reduce: the weights' pass has no noise weights");

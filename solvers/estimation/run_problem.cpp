@@ -82,9 +82,27 @@ std::vector<ConstraintRow> ResolveConstraints(const RunDescription& run,
   return rows;
 }
 
+SharedRunWork::Series SharedRunWork::Derivatives(const RunData& data,
+                                                 const AngleDerivativeOptions& options,
+                                                 const std::vector<std::size_t>& at) {
+  for (const SeriesEntry& e : series_) {
+    if (e.data == &data && e.half_window_s == options.half_window_s && e.at == at) return e.series;
+  }
+  SeriesEntry e{&data, options.half_window_s, at, nullptr};
+  e.series = std::make_shared<const std::vector<BenchAngles<double>>>(
+      at.empty() ? EstimateAngleDerivatives(data, options)
+                 : EstimateAngleDerivativesAt(data, options, at));
+  // One entry of each kind (every sample, at the epochs): a new one replaces its kind's.
+  series_.erase(std::remove_if(series_.begin(), series_.end(),
+                               [&](const SeriesEntry& o) { return o.at.empty() == at.empty(); }),
+                series_.end());
+  series_.push_back(e);
+  return e.series;
+}
+
 RunProblem BuildRunProblem(const RunDescription& run, const RunData& data,
                            const ParameterLayout& layout, double epoch_s,
-                           const AngleDerivativeOptions& derivatives) {
+                           const AngleDerivativeOptions& derivatives, SharedRunWork* shared) {
   if (!(epoch_s > 0.0)) throw OptionError("epoch_s", "must be > 0");
   RunProblem p;
   p.cfg = MakeModelConfig(run, layout, data);
@@ -94,11 +112,13 @@ RunProblem BuildRunProblem(const RunDescription& run, const RunData& data,
     throw InputError(run.data_path + ": run too short (" + std::to_string(p.epochs.size()) +
                      " epochs of " + std::to_string(epoch_s) + " s; at least 3 needed)");
   }
-  if (NeedsRatesAtEverySample(layout)) {
-    p.series.derivatives = EstimateAngleDerivatives(data, derivatives);
+  if (!NeedsRatesAtEverySample(layout)) p.series.at = p.epochs;
+  if (shared) {
+    p.series.derivatives = shared->Derivatives(data, derivatives, p.series.at);
   } else {
-    p.series.at = p.epochs;
-    p.series.derivatives = EstimateAngleDerivativesAt(data, derivatives, p.series.at);
+    p.series.derivatives = std::make_shared<const std::vector<BenchAngles<double>>>(
+        p.series.at.empty() ? EstimateAngleDerivatives(data, derivatives)
+                            : EstimateAngleDerivativesAt(data, derivatives, p.series.at));
   }
   p.prior = MakePrior(run, layout);
   p.n = layout.size();

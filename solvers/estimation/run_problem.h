@@ -4,6 +4,7 @@
 // the variances the process and measurement models need.
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
@@ -65,6 +66,44 @@ struct RunProblem {
   void Hold(const std::vector<int>& indices);
 };
 
+struct RunPass;  // run_evaluation.h
+
+// Work on one run that no parameter layout changes, for the fits of several
+// layouts of it (diagnose's loop; on a real 25-min, 100-Hz run about 40 and
+// 20 ms a fit): the recorded angles' rates and accelerations, and the noise
+// weights' reference pass at the nominal values (WeightsPass: every effect is
+// nominal at zero, where it changes neither the angles nor the triad's
+// axes, and the reduction reads only the scale factors of its theta). Each
+// part is formed by the first fit that asks for it and kept while later ones
+// ask for the same run data, epochs, derivative options and nominal values;
+// one that differs is formed anew and replaces it. Not for concurrent use.
+class SharedRunWork {
+ public:
+  using Series = std::shared_ptr<const std::vector<BenchAngles<double>>>;
+  // The derivatives at `at` (every sample when empty).
+  Series Derivatives(const RunData& data, const AngleDerivativeOptions& options,
+                     const std::vector<std::size_t>& at);
+  // WeightsPass(p, p.prior.mean) (run_evaluation.cpp).
+  std::shared_ptr<const RunPass> Weights(const RunProblem& p, int threads);
+
+ private:
+  struct SeriesEntry {
+    const RunData* data = nullptr;
+    double half_window_s = 0.0;
+    std::vector<std::size_t> at;
+    Series series;
+  };
+  std::vector<SeriesEntry> series_;  // at most one every-sample and one at-epochs entry
+  struct WeightsEntry {
+    const RunData* data = nullptr;
+    std::vector<std::size_t> epochs;
+    Eigen::VectorXd nominal;  // the base parameters' nominal values
+    double sigma_angle = 0.0, sigma_rate = 0.0, isotropic_var = 0.0;
+    std::shared_ptr<const RunPass> pass;
+  };
+  WeightsEntry weights_;
+};
+
 // The run's constraints as rows over the layout's theta. Throws InputError
 // when a constraint names a parameter that is not in the layout.
 std::vector<ConstraintRow> ResolveConstraints(const RunDescription& run,
@@ -72,9 +111,11 @@ std::vector<ConstraintRow> ResolveConstraints(const RunDescription& run,
 
 // Throws InputError for a run too short for epoch_s, or a constraint naming a
 // parameter that is not in the layout.
+// With `shared`, the angles' derivatives come from it (formed there once).
 RunProblem BuildRunProblem(const RunDescription& run, const RunData& data,
                            const ParameterLayout& layout, double epoch_s,
-                           const AngleDerivativeOptions& derivatives);
+                           const AngleDerivativeOptions& derivatives,
+                           SharedRunWork* shared = nullptr);
 
 // Sample indices of the measurement epochs: the first sample, then the first
 // sample at least epoch_s after the previous epoch, and the last sample.
