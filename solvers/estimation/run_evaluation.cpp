@@ -211,16 +211,14 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
     const ProcessNoise& w = *wp.process[e].noise;
     pb[e].C = -LQ[e] * s.U;
     pb[e].r0 = LQ[e] * r;
-    Mat6 Q = w.Q_iso;
-    for (int i = 0; i < 3; ++i) Q += var[i] * w.channel_weight[i];
     for (int i = 0; i < 3; ++i) {
-      // d var_i / d K_i = -2 var_i / K_i; dL / d var_i by a central
-      // difference of the 6 x 6 whitening (exact to ~1e-8 relative).
-      const double h = 1e-4 * var[i];
-      const Mat6 dL = (WhiteningOf(Q + h * w.channel_weight[i]) -
-                       WhiteningOf(Q - h * w.channel_weight[i])) /
-                      (2.0 * h) * (-2.0 * var[i] / theta[kKx + i]);
-      pb[e].C.col(kKx + i) += dL * r;
+      // d var_i / d K_i = -2 var_i / K_i. The whitening L = R^-1 of Q = R R^T
+      // moves as dL = -Phi(L dQ L^T) L, Phi the lower triangle with half the
+      // diagonal (the Cholesky factor's derivative), and L r = r0.
+      Mat6 X = LQ[e] * w.channel_weight[i] * LQ[e].transpose();
+      X.diagonal() *= 0.5;
+      const Vec6 dLr = -(X.triangularView<Eigen::Lower>() * pb[e].r0);
+      pb[e].C.col(kKx + i) += dLr * (-2.0 * var[i] / theta[kKx + i]);
     }
     if (!information) {
       share_p[e].noalias() = pb[e].C.transpose() * pb[e].r0;
