@@ -5,6 +5,9 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <array>
+#include <limits>
+#include <new>
+#include <type_traits>
 
 namespace triadcal {
 namespace {
@@ -16,25 +19,43 @@ constexpr int kMaxParams = 64;
 constexpr int kJetParams = 8;
 using SmallJet = ceres::Jet<double, kJetParams>;
 
-// Jets of the bench motion behind the size effect: the six bench-angle
-// quantities (angle, rate, acceleration of both axes) and the geometric
-// parameters the motion depends on (dpsi, d, eps): at most 6 + 3 = 9.
-constexpr int kGeometryJet = 9;
-using GeoJet = ceres::Jet<double, kGeometryJet>;
+// Jets of the bench motion behind the size effect: the geometric parameters
+// the motion depends on (dpsi, d, eps), the bench zeros (dtheta_c,
+// dlambda2) and the angle-stage parameters: at most 3 + 2 + 7.
+constexpr int kGeometryJet = 3 + 2 + kJetParams - 1;
 
 // Rows of theta derivatives, on the stack (one sample's work allocates nothing).
 using ThetaRow = Eigen::Matrix<double, 1, Eigen::Dynamic, Eigen::RowMajor, 1, kMaxParams>;
 using ThetaRows3 = Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::ColMajor, 3, kMaxParams>;
 
-// theta as Jets with only the listed entries seeded (derivative slot q for
-// entry idx[q]).
+// theta as Jets for a function that reads only the listed entries (derivative
+// slot q for entry idx[q] when q < seeded): only those are formed. A whole
+// array of Jets cost more than the function it fed (a pass with
+// angle_latency wrote 2-6 kB of Jets per sample). The other entries are
+// never read; in a build with assertions they hold NaN, so that a read
+// would show in every result.
 template <typename J>
-std::array<J, kMaxParams> SeededTheta(const double* th, int n, const int* idx, int count) {
-  std::array<J, kMaxParams> t;
-  for (int i = 0; i < n; ++i) t[i] = J(th[i]);
-  for (int q = 0; q < count; ++q) t[idx[q]].v[q] = 1.0;
-  return t;
-}
+class SparseJets {
+ public:
+  SparseJets(const double* th, const int* idx, int count, int seeded) {
+    J* t = data();
+#ifndef NDEBUG
+    for (int i = 0; i < kMaxParams; ++i) new (t + i) J(std::numeric_limits<double>::quiet_NaN());
+#endif
+    for (int q = 0; q < count; ++q) {
+      new (t + idx[q]) J(th[idx[q]]);
+      if (q < seeded) t[idx[q]].v[q] = 1.0;
+    }
+  }
+  SparseJets(const SparseJets&) = delete;
+  SparseJets& operator=(const SparseJets&) = delete;
+  const J* data() const { return reinterpret_cast<const J*>(storage_); }
+
+ private:
+  J* data() { return reinterpret_cast<J*>(storage_); }
+  static_assert(std::is_trivially_destructible_v<J>);
+  alignas(J) unsigned char storage_[kMaxParams * sizeof(J)];
+};
 
 // [v x]
 Mat3<double> Cross(const Vec3<double>& v) {
@@ -61,11 +82,11 @@ constexpr MisalignmentEntry kMisalignment[3][3] = {{{-1, 0.0}, {kAlphaY, -1.0}, 
                                                    {{kBetaX, -1.0}, {kGammaY, 1.0}, {-1, 0.0}}};
 
 // Reading i of the readings model at W (bench_model.h Readings_mV) without
-// its zero offset, its gradient by W, and (added into row) its derivatives
-// by the sensor parameters times `weight`.
+// its zero offset, its gradient by W, and (added into *row, when given) its
+// derivatives by the sensor parameters times `weight`.
 double ReadingWithoutOffset(const ParameterLayout& layout, const double* th, int i,
                             const Vec3<double>& W, Eigen::RowVector3d* grad_W, double weight,
-                            ThetaRow& row) {
+                            ThetaRow* row_or_null) {
   const Mat3<double> M = MisalignmentMatrix(th);
   const Mat3<double> K = NonlinearityMatrix(th);
   const int o_a = layout.offset(Effect::kScaleAsymmetry);
@@ -80,6 +101,8 @@ double ReadingWithoutOffset(const ParameterLayout& layout, const double* th, int
   const double sgn = u < 0.0 ? -1.0 : 1.0;
   const double s = th[kKx + i] + (o_a >= 0 ? sgn * th[o_a + i] : 0.0);
   *grad_W = s * du;
+  if (!row_or_null) return s * u;
+  ThetaRow& row = *row_or_null;
   row[kKx + i] += weight * u;
   if (o_a >= 0) row[o_a + i] += weight * sgn * u;
   for (int j = 0; j < 3; ++j) {
@@ -139,8 +162,9 @@ TRIADCAL_FLATTEN TRIADCAL_NOINLINE void AngleStage(const ModelConfig& cfg, const
                                                    Eigen::Matrix<double, 6, kJetParams>* db) {
   const ParameterLayout& layout = cfg.layout;
   const std::vector<int>& angle_params = layout.StageParams(EffectStage::kAngle);
-  const std::array<SmallJet, kMaxParams> t = SeededTheta<SmallJet>(
-      th, layout.size(), angle_params.data(), static_cast<int>(angle_params.size()));
+  // The angle stage reads only its own parameters (BenchAnglesFromRecorded).
+  const int count = static_cast<int>(angle_params.size());
+  const SparseJets<SmallJet> t(th, angle_params.data(), count, count);
   const BenchAngles<SmallJet> bj = BenchAnglesFromRecorded<SmallJet>(cfg, t.data(), rec);
   for (int i = 0; i < 2; ++i) {
     const AxisState<SmallJet>& a = bj.axis[i];
@@ -159,10 +183,105 @@ struct SizeCorrection {
   bool r_zero = false;
 };
 
+// The size effect away from r = 0 (SizeEffect), with Jets of N slots:
+// dpsi, d, eps (those in the layout), dtheta_c, dlambda2, then the
+// angle-stage parameters, which reach the motion through the bench angles'
+// derivatives db. The points' positions (O at R, accelerometer i at R +
+// r_i) enter their accelerations linearly, so the columns of R and r are by
+// ForceGradientByPoint.
+template <int N>
+TRIADCAL_FLATTEN TRIADCAL_NOINLINE void SizeEffectAwayFromZero(
+    const ModelConfig& cfg, const double* th, const BenchAngles<double>& b,
+    const Eigen::Matrix<double, 6, kJetParams>& db, SizeCorrection* out) {
+  using GeoJet = ceres::Jet<double, N>;
+  const ParameterLayout& layout = cfg.layout;
+  const int n = layout.size();
+  const double g = cfg.g_mps2;
+  const std::vector<int>& angle_params = layout.StageParams(EffectStage::kAngle);
+  const int n_angle = static_cast<int>(angle_params.size());
+  const int o_s = layout.offset(Effect::kSizeEffect);
+  // The motion reads dpsi, d, eps (seeded), the bench zeros and the lever
+  // arm (ComputeBenchMotion, SensingPoint_m of O).
+  std::array<int, 8> read = {kDpsi, -1, -1};
+  int n_geo = 1;
+  const int o_d = layout.offset(Effect::kAxisNonintersection);
+  if (o_d >= 0) read[n_geo++] = o_d;
+  const int o_e = layout.offset(Effect::kAxisNonperpendicularity);
+  if (o_e >= 0) read[n_geo++] = o_e;
+  int n_read = n_geo;
+  for (int i : {kDthetaC, kDlambda2, kDx2, kDy2, kDz2}) read[n_read++] = i;
+  const SparseJets<GeoJet> t(th, read.data(), n_read, n_geo);
+  // The bench angles: angle l_i enters as l_i + dtheta_c (l_i + dlambda2),
+  // and every quantity moves with the angle-stage parameters by db.
+  const int slot_c = n_geo, slot_a = n_geo + 2;
+  BenchAngles<GeoJet> bj;
+  for (int i = 0; i < 2; ++i) {
+    AxisState<GeoJet>& a = bj.axis[i];
+    a.angle = GeoJet(b.axis[i].angle);
+    a.rate = GeoJet(b.axis[i].rate);
+    a.accel = GeoJet(b.axis[i].accel);
+    a.angle.v[slot_c + i] = 1.0;
+    for (int q = 0; q < n_angle; ++q) {
+      a.angle.v[slot_a + q] = db(3 * i, q);
+      a.rate.v[slot_a + q] = db(3 * i + 1, q);
+      a.accel.v[slot_a + q] = db(3 * i + 2, q);
+    }
+  }
+  const BenchMotion<GeoJet> m = ComputeBenchMotion(cfg, t.data(), bj);
+  auto value = [](const Vec3<GeoJet>& v) { return Vec3<double>(v[0].a, v[1].a, v[2].a); };
+  Mat3<double> C_L2;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) C_L2(r, c) = m.C_L2(r, c).a;
+  const Mat3<double> dW_dp = ForceGradientByPoint(C_L2, value(m.w1_L) + value(m.w12_L),
+                                                  value(m.dw1_L) + value(m.dw12_L), g);
+  // W at O by the motion; at accelerometer i, W_O + (w2' x r_i + w2 x (w2 x r_i)) / g
+  // with w2, w2' the rate of frame 2 and its derivative in frame 2 (rigid
+  // body: MotionOfPoint in frame 2; r_i = p_i - p_O fixed in it).
+  const Vec3<GeoJet> Wj_O =
+      SpecificForce_g(cfg, m.C_L2, MotionOfPoint(m, SensingPoint_m(cfg, t.data(), 0)).a_L);
+  const Vec3<GeoJet> w2 = m.C_L2.transpose() * (m.w1_L + m.w12_L);
+  const Vec3<GeoJet> dw2 = m.C_L2.transpose() * (m.dw1_L + m.dw12_L);
+  auto split = [](const Vec3<GeoJet>& Wj, Vec3<double>* W_p, Eigen::Matrix<double, 3, N>* dW_p) {
+    for (int r = 0; r < 3; ++r) {
+      (*W_p)[r] = Wj[r].a;
+      dW_p->row(r) = Wj[r].v.transpose();
+    }
+  };
+  Vec3<double> W_O;
+  Eigen::Matrix<double, 3, N> dW_O;
+  split(Wj_O, &W_O, &dW_O);
+  Eigen::Vector3d& z = out->z;
+  ThetaRows3& dD = out->dD;
+  dD = ThetaRows3::Zero(3, n);
+  ThetaRow drow(n);
+  for (int i = 1; i < 3; ++i) {  // x senses at O: D_0 = 0
+    const double* ri = th + o_s + 3 * (i - 1);
+    const Vec3<GeoJet> r{GeoJet(ri[0]), GeoJet(ri[1]), GeoJet(ri[2])};
+    Vec3<double> W_i;
+    Eigen::Matrix<double, 3, N> dW_i;
+    split(Wj_O + (dw2.cross(r) + w2.cross(w2.cross(r))) / GeoJet(g), &W_i, &dW_i);
+    drow.setZero();
+    Eigen::RowVector3d grad_i, grad_O;
+    const double d = ReadingWithoutOffset(layout, th, i, W_i, &grad_i, 1.0, &drow) -
+                     ReadingWithoutOffset(layout, th, i, W_O, &grad_O, -1.0, &drow);
+    z[i] -= d;
+    // By the Jet slots: grad R_i(W_i) dW_i - grad R_i(W_O) dW_O.
+    const Eigen::Matrix<double, 1, N> dx = grad_i * dW_i - grad_O * dW_O;
+    for (int q = 0; q < n_geo; ++q) drow[read[q]] += dx[q];
+    drow[kDthetaC] += dx[slot_c];
+    drow[kDlambda2] += dx[slot_c + 1];
+    for (int q = 0; q < n_angle; ++q) drow[angle_params[q]] += dx[slot_a + q];
+    // By R (moves both points) and r_i (moves accelerometer i's).
+    drow.segment<3>(kDx2) += (grad_i - grad_O) * dW_dp;
+    drow.segment<3>(o_s + 3 * (i - 1)) += grad_i * dW_dp;
+    dD.row(i) = drow;
+  }
+}
+
 // Size effect: accelerometer i senses W_i at its own point; B1 removes
 // D_i = R_i(W_i) - R_i(W_O) from reading i first (AccelerationFromReadings_L).
-// dD/dtheta: by W through Jets of the geometry (the bench-angle quantities
-// and the geometric parameters), and by the sensor parameters written out.
+// dD/dtheta: by W through Jets of the geometry (SizeEffectAwayFromZero), and
+// by the sensor parameters written out.
 // With r = 0 (the score tests of `diagnose` linearise there) D vanishes for
 // every other parameter value, and only its columns by r remain:
 // dD_i/dr_i = grad R_i(W_O) dW/dp (ForceGradientByPoint).
@@ -171,11 +290,8 @@ TRIADCAL_FLATTEN TRIADCAL_NOINLINE void SizeEffect(const ModelConfig& cfg, const
                                                    const Eigen::Matrix<double, 6, kJetParams>& db,
                                                    SizeCorrection* out) {
   const ParameterLayout& layout = cfg.layout;
-  const int n = layout.size();
   const double g = cfg.g_mps2;
   const std::vector<int>& angle_params = layout.StageParams(EffectStage::kAngle);
-  Eigen::Vector3d& z = out->z;
-  ThetaRows3& dD = out->dD;
   Eigen::Matrix3d& dD_r = out->dD_r;
   const int o_s = layout.offset(Effect::kSizeEffect);
   bool r_zero = true;
@@ -187,84 +303,23 @@ TRIADCAL_FLATTEN TRIADCAL_NOINLINE void SizeEffect(const ModelConfig& cfg, const
         SpecificForce_g(cfg, m.C_L2, MotionOfPoint(m, SensingPoint_m(cfg, th, 0)).a_L);
     const Mat3<double> dW_dr =
         ForceGradientByPoint(m.C_L2, m.w1_L + m.w12_L, m.dw1_L + m.dw12_L, g);
-    ThetaRow scratch = ThetaRow::Zero(n);
     for (int i = 1; i < 3; ++i) {
       Eigen::RowVector3d grad_O;
-      ReadingWithoutOffset(layout, th, i, W_O, &grad_O, 0.0, scratch);
+      ReadingWithoutOffset(layout, th, i, W_O, &grad_O, 0.0, nullptr);
       dD_r.row(i) = grad_O * dW_dr;
     }
   } else {
-    // Jets over what the bench's motion depends on: dpsi, d, eps and the six
-    // bench-angle quantities. The points' positions (O at R, accelerometer i
-    // at R + r_i) enter their accelerations linearly, so the columns of R
-    // and r are by ForceGradientByPoint.
-    std::array<int, 3> geo = {kDpsi, -1, -1};
-    int n_geo = 1;
-    const int o_d = layout.offset(Effect::kAxisNonintersection);
-    if (o_d >= 0) geo[n_geo++] = o_d;
-    const int o_e = layout.offset(Effect::kAxisNonperpendicularity);
-    if (o_e >= 0) geo[n_geo++] = o_e;
-    const std::array<GeoJet, kMaxParams> t = SeededTheta<GeoJet>(th, n, geo.data(), n_geo);
-    BenchAngles<GeoJet> bj;
-    const int slot0 = n_geo;  // b's six quantities after the parameters
-    for (int i = 0; i < 2; ++i) {
-      bj.axis[i].angle = GeoJet(b.axis[i].angle, slot0 + 3 * i);
-      bj.axis[i].rate = GeoJet(b.axis[i].rate, slot0 + 3 * i + 1);
-      bj.axis[i].accel = GeoJet(b.axis[i].accel, slot0 + 3 * i + 2);
-    }
-    const BenchMotion<GeoJet> m = ComputeBenchMotion(cfg, t.data(), bj);
-    auto value = [](const Vec3<GeoJet>& v) { return Vec3<double>(v[0].a, v[1].a, v[2].a); };
-    Mat3<double> C_L2;
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) C_L2(r, c) = m.C_L2(r, c).a;
-    const Mat3<double> dW_dp = ForceGradientByPoint(C_L2, value(m.w1_L) + value(m.w12_L),
-                                                    value(m.dw1_L) + value(m.dw12_L), g);
-    // W at O by the motion; at accelerometer i, W_O + (w2' x r_i + w2 x (w2 x r_i)) / g
-    // with w2, w2' the rate of frame 2 and its derivative in frame 2 (rigid
-    // body: MotionOfPoint in frame 2; r_i = p_i - p_O fixed in it).
-    const Vec3<GeoJet> Wj_O =
-        SpecificForce_g(cfg, m.C_L2, MotionOfPoint(m, SensingPoint_m(cfg, t.data(), 0)).a_L);
-    const Vec3<GeoJet> w2 = m.C_L2.transpose() * (m.w1_L + m.w12_L);
-    const Vec3<GeoJet> dw2 = m.C_L2.transpose() * (m.dw1_L + m.dw12_L);
-    auto split = [](const Vec3<GeoJet>& Wj, Vec3<double>* W_p,
-                    Eigen::Matrix<double, 3, kGeometryJet>* dW_p) {
-      for (int r = 0; r < 3; ++r) {
-        (*W_p)[r] = Wj[r].a;
-        dW_p->row(r) = Wj[r].v.transpose();
-      }
-    };
-    auto at = [&](int i, Vec3<double>* W_p, Eigen::Matrix<double, 3, kGeometryJet>* dW_p) {
-      const double* ri = th + o_s + 3 * (i - 1);
-      const Vec3<GeoJet> r{GeoJet(ri[0]), GeoJet(ri[1]), GeoJet(ri[2])};
-      split(Wj_O + (dw2.cross(r) + w2.cross(w2.cross(r))) / GeoJet(g), W_p, dW_p);
-    };
-    Vec3<double> W_O;
-    Eigen::Matrix<double, 3, kGeometryJet> dW_O;
-    split(Wj_O, &W_O, &dW_O);
-    dD = ThetaRows3::Zero(3, n);
-    ThetaRow drow(n);
-    for (int i = 1; i < 3; ++i) {  // x senses at O: D_0 = 0
-      Vec3<double> W_i;
-      Eigen::Matrix<double, 3, kGeometryJet> dW_i;
-      at(i, &W_i, &dW_i);
-      drow.setZero();
-      Eigen::RowVector3d grad_i, grad_O;
-      const double d = ReadingWithoutOffset(layout, th, i, W_i, &grad_i, 1.0, drow) -
-                       ReadingWithoutOffset(layout, th, i, W_O, &grad_O, -1.0, drow);
-      z[i] -= d;
-      // By the Jet slots: grad R_i(W_i) dW_i - grad R_i(W_O) dW_O.
-      const Eigen::Matrix<double, 1, kGeometryJet> dx = grad_i * dW_i - grad_O * dW_O;
-      for (int q = 0; q < n_geo; ++q) drow[geo[q]] += dx[q];
-      // The bench angles enter as the sums l1 + dtheta_c and l2 + dlambda2.
-      drow[kDthetaC] += dx[slot0];
-      drow[kDlambda2] += dx[slot0 + 3];
-      for (std::size_t q = 0; q < angle_params.size(); ++q) {
-        for (int c = 0; c < 6; ++c) drow[angle_params[q]] += dx[slot0 + c] * db(c, q);
-      }
-      // By R (moves both points) and r_i (moves accelerometer i's).
-      drow.segment<3>(kDx2) += (grad_i - grad_O) * dW_dp;
-      drow.segment<3>(o_s + 3 * (i - 1)) += grad_i * dW_dp;
-      dD.row(i) = drow;
+    // Slots: dpsi, d, eps, the bench zeros dtheta_c and dlambda2, and the
+    // angle-stage parameters (through the bench angles' derivatives db).
+    const int slots = 3 + static_cast<int>(angle_params.size()) +
+                      (layout.offset(Effect::kAxisNonintersection) >= 0 ? 1 : 0) +
+                      (layout.offset(Effect::kAxisNonperpendicularity) >= 0 ? 1 : 0);
+    if (slots <= 4) {
+      SizeEffectAwayFromZero<4>(cfg, th, b, db, out);
+    } else if (slots <= 8) {
+      SizeEffectAwayFromZero<8>(cfg, th, b, db, out);
+    } else {
+      SizeEffectAwayFromZero<kGeometryJet>(cfg, th, b, db, out);
     }
   }
 }

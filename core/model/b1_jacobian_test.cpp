@@ -18,15 +18,23 @@ TEST(B1Jacobian, AnalyticMatchesAutomaticAndNumeric) {
   // The base model; the whole catalogue at once, every effect away from zero;
   // the whole catalogue with the effects at zero, as the score tests of
   // diagnose linearise; and every effect but the size effect away from zero
-  // (the size effect's columns at r = 0 are written out apart from its Jets).
+  // (the size effect's columns at r = 0 are written out apart from its Jets);
+  // then the size effect away from zero with each width of its Jets (4, 8
+  // and 12 slots: SizeEffectAwayFromZero).
   // (The gyro stage does not act on the accelerometers: left out.)
   std::vector<Effect> all;
   for (const EffectSpec& e : EffectCatalogue()) {
     if (e.stage != EffectStage::kGyro) all.push_back(e.id);
   }
-  for (int variant = 0; variant < 4; ++variant) {
+  const std::vector<std::vector<Effect>> size_layouts = {
+      {Effect::kSizeEffect, Effect::kAngleLatency},
+      {Effect::kSizeEffect, Effect::kEncoderHarmonic, Effect::kAxisNonintersection},
+      {Effect::kSizeEffect, Effect::kAngleLatency, Effect::kEncoderHarmonic,
+       Effect::kAxisNonperpendicularity}};
+  for (int variant = 0; variant < 7; ++variant) {
     ModelConfig cfg;
     if (variant > 0) cfg.layout = ParameterLayout(all);
+    if (variant >= 4) cfg.layout = ParameterLayout(size_layouts[variant - 4]);
     cfg.temp_ref_C = 20.0;
     ASSERT_TRUE(B1HasAnalyticJacobian(cfg.layout));
     const int n = cfg.layout.size();
@@ -43,7 +51,8 @@ TEST(B1Jacobian, AnalyticMatchesAutomaticAndNumeric) {
         for (std::size_t q = 0; q < spec.params.size(); ++q) {
           const ParamSpec& p = spec.params[q];
           const double size = p.typical * p.si_per_unit * (spec.scale_relative ? th[kKx] : 1.0);
-          const bool away = variant == 1 || (variant == 3 && e != Effect::kSizeEffect);
+          const bool away =
+              variant == 1 || variant >= 4 || (variant == 3 && e != Effect::kSizeEffect);
           th[cfg.layout.offset(e) + q] = away ? 2.0 * size * nrm(rng) : 0.0;
         }
       }

@@ -136,6 +136,13 @@ BenchAngles<T> EncoderReading(const ModelConfig& cfg, const T* theta, const Benc
 }
 
 // Recorded angles (and the rates/accelerations derived from them) -> bench angles.
+// |a - b| <= tol, and for Jets (a.a, a.v) every derivative too.
+inline bool WithinOf(double a, double b, double tol) { return std::abs(a - b) <= tol; }
+template <typename J>
+bool WithinOf(const J& a, const J& b, double tol) {
+  return std::abs(a.a - b.a) <= tol && ((a.v - b.v).cwiseAbs().array() <= tol).all();
+}
+
 template <typename T>
 BenchAngles<T> BenchAnglesFromRecorded(const ModelConfig& cfg, const T* theta,
                                        const BenchAngles<double>& recorded) {
@@ -162,12 +169,18 @@ BenchAngles<T> BenchAnglesFromRecorded(const ModelConfig& cfg, const T* theta,
   if (cfg.layout.has(Effect::kEncoderHarmonic)) {
     for (int i = 0; i < 2; ++i) {
       const AxisState<T> r = b.axis[i];
+      // l = r - e(l) by fixed-point iteration (contraction factor |e'|, a
+      // few 1e-3), until l no longer moves (below 1e-15 rad, its
+      // derivatives alike): at zero harmonics (diagnose's score tests) the
+      // second evaluation confirms the first.
       T l = r.angle, e, de, dde;
-      for (int it = 0; it < 4; ++it) {  // contraction factor |e'| << 1
-        EncoderError(cfg, theta, i, l, &e, &de, &dde);
-        l = r.angle - e;
-      }
       EncoderError(cfg, theta, i, l, &e, &de, &dde);
+      for (int it = 0; it < 6; ++it) {
+        const T next = r.angle - e;
+        if (WithinOf(next, l, 1e-15)) break;
+        l = next;
+        EncoderError(cfg, theta, i, l, &e, &de, &dde);
+      }
       b.axis[i].angle = l;
       b.axis[i].rate = r.rate / (T(1.0) + de);
       b.axis[i].accel =
