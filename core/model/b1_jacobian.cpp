@@ -1,13 +1,11 @@
 #include "core/model/b1_jacobian.h"
+#include "core/model/sparse_jets.h"
 
 #include <ceres/jet.h>
 
 #include <Eigen/LU>
 #include <algorithm>
 #include <array>
-#include <limits>
-#include <new>
-#include <type_traits>
 
 namespace triadcal {
 namespace {
@@ -27,35 +25,6 @@ constexpr int kGeometryJet = 3 + 2 + kJetParams - 1;
 // Rows of theta derivatives, on the stack (one sample's work allocates nothing).
 using ThetaRow = Eigen::Matrix<double, 1, Eigen::Dynamic, Eigen::RowMajor, 1, kMaxParams>;
 using ThetaRows3 = Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::ColMajor, 3, kMaxParams>;
-
-// theta as Jets for a function that reads only the listed entries (derivative
-// slot q for entry idx[q] when q < seeded): only those are formed. A whole
-// array of Jets cost more than the function it fed (a pass with
-// angle_latency wrote 2-6 kB of Jets per sample). The other entries are
-// never read; in a build with assertions they hold NaN, so that a read
-// would show in every result.
-template <typename J>
-class SparseJets {
- public:
-  SparseJets(const double* th, const int* idx, int count, int seeded) {
-    J* t = data();
-#ifndef NDEBUG
-    for (int i = 0; i < kMaxParams; ++i) new (t + i) J(std::numeric_limits<double>::quiet_NaN());
-#endif
-    for (int q = 0; q < count; ++q) {
-      new (t + idx[q]) J(th[idx[q]]);
-      if (q < seeded) t[idx[q]].v[q] = 1.0;
-    }
-  }
-  SparseJets(const SparseJets&) = delete;
-  SparseJets& operator=(const SparseJets&) = delete;
-  const J* data() const { return reinterpret_cast<const J*>(storage_); }
-
- private:
-  J* data() { return reinterpret_cast<J*>(storage_); }
-  static_assert(std::is_trivially_destructible_v<J>);
-  alignas(J) unsigned char storage_[kMaxParams * sizeof(J)];
-};
 
 // [v x]
 Mat3<double> Cross(const Vec3<double>& v) {
@@ -164,7 +133,7 @@ TRIADCAL_FLATTEN TRIADCAL_NOINLINE void AngleStage(const ModelConfig& cfg, const
   const std::vector<int>& angle_params = layout.StageParams(EffectStage::kAngle);
   // The angle stage reads only its own parameters (BenchAnglesFromRecorded).
   const int count = static_cast<int>(angle_params.size());
-  const SparseJets<SmallJet> t(th, angle_params.data(), count, count);
+  const SparseJets<SmallJet, kMaxParams> t(th, angle_params.data(), count, count);
   const BenchAngles<SmallJet> bj = BenchAnglesFromRecorded<SmallJet>(cfg, t.data(), rec);
   for (int i = 0; i < 2; ++i) {
     const AxisState<SmallJet>& a = bj.axis[i];
@@ -210,7 +179,7 @@ TRIADCAL_FLATTEN TRIADCAL_NOINLINE void SizeEffectAwayFromZero(
   if (o_e >= 0) read[n_geo++] = o_e;
   int n_read = n_geo;
   for (int i : {kDthetaC, kDlambda2, kDx2, kDy2, kDz2}) read[n_read++] = i;
-  const SparseJets<GeoJet> t(th, read.data(), n_read, n_geo);
+  const SparseJets<GeoJet, kMaxParams> t(th, read.data(), n_read, n_geo);
   // The bench angles: angle l_i enters as l_i + dtheta_c (l_i + dlambda2),
   // and every quantity moves with the angle-stage parameters by db.
   const int slot_c = n_geo, slot_a = n_geo + 2;

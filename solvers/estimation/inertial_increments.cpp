@@ -3,6 +3,7 @@
 #include <ceres/jet.h>
 
 #include "core/model/b1_jacobian.h"
+#include "core/model/sparse_jets.h"
 
 #include <algorithm>
 #include <cmath>
@@ -166,21 +167,38 @@ double IsotropicSampleVariance(double angle_noise_rad, double g_mps2) {
 
 namespace {
 
-template <int N>
+// The reference motion reads dpsi, dtheta_c, dlambda2, the lever arm, d,
+// eps and the angle stage's parameters (ReferenceMotion): Jets over those
+// alone (over every parameter, its Jets were 6 % of a diagnose).
+constexpr int kReferenceJet = 6 + 2 + 7;
+
 ReferenceSample ReferenceWithJacobian(const ModelConfig& cfg, const Eigen::VectorXd& theta,
                                       const BenchAngles<double>& rec) {
-  using J = ceres::Jet<double, N>;
+  using J = ceres::Jet<double, kReferenceJet>;
+  const ParameterLayout& layout = cfg.layout;
   const int n = static_cast<int>(theta.size());
-  std::vector<J> th(N);
-  for (int i = 0; i < N; ++i) th[i] = J(i < n ? theta[i] : 0.0, i);
+  if (n > 64) throw std::invalid_argument("more than 64 parameters are not supported");
+  std::vector<int> idx = {kDpsi, kDthetaC, kDlambda2, kDx2, kDy2, kDz2};
+  for (Effect e : {Effect::kAxisNonintersection, Effect::kAxisNonperpendicularity}) {
+    if (layout.offset(e) >= 0) idx.push_back(layout.offset(e));
+  }
+  for (int i : layout.StageParams(EffectStage::kAngle)) idx.push_back(i);
+  if (static_cast<int>(idx.size()) > kReferenceJet) {
+    throw std::logic_error(
+        "EvaluateReference: more parameters reach the reference motion than its Jets hold");
+  }
+  const int count = static_cast<int>(idx.size());
+  const SparseJets<J> th(theta.data(), idx.data(), count, count);
   const PointMotion<J> pm = ReferenceMotion<J>(cfg, th.data(), rec);
   ReferenceSample out;
-  out.dref_dtheta.resize(6, n);
+  out.dref_dtheta = Eigen::MatrixXd::Zero(6, n);
   for (int r = 0; r < 3; ++r) {
     out.v_mps[r] = pm.v_L[r].a;
     out.p_m[r] = pm.p_L[r].a;
-    out.dref_dtheta.row(r) = pm.v_L[r].v.head(n).transpose();
-    out.dref_dtheta.row(3 + r) = pm.p_L[r].v.head(n).transpose();
+    for (int q = 0; q < count; ++q) {
+      out.dref_dtheta(r, idx[q]) = pm.v_L[r].v[q];
+      out.dref_dtheta(3 + r, idx[q]) = pm.p_L[r].v[q];
+    }
   }
   return out;
 }
@@ -189,15 +207,11 @@ ReferenceSample ReferenceWithJacobian(const ModelConfig& cfg, const Eigen::Vecto
 
 ReferenceSample EvaluateReference(const ModelConfig& cfg, const Eigen::VectorXd& theta,
                                   const BenchAngles<double>& rec, bool with_jacobian) {
-  const int n = static_cast<int>(theta.size());
   if (!with_jacobian) {
     const PointMotion<double> pm = ReferenceMotion<double>(cfg, theta.data(), rec);
     return ReferenceSample{pm.v_L, pm.p_L, Eigen::MatrixXd()};
   }
-  if (n <= 32) return ReferenceWithJacobian<32>(cfg, theta, rec);
-  if (n <= 48) return ReferenceWithJacobian<48>(cfg, theta, rec);
-  if (n <= 64) return ReferenceWithJacobian<64>(cfg, theta, rec);
-  throw std::invalid_argument("more than 64 parameters are not supported");
+  return ReferenceWithJacobian(cfg, theta, rec);
 }
 
 Eigen::Matrix<double, 6, 6> ReferenceNoiseCovariance(const ModelConfig& cfg,
