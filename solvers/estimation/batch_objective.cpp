@@ -124,26 +124,40 @@ void BatchObjective::Assemble(Point* pt) const {
     pt->gradient.resize(0);
     pt->information.resize(0, 0);
     pt->data_information.resize(0, 0);
+    pt->data_information_scale.resize(0);
     return;
   }
   const bool with_information = pt->reductions[0].information.size() > 0;
   pt->gradient = A_.transpose() * res;
   pt->data_information = Eigen::MatrixXd::Zero(with_information ? m_ : 0, with_information ? m_ : 0);
+  pt->data_information_scale = Eigen::VectorXd::Zero(with_information ? m_ : 0);
   for (int r = 0; r < runs(); ++r) {
     const RunReduction& red = pt->reductions[r];
     Eigen::VectorXd g = red.gradient;
     Eigen::MatrixXd I = red.information;
+    Eigen::VectorXd scale = red.information_scale.size() == red.information.rows()
+                                ? red.information_scale
+                                : Eigen::VectorXd(red.information.diagonal().cwiseAbs());
     if (HasGyroPart(*pt, r) && pt->gyro[r].gradient.size() > 0) {
       g += pt->gyro[r].gradient;
-      if (with_information) I += pt->gyro[r].information;
+      if (with_information) {
+        I += pt->gyro[r].information;
+        scale += pt->gyro[r].information.diagonal().cwiseAbs();
+      }
     }
     if (runs_[r].map.size() == 0) {
       pt->gradient += g;
-      if (with_information) pt->data_information += I;
+      if (with_information) {
+        pt->data_information += I;
+        pt->data_information_scale += scale;
+      }
     } else {
       const Eigen::MatrixXd& T = runs_[r].map;
       pt->gradient.noalias() += T.transpose() * g;
-      if (with_information) pt->data_information.noalias() += T.transpose() * I * T;
+      if (with_information) {
+        pt->data_information.noalias() += T.transpose() * I * T;
+        pt->data_information_scale.noalias() += T.cwiseAbs2().transpose() * scale;
+      }
     }
   }
   pt->information = with_information ? Eigen::MatrixXd(pt->data_information + A_.transpose() * A_)

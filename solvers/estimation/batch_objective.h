@@ -59,6 +59,9 @@ class BatchObjective {
     double gyro_cost = 0.0;                 // the gyros' -log L, their noise profiled
     Eigen::VectorXd gradient;               // m (empty without the Jacobian)
     Eigen::MatrixXd data_information;       // m x m, sum_r T_r^T I_r T_r
+    // Its diagonal before the states' elimination (RunReduction::
+    // information_scale, through the maps): what its rounding is relative to.
+    Eigen::VectorXd data_information_scale;
     Eigen::MatrixXd information;            // m x m, with A^T A
     bool finite() const;
   };

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <optional>
 #include <set>
 #include <stdexcept>
@@ -219,6 +220,10 @@ double HoldPriority(int index) {
   return 1.0;                                       // bench zeros, effects
 }
 
+Eigen::VectorXd InformationResolution(const Eigen::VectorXd& scale) {
+  return kInformationResolution * std::numeric_limits<double>::epsilon() * scale.cwiseAbs();
+}
+
 std::vector<int> SupportedByInformation(const Eigen::MatrixXd& information,
                                         const Eigen::VectorXd& min_info,
                                         const Eigen::VectorXd& priority, Eigen::VectorXd* left,
@@ -329,7 +334,11 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
     std::vector<Direction> nulls;
     ClassifyDirections(layout, info_si, s, null_directions, &nulls, nullptr);
     for (const Direction& dir : nulls) d.unsupported.push_back(dir.named);
-    Eigen::VectorXd min_info = Eigen::VectorXd::Constant(n, o.min_information);
+    // Below the information's resolution a parameter has none.
+    const Eigen::VectorXd resolution =
+        InformationResolution(at.data_information_scale * static_cast<double>(m))
+            .cwiseProduct(s.cwiseAbs2());
+    Eigen::VectorXd min_info = resolution.cwiseMax(o.min_information);
     Eigen::VectorXd priority(n);
     for (int i = 0; i < n; ++i) priority[i] = HoldPriority(layout, i);
     for (int i : user_free) min_info[i] = 0.0;  // kept first whatever their information
@@ -343,7 +352,7 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
     kind.assign(n, 1);
     for (int i : kept) kind[i] = 0;
     for (int i = 0; i < n; ++i) {
-      if (kind[i] == 1 && left[i] < o.null_information) kind[i] = 2;
+      if (kind[i] == 1 && left[i] < std::max(o.null_information, resolution[i])) kind[i] = 2;
     }
   }
   for (int i : user_hold) kind[i] = 2;

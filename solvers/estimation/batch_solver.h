@@ -79,6 +79,17 @@ struct HoldPolicy {
   std::vector<std::string> hold, free;
 };
 
+// What the information of each parameter resolves to, in the units of
+// `scale` (its diagonal before the states' elimination: BatchObjective::
+// Point::data_information_scale). For a parameter the states absorb, the
+// elimination subtracts nearly all of it and what is left is rounding, about
+// 1e-16 of it (real slow roll run at the decision: dy2's 0.006 prior units
+// of 3e13, above or below null_information by the order of the sums).
+// kInformationResolution times that is taken as no information: the hold
+// rule neither estimates nor considers a parameter on less.
+constexpr double kInformationResolution = 100.0;
+Eigen::VectorXd InformationResolution(const Eigen::VectorXd& scale);
+
 // The decision of HoldPolicy (what fit does first; filter uses it too).
 struct HoldDecision {
   std::vector<std::string> held;      // structural nulls and the user's holds

@@ -226,7 +226,8 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
     }
   });
   if (information) {
-    out.information = ThetaInformationBySchur(pb, mb, Eigen::MatrixXd::Zero(0, n));
+    out.information =
+        ThetaInformationBySchur(pb, mb, Eigen::MatrixXd::Zero(0, n), &out.information_scale);
   }
   out.gradient = Eigen::VectorXd::Zero(n);
   for (std::size_t e = 0; e < E; ++e) {

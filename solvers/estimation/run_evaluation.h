@@ -90,6 +90,9 @@ struct RunReduction {
   double cost = 0.0;            // 0.5 chi^2 of the process and measurement residuals
   Eigen::VectorXd gradient;     // n (empty without the pass's Jacobian)
   Eigen::MatrixXd information;  // n x n, Gauss-Newton (empty without the Jacobian)
+  // With the information: its diagonal before the states' elimination
+  // (ThetaInformationBySchur's scale).
+  Eigen::VectorXd information_scale;
   Eigen::Vector3d noise_mV = Eigen::Vector3d::Zero();  // the reading noise it was reduced at
   // Degrees of freedom of these residuals with the states solved for: 6 per
   // interval (the measurements only pin the states).

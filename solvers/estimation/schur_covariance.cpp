@@ -18,11 +18,13 @@ Eigen::MatrixXd SolveColumns(const Eigen::LDLT<Eigen::Matrix<double, 6, 6>>& ldl
 
 Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process,
                                         const std::vector<MeasurementBlock>& measurement,
-                                        const Eigen::MatrixXd& theta_rows) {
+                                        const Eigen::MatrixXd& theta_rows,
+                                        Eigen::VectorXd* scale) {
   using Mat6 = Eigen::Matrix<double, 6, 6>;
   const std::size_t E = measurement.size();
   const Eigen::Index n = measurement[0].N.cols();
   Eigen::MatrixXd Htt = Eigen::MatrixXd::Zero(n, n);
+  if (scale) *scale = Eigen::VectorXd::Zero(n);
   if (n == 0) return Htt;
   // H_tt - H_tx H_xx^-1 H_xt = rows^T rows + sum_e (N_e^T N_e + C_e^T C_e)
   // - sum_e W_e^T W_e, with W_e = L_e^-1 G_e (S_e = L_e L_e^T) the theta
@@ -31,13 +33,17 @@ Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process
   // chunks of epochs at a time (one product of many rows instead of three
   // 6-row products an epoch: the score analysis's 84 columns took 0.1 s).
   auto lower = [&Htt]() { return Htt.selfadjointView<Eigen::Lower>(); };
-  if (theta_rows.rows() > 0) lower().rankUpdate(theta_rows.transpose());
+  if (theta_rows.rows() > 0) {
+    lower().rankUpdate(theta_rows.transpose());
+    if (scale) *scale += theta_rows.colwise().squaredNorm().transpose();
+  }
   constexpr std::size_t kChunk = 128;
   Eigen::MatrixXd pos = Eigen::MatrixXd::Zero(12 * kChunk, n);
   Eigen::MatrixXd neg(6 * kChunk, n);
   std::size_t rows = 0;  // epochs in the chunk
   auto flush = [&]() {
     if (rows == 0) return;
+    if (scale) *scale += pos.topRows(12 * rows).colwise().squaredNorm().transpose();
     lower().rankUpdate(pos.topRows(12 * rows).transpose(), 1.0);
     lower().rankUpdate(neg.topRows(6 * rows).transpose(), -1.0);
     rows = 0;

@@ -35,10 +35,14 @@ struct MeasurementBlock {  // residual couples x_e and theta
 // The information of theta with the states eliminated, H_tt - H_tx H_xx^-1 H_xt
 // (its inverse is the covariance above). process[e] links epoch e and e+1
 // (E - 1 of them); measurement[e] is at epoch e (E of them); theta_rows are
-// the rows on theta alone (priors, constraints).
+// the rows on theta alone (priors, constraints). *scale, when given, gets
+// the diagonal before the elimination (H_tt's): what the elimination
+// subtracts from, so that a parameter's information resolves to about
+// 1e-16 of it (InformationResolution, batch_solver.h).
 Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process,
                                         const std::vector<MeasurementBlock>& measurement,
-                                        const Eigen::MatrixXd& theta_rows);
+                                        const Eigen::MatrixXd& theta_rows,
+                                        Eigen::VectorXd* scale = nullptr);
 
 // The problem at one theta with the states solved for (variable projection).
 // The residuals are affine in the states for a given theta (r = r0 + J_x x),

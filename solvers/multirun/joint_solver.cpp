@@ -212,8 +212,10 @@ std::vector<int> HeldByRule(const JointLayout& jl, const std::vector<RunProblem>
   const Eigen::MatrixXd info =
       sigma.asDiagonal() *
       (pt.data_information + ConstraintInformationOverPhi(objective, m)) * sigma.asDiagonal();
-  Eigen::VectorXd min_info =
-      Eigen::VectorXd::Constant(m, opt.batch.holding.min_information);
+  // Below the information's resolution a parameter has none.
+  const Eigen::VectorXd resolution =
+      InformationResolution(pt.data_information_scale).cwiseProduct(sigma.cwiseAbs2());
+  Eigen::VectorXd min_info = resolution.cwiseMax(opt.batch.holding.min_information);
   Eigen::VectorXd priority(m);
   for (int j = 0; j < m; ++j) {
     const JointParam& p = jl.param(j);
@@ -240,7 +242,9 @@ std::vector<int> HeldByRule(const JointLayout& jl, const std::vector<RunProblem>
     kind.assign(m, 1);
     for (int j : kept) kind[j] = 0;
     for (int j = 0; j < m; ++j) {
-      if (kind[j] == 1 && left[j] < opt.batch.holding.null_information) kind[j] = 2;
+      if (kind[j] == 1 && left[j] < std::max(opt.batch.holding.null_information, resolution[j])) {
+        kind[j] = 2;
+      }
     }
   }
   for (int j = 0; j < m; ++j) {
