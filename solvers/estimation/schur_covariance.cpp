@@ -37,7 +37,7 @@ Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process
     lower().rankUpdate(theta_rows.transpose());
     if (scale) *scale += theta_rows.colwise().squaredNorm().transpose();
   }
-  constexpr std::size_t kChunk = 128;
+  constexpr std::size_t kChunk = 64;
   Eigen::MatrixXd pos = Eigen::MatrixXd::Zero(12 * kChunk, n);
   Eigen::MatrixXd neg(6 * kChunk, n);
   std::size_t rows = 0;  // epochs in the chunk
