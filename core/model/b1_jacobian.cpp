@@ -406,4 +406,61 @@ TRIADCAL_FLATTEN void AccelerationWithJacobian(const ModelConfig& cfg, const dou
   }
 }
 
+void ReferenceMotionWithJacobian(const ModelConfig& cfg, const double* th,
+                                 const BenchAngles<double>& rec, Eigen::Vector3d* v_out,
+                                 Eigen::Vector3d* p_out, Eigen::Ref<Eigen::MatrixXd> J) {
+  const ParameterLayout& layout = cfg.layout;
+  J.setZero();
+  BenchAngles<double> b = rec;
+  const std::vector<int>& angle_params = layout.StageParams(EffectStage::kAngle);
+  Eigen::Matrix<double, 6, kJetParams> db = Eigen::Matrix<double, 6, kJetParams>::Zero();
+  if (!angle_params.empty()) AngleStage(cfg, th, rec, &b, &db);
+  const BenchMotion<double> m = ComputeBenchMotion(cfg, th, b);
+  const Vec3<double> R = LeverArm_m(cfg, th);
+  const Vec3<double> q = m.C_L2 * R;
+  const Vec3<double> p = m.axis_offset_L + q;
+  const Vec3<double>& w1 = m.w1_L;
+  const Vec3<double>& w12 = m.w12_L;
+  const Vec3<double> v = w1.cross(p) + w12.cross(q);
+  *v_out = v;
+  *p_out = p;
+  const Vec3<double> e_z = Vec3<double>::UnitZ();
+  const Vec3<double> u1 = Rz(th[kDpsi]).col(1);
+  const int o_e = layout.offset(Effect::kAxisNonperpendicularity);
+  const double eps = o_e >= 0 ? th[o_e] : 0.0;
+  const Vec3<double> n_1(std::cos(eps), std::sin(eps), 0.0);  // Rz(eps) e_x
+  const Vec3<double> n_L = m.C_L1 * n_1;
+  auto add = [&J](int col, const Vec3<double>& dv, const Vec3<double>& dp) {
+    J.col(col).head<3>() += dv;
+    J.col(col).tail<3>() += dp;
+  };
+  add(kDpsi, e_z.cross(v), e_z.cross(p));
+  // The outer angle A, the inner angle B, and the two rates.
+  const Vec3<double> dp_A = u1.cross(p), dq_A = u1.cross(q), dw12_A = u1.cross(w12);
+  const Vec3<double> dv_A = w1.cross(dp_A) + dw12_A.cross(q) + w12.cross(dq_A);
+  const Vec3<double> dq_B = n_L.cross(q);
+  const Vec3<double> dv_B = (w1 + w12).cross(dq_B);
+  const Vec3<double> dv_r0 = u1.cross(p), dv_r1 = n_L.cross(q);
+  add(kDthetaC, dv_A, dp_A);
+  add(kDlambda2, dv_B, dq_B);
+  for (std::size_t a = 0; a < angle_params.size(); ++a) {
+    add(angle_params[a],
+        dv_A * db(0, a) + dv_r0 * db(1, a) + dv_B * db(3, a) + dv_r1 * db(4, a),
+        dp_A * db(0, a) + dq_B * db(3, a));
+  }
+  for (int j = 0; j < 3; ++j) {
+    const Vec3<double> dq = m.C_L2.col(j);
+    add(kDx2 + j, (w1 + w12).cross(dq), dq);
+  }
+  const int o_d = layout.offset(Effect::kAxisNonintersection);
+  if (o_d >= 0) add(o_d, w1.cross(m.C_L1.col(2)), m.C_L1.col(2));
+  if (o_e >= 0) {
+    const Vec3<double> q1 = m.C_L1.transpose() * q;  // C_12 R
+    const Mat3<double> C_12 = m.C_L1.transpose() * m.C_L2;
+    const Vec3<double> dq = m.C_L1 * (e_z.cross(q1) - C_12 * e_z.cross(R));
+    const Vec3<double> dw12 = m.C_L1 * e_z.cross(n_1) * b.axis[1].rate;
+    add(o_e, w1.cross(dq) + dw12.cross(q) + w12.cross(dq), dq);
+  }
+}
+
 }  // namespace triadcal

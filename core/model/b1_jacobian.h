@@ -9,7 +9,7 @@
 // asymmetry through s_i, cross_quadratic through F and its Jacobian),
 // axis_nonintersection (B2 only), the axis non-perpendicularity (through C)
 // and the size effect (the correction D of the readings, with its derivatives
-// by W taken by Jets of the bench motion alone, 9 wide, by the lever arm and
+// by W taken by Jets of the bench motion alone, 4, 8 or 12 wide, by the lever arm and
 // r written out (the points enter linearly), and by the sensor
 // parameters written out; with r = 0, where the score tests of `diagnose`
 // linearise, only its columns by r, written out). A layout with an effect
@@ -56,5 +56,23 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* theta,
                               const BenchAngles<double>& recorded,
                               const Eigen::Vector3d& readings_mV, const SampleContext& ctx,
                               Eigen::Vector3d* a, Eigen::Ref<Eigen::MatrixXd> J);
+
+// Block B2 (ReferenceMotion in bench_model.h) with its Jacobian written out:
+// the velocity and position of O in L and their derivatives (J: 6 x
+// layout.size(), rows v then p, zero where B2 does not depend). Requires
+// B1HasAnalyticJacobian(cfg.layout). With p = C_L1 e_z d + q, q = C_L2 R,
+// v = w1 x p + w12 x q (w1 = u1 l1', w12 = n_L l2', u1 = Rz(dpsi) e_y the
+// outer axis, n_L = C_L1 Rz(eps) e_x the inner one):
+//
+//   d/d dpsi: e_z x (p, v)           d/d A (A = l1 + dtheta_c): u1 x (p, q, w12)
+//   d/d B (B = l2 + dlambda2): n_L x q in p and q    d/d l1': u1 x p in v
+//   d/d l2': n_L x q in v            d/d R: C_L2 (q and p)     d/d d: C_L1 e_z (p)
+//   d/d eps: C_L1 (e_z x C_12 R - C_12 (e_z x R)) in q and p, C_L1 (e_z x n_1) l2' in w12
+//
+// and the angle stage's parameters through l1, l1', l2, l2' (their small Jets,
+// as in AccelerationWithJacobian).
+void ReferenceMotionWithJacobian(const ModelConfig& cfg, const double* theta,
+                                 const BenchAngles<double>& recorded, Eigen::Vector3d* v,
+                                 Eigen::Vector3d* p, Eigen::Ref<Eigen::MatrixXd> J);
 
 }  // namespace triadcal

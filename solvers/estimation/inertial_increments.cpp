@@ -169,7 +169,7 @@ namespace {
 
 // The reference motion reads dpsi, dtheta_c, dlambda2, the lever arm, d,
 // eps and the angle stage's parameters (ReferenceMotion): Jets over those
-// alone (over every parameter, its Jets were 6 % of a diagnose).
+// alone, where its Jacobian is not written out (ReferenceMotionWithJacobian).
 constexpr int kReferenceJet = 6 + 2 + 7;
 
 ReferenceSample ReferenceWithJacobian(const ModelConfig& cfg, const Eigen::VectorXd& theta,
@@ -210,6 +210,12 @@ ReferenceSample EvaluateReference(const ModelConfig& cfg, const Eigen::VectorXd&
   if (!with_jacobian) {
     const PointMotion<double> pm = ReferenceMotion<double>(cfg, theta.data(), rec);
     return ReferenceSample{pm.v_L, pm.p_L, Eigen::MatrixXd()};
+  }
+  if (B1HasAnalyticJacobian(cfg.layout)) {
+    ReferenceSample out;
+    out.dref_dtheta.resize(6, theta.size());
+    ReferenceMotionWithJacobian(cfg, theta.data(), rec, &out.v_mps, &out.p_m, out.dref_dtheta);
+    return out;
   }
   return ReferenceWithJacobian(cfg, theta, rec);
 }
