@@ -425,7 +425,7 @@ void ReferenceMotionWithJacobian(const ModelConfig& cfg, const double* th,
   *v_out = v;
   *p_out = p;
   const Vec3<double> e_z = Vec3<double>::UnitZ();
-  const Vec3<double> u1 = Rz(th[kDpsi]).col(1);
+  const Vec3<double> u1 = m.C_L1.col(1);  // Rz(dpsi) e_y: Ry keeps e_y
   const int o_e = layout.offset(Effect::kAxisNonperpendicularity);
   const double eps = o_e >= 0 ? th[o_e] : 0.0;
   const Vec3<double> n_1(std::cos(eps), std::sin(eps), 0.0);  // Rz(eps) e_x
