@@ -120,7 +120,7 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
       pb[e].r0 = LQ[e] * raw0[e];
     }
   });
-  const ReducedOverStates at_states = ReduceOverStates(pb, mb, true);
+  const ReducedOverStates at_states = ReduceOverStates(pb, mb, true, threads);
   out.cost = at_states.cost;
   out.states.resize(E);
   out.process_residual.assign(E, Vec6::Zero());
@@ -151,30 +151,34 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
   std::vector<Parts> comp(E - 1);
   ParallelFor(E - 1, threads, [&](std::size_t e) {
     const ProcessNoise& qn = *wp.process[e].noise;
-    Mat6 Q = qn.Q_iso, Q_ref = qn.Q_iso;
-    for (int i = 0; i < 3; ++i) {
-      Q += var[i] * qn.channel_weight[i];
-      Q_ref += var_ref[i] * qn.channel_weight[i];
-    }
-    const Eigen::LDLT<Mat6> ldlt(Q), ldlt_ref(Q_ref);
-    const Vec6 w = ldlt.solve(out.process_residual[e + 1]);
+    // Q's whitening from step 1: Q^-1 v = LQ^T LQ v.
+    const Mat6& L = LQ[e];
+    auto solve_q = [&L](const Vec6& v) -> Vec6 {
+      const Vec6 Lv = L.triangularView<Eigen::Lower>() * v;
+      return L.transpose().triangularView<Eigen::Upper>() * Lv;
+    };
+    Mat6 Q_ref = qn.Q_iso;
+    for (int i = 0; i < 3; ++i) Q_ref += var_ref[i] * qn.channel_weight[i];
+    const Eigen::LLT<Mat6> llt_ref(Q_ref);
+    const Vec6 w = solve_q(out.process_residual[e + 1]);
     Parts& c = comp[e];
     std::array<Mat6, 3> A;
     std::array<Vec6, 3> QiQinv_r, QinvQiw;
     for (int i = 0; i < 3; ++i) {
-      A[i] = ldlt_ref.solve(var_ref[i] * qn.channel_weight[i]);
+      A[i] = llt_ref.solve(var_ref[i] * qn.channel_weight[i]);
       QiQinv_r[i] = var[i] * (qn.channel_weight[i] * w);
-      QinvQiw[i] = ldlt.solve(QiQinv_r[i]);
+      QinvQiw[i] = solve_q(QiQinv_r[i]);
       c.q[i] = w.dot(QiQinv_r[i]);
       c.N[i] = A[i].trace();
     }
+    // Both symmetric: q_ij = (Q_i w)^T Q^-1 (Q_j w), tr(A_i A_j) = sum A_i o A_j^T.
     for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) {
-        c.qq(i, j) = QiQinv_r[i].dot(QinvQiw[j]);
-        c.tt(i, j) = (A[i] * A[j]).trace();
+      for (int j = i; j < 3; ++j) {
+        c.qq(i, j) = c.qq(j, i) = QiQinv_r[i].dot(QinvQiw[j]);
+        c.tt(i, j) = c.tt(j, i) = A[i].cwiseProduct(A[j].transpose()).sum();
       }
     }
-    c.log_det = 0.5 * ldlt_ref.vectorD().array().log().sum();
+    c.log_det = llt_ref.matrixLLT().diagonal().array().log().sum();  // 0.5 log det
   });
   for (const Parts& c : comp) {
     out.channel_quadratic += c.q;
@@ -227,7 +231,8 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
   });
   if (information) {
     out.information =
-        ThetaInformationBySchur(pb, mb, Eigen::MatrixXd::Zero(0, n), &out.information_scale);
+        ThetaInformationBySchur(pb, mb, Eigen::MatrixXd::Zero(0, n), &out.information_scale,
+                                threads);
   }
   out.gradient = Eigen::VectorXd::Zero(n);
   for (std::size_t e = 0; e < E; ++e) {

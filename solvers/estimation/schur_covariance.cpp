@@ -2,16 +2,18 @@
 
 #include <Eigen/Cholesky>
 
+#include "solvers/estimation/parallel.h"
+
 namespace triadcal {
 namespace {
 
 // S^-1 G for the theta columns G (6 x n). With no columns (only the states
 // solved for) it returns the empty result without calling the solve: Eigen's
 // triangular solve reads an empty right-hand side's null data (UBSan).
-Eigen::MatrixXd SolveColumns(const Eigen::LDLT<Eigen::Matrix<double, 6, 6>>& ldlt,
-                             const Eigen::MatrixXd& G) {
+template <typename Decomposition>
+Eigen::MatrixXd SolveColumns(const Decomposition& d, const Eigen::MatrixXd& G) {
   if (G.cols() == 0) return Eigen::MatrixXd(6, 0);
-  return ldlt.solve(G);
+  return d.solve(G);
 }
 
 }  // namespace
@@ -19,7 +21,7 @@ Eigen::MatrixXd SolveColumns(const Eigen::LDLT<Eigen::Matrix<double, 6, 6>>& ldl
 Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process,
                                         const std::vector<MeasurementBlock>& measurement,
                                         const Eigen::MatrixXd& theta_rows,
-                                        Eigen::VectorXd* scale) {
+                                        Eigen::VectorXd* scale, int threads) {
   using Mat6 = Eigen::Matrix<double, 6, 6>;
   const std::size_t E = measurement.size();
   const Eigen::Index n = measurement[0].N.cols();
@@ -32,62 +34,81 @@ Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process
   // recursion is O(E n); the sums are rank updates of the lower triangle,
   // chunks of epochs at a time (one product of many rows instead of three
   // 6-row products an epoch: the score analysis's 84 columns took 0.1 s).
-  auto lower = [&Htt]() { return Htt.selfadjointView<Eigen::Lower>(); };
+  // The first sum needs no elimination: the two are formed apart, on two
+  // threads when there are.
+  constexpr std::size_t kChunk = 64;
+  Eigen::MatrixXd data_sum = Eigen::MatrixXd::Zero(n, n);
+  Eigen::MatrixXd eliminated_sum = Eigen::MatrixXd::Zero(n, n);
+  Eigen::VectorXd data_scale = Eigen::VectorXd::Zero(n);
+  auto data_part = [&]() {
+    Eigen::MatrixXd pos(12 * kChunk, n);
+    std::size_t rows = 0;  // epochs in the chunk
+    for (std::size_t e = 0; e < E; ++e) {
+      pos.middleRows(12 * rows, 6) = measurement[e].N;
+      if (e + 1 < E) {
+        pos.middleRows(12 * rows + 6, 6) = process[e].C;
+      } else {
+        pos.middleRows(12 * rows + 6, 6).setZero();
+      }
+      if (++rows < kChunk && e + 1 < E) continue;
+      data_scale += pos.topRows(12 * rows).colwise().squaredNorm().transpose();
+      data_sum.selfadjointView<Eigen::Lower>().rankUpdate(pos.topRows(12 * rows).transpose());
+      rows = 0;
+    }
+  };
+  auto eliminated_part = [&]() {
+    Eigen::MatrixXd neg(6 * kChunk, n);
+    std::size_t rows = 0;
+    // Running state of the elimination: S (6x6) and G (6xn) of the next x_e,
+    // after eliminating the states before it.
+    Mat6 S = measurement[0].M.transpose() * measurement[0].M;
+    Eigen::MatrixXd G = measurement[0].M.transpose() * measurement[0].N;
+    if (!process.empty()) {
+      S += process[0].A.transpose() * process[0].A;
+      G.noalias() += process[0].A.transpose() * process[0].C;
+    }
+    Eigen::MatrixXd W(6, n), Gn(6, n);
+    for (std::size_t e = 0; e < E; ++e) {
+      const Eigen::LLT<Mat6> llt(S);
+      W = G;
+      llt.matrixL().solveInPlace(W);
+      neg.middleRows(6 * rows, 6) = W;
+      if (++rows == kChunk || e + 1 == E) {
+        eliminated_sum.selfadjointView<Eigen::Lower>().rankUpdate(neg.topRows(6 * rows).transpose());
+        rows = 0;
+      }
+      if (e + 1 == E) break;
+      const ProcessBlock& p = process[e];
+      // The fill-in of eliminating x_e: U^T S^-1 U and U^T S^-1 G, with
+      // U = A^T B the (e, e+1) block, as (L^-1 U)^T (L^-1 U) and (L^-1 U)^T W.
+      Mat6 LiU = p.A.transpose() * p.B;
+      llt.matrixL().solveInPlace(LiU);
+      Mat6 Sn = p.B.transpose() * p.B + measurement[e + 1].M.transpose() * measurement[e + 1].M;
+      Gn.noalias() = p.B.transpose() * p.C;
+      Gn.noalias() += measurement[e + 1].M.transpose() * measurement[e + 1].N;
+      if (e + 1 < process.size()) {
+        Sn += process[e + 1].A.transpose() * process[e + 1].A;
+        Gn.noalias() += process[e + 1].A.transpose() * process[e + 1].C;
+      }
+      S = Sn - LiU.transpose() * LiU;
+      G = Gn;
+      G.noalias() -= LiU.transpose() * W;
+    }
+  };
+  ParallelFor(2, threads, [&](std::size_t part) {
+    if (part == 0) {
+      eliminated_part();
+    } else {
+      data_part();
+    }
+  });
   if (theta_rows.rows() > 0) {
-    lower().rankUpdate(theta_rows.transpose());
+    Htt.selfadjointView<Eigen::Lower>().rankUpdate(theta_rows.transpose());
     if (scale) *scale += theta_rows.colwise().squaredNorm().transpose();
   }
-  constexpr std::size_t kChunk = 64;
-  Eigen::MatrixXd pos = Eigen::MatrixXd::Zero(12 * kChunk, n);
-  Eigen::MatrixXd neg(6 * kChunk, n);
-  std::size_t rows = 0;  // epochs in the chunk
-  auto flush = [&]() {
-    if (rows == 0) return;
-    if (scale) *scale += pos.topRows(12 * rows).colwise().squaredNorm().transpose();
-    lower().rankUpdate(pos.topRows(12 * rows).transpose(), 1.0);
-    lower().rankUpdate(neg.topRows(6 * rows).transpose(), -1.0);
-    rows = 0;
-  };
-
-  // Running state of the elimination: S (6x6) and G (6xn) of the next x_e,
-  // after eliminating the states before it.
-  Mat6 S = measurement[0].M.transpose() * measurement[0].M;
-  Eigen::MatrixXd G = measurement[0].M.transpose() * measurement[0].N;
-  if (!process.empty()) {
-    S += process[0].A.transpose() * process[0].A;
-    G.noalias() += process[0].A.transpose() * process[0].C;
-  }
-  Eigen::MatrixXd W(6, n), Gn(6, n);
-  for (std::size_t e = 0; e < E; ++e) {
-    pos.middleRows(12 * rows, 6) = measurement[e].N;
-    if (e + 1 < E) {
-      pos.middleRows(12 * rows + 6, 6) = process[e].C;
-    } else {
-      pos.middleRows(12 * rows + 6, 6).setZero();
-    }
-    const Eigen::LLT<Mat6> llt(S);
-    W = G;
-    llt.matrixL().solveInPlace(W);
-    neg.middleRows(6 * rows, 6) = W;
-    if (++rows == kChunk) flush();
-    if (e + 1 == E) break;
-    const ProcessBlock& p = process[e];
-    // The fill-in of eliminating x_e: U^T S^-1 U and U^T S^-1 G, with
-    // U = A^T B the (e, e+1) block, as (L^-1 U)^T (L^-1 U) and (L^-1 U)^T W.
-    Mat6 LiU = p.A.transpose() * p.B;
-    llt.matrixL().solveInPlace(LiU);
-    Mat6 Sn = p.B.transpose() * p.B + measurement[e + 1].M.transpose() * measurement[e + 1].M;
-    Gn.noalias() = p.B.transpose() * p.C;
-    Gn.noalias() += measurement[e + 1].M.transpose() * measurement[e + 1].N;
-    if (e + 1 < process.size()) {
-      Sn += process[e + 1].A.transpose() * process[e + 1].A;
-      Gn.noalias() += process[e + 1].A.transpose() * process[e + 1].C;
-    }
-    S = Sn - LiU.transpose() * LiU;
-    G = Gn;
-    G.noalias() -= LiU.transpose() * W;
-  }
-  flush();
+  if (scale) *scale += data_scale;
+  Htt.triangularView<Eigen::Lower>() += data_sum;
+  Htt.triangularView<Eigen::Lower>() -= eliminated_sum;
   for (Eigen::Index j = 1; j < n; ++j) {
     for (Eigen::Index i = 0; i < j; ++i) Htt(i, j) = Htt(j, i);
   }
@@ -96,7 +117,7 @@ Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process
 
 ReducedOverStates ReduceOverStates(const std::vector<ProcessBlock>& process,
                                    const std::vector<MeasurementBlock>& measurement,
-                                   bool with_states) {
+                                   bool with_states, int threads) {
   using Mat6 = Eigen::Matrix<double, 6, 6>;
   using Vec6 = Eigen::Matrix<double, 6, 1>;
   const std::size_t E = measurement.size();
@@ -105,14 +126,21 @@ ReducedOverStates ReduceOverStates(const std::vector<ProcessBlock>& process,
   out.information = Eigen::MatrixXd::Zero(n, n);
   out.gradient = Eigen::VectorXd::Zero(n);
   double rr = 0.0;
+  // Without theta columns (the states alone solved for) the products by
+  // them are skipped: each would cost a dynamic product's set-up.
+  const bool with_theta = n > 0;
   for (const MeasurementBlock& m : measurement) {
-    out.information.noalias() += m.N.transpose() * m.N;
-    out.gradient.noalias() += m.N.transpose() * m.r0;
+    if (with_theta) {
+      out.information.noalias() += m.N.transpose() * m.N;
+      out.gradient.noalias() += m.N.transpose() * m.r0;
+    }
     rr += m.r0.squaredNorm();
   }
   for (const ProcessBlock& p : process) {
-    out.information.noalias() += p.C.transpose() * p.C;
-    out.gradient.noalias() += p.C.transpose() * p.r0;
+    if (with_theta) {
+      out.information.noalias() += p.C.transpose() * p.C;
+      out.gradient.noalias() += p.C.transpose() * p.r0;
+    }
     rr += p.r0.squaredNorm();
   }
   // The diagonal block, theta coupling and right-hand side of state e before
@@ -120,49 +148,55 @@ ReducedOverStates ReduceOverStates(const std::vector<ProcessBlock>& process,
   auto block = [&](std::size_t e, Mat6* S, Eigen::MatrixXd* G, Vec6* h) {
     const MeasurementBlock& m = measurement[e];
     *S = m.M.transpose() * m.M;
-    *G = m.M.transpose() * m.N;
+    if (with_theta) *G = m.M.transpose() * m.N;
     *h = m.M.transpose() * m.r0;
     if (e > 0) {
       const ProcessBlock& p = process[e - 1];
       *S += p.B.transpose() * p.B;
-      *G += p.B.transpose() * p.C;
+      if (with_theta) *G += p.B.transpose() * p.C;
       *h += p.B.transpose() * p.r0;
     }
     if (e < process.size()) {
       const ProcessBlock& p = process[e];
       *S += p.A.transpose() * p.A;
-      *G += p.A.transpose() * p.C;
+      if (with_theta) *G += p.A.transpose() * p.C;
       *h += p.A.transpose() * p.r0;
     }
   };
-  Mat6 S;
-  Eigen::MatrixXd G;
-  Vec6 h;
-  block(0, &S, &G, &h);
+  // Each epoch's blocks before the elimination and each interval's
+  // off-diagonal block U_e = A_e^T B_e, independent of one another (on
+  // `threads`); the elimination itself runs in order.
+  std::vector<Mat6> S0(E), U(E - 1);
+  std::vector<Eigen::MatrixXd> G0(E);
+  std::vector<Vec6> h0(E);
+  ParallelFor(E, threads, [&](std::size_t e) {
+    block(e, &S0[e], &G0[e], &h0[e]);
+    if (e + 1 < E) U[e] = process[e].A.transpose() * process[e].B;
+  });
+  Mat6 S = S0[0];
+  Eigen::MatrixXd G = std::move(G0[0]);
+  Vec6 h = h0[0];
   double hSh = 0.0;
   // For the back substitution: x_e = S_e^-1 (-h_e - U_e x_{e+1}).
   std::vector<Mat6> Sinv_U(with_states ? E : 0);
   std::vector<Vec6> Sinv_h(with_states ? E : 0);
   for (std::size_t e = 0; e < E; ++e) {
-    const Eigen::LDLT<Mat6> ldlt(S);
-    const Eigen::MatrixXd SiG = SolveColumns(ldlt, G);
-    const Vec6 Sih = ldlt.solve(h);
-    out.information.noalias() -= G.transpose() * SiG;
-    out.gradient.noalias() -= G.transpose() * Sih;
+    const Eigen::LLT<Mat6> llt(S);
+    const Vec6 Sih = llt.solve(h);
+    Eigen::MatrixXd SiG;
+    if (with_theta) {
+      SiG = llt.solve(G);
+      out.information.noalias() -= G.transpose() * SiG;
+      out.gradient.noalias() -= G.transpose() * Sih;
+    }
     hSh += h.dot(Sih);
     if (with_states) Sinv_h[e] = Sih;
     if (e + 1 == E) break;
-    const ProcessBlock& p = process[e];
-    const Mat6 U = p.A.transpose() * p.B;
-    const Mat6 SiU = ldlt.solve(U);
+    const Mat6 SiU = llt.solve(U[e]);
     if (with_states) Sinv_U[e] = SiU;
-    Mat6 Sn;
-    Eigen::MatrixXd Gn;
-    Vec6 hn;
-    block(e + 1, &Sn, &Gn, &hn);
-    S = Sn - U.transpose() * SiU;
-    G = Gn - U.transpose() * SiG;
-    h = hn - U.transpose() * Sih;
+    S = S0[e + 1] - U[e].transpose() * SiU;
+    if (with_theta) G = G0[e + 1] - U[e].transpose() * SiG;
+    h = h0[e + 1] - U[e].transpose() * Sih;
   }
   out.cost = 0.5 * (rr - hSh);
   out.information = 0.5 * (out.information + out.information.transpose());

@@ -42,7 +42,7 @@ struct MeasurementBlock {  // residual couples x_e and theta
 Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process,
                                         const std::vector<MeasurementBlock>& measurement,
                                         const Eigen::MatrixXd& theta_rows,
-                                        Eigen::VectorXd* scale = nullptr);
+                                        Eigen::VectorXd* scale = nullptr, int threads = 1);
 
 // The problem at one theta with the states solved for (variable projection).
 // The residuals are affine in the states for a given theta (r = r0 + J_x x),
@@ -54,6 +54,8 @@ Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process
 //   cost      = 0.5 |r0|^2 - 0.5 b_x^T H_xx^-1 b_x,       b = J^T r0
 //   gradient  = b_t - H_tx H_xx^-1 b_x
 //   x_optimal = -H_xx^-1 b_x            (when asked: back substitution)
+//
+// The blocks of each epoch are formed on `threads`, the elimination in order.
 struct ReducedOverStates {
   double cost = 0.0;             // 0.5 |r|^2 at the optimal states
   Eigen::VectorXd gradient;      // d cost / d theta at the optimal states (n)
@@ -62,7 +64,7 @@ struct ReducedOverStates {
 };
 ReducedOverStates ReduceOverStates(const std::vector<ProcessBlock>& process,
                                    const std::vector<MeasurementBlock>& measurement,
-                                   bool with_states = false);
+                                   bool with_states = false, int threads = 1);
 
 // The reduced gradient split by epoch (the prediction-error decomposition of
 // a state-space model's likelihood). T_e is the problem truncated after epoch e
