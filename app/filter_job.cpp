@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <sstream>
 
 #include "app/estimate_json.h"
@@ -199,12 +200,17 @@ FilterOutcome FilterRun(const FilterSettings& s, const std::string& run_yaml, co
   f.pinned.insert(f.pinned.end(), f.decision.consider.begin(), f.decision.consider.end());
   opt.held = f.pinned;
   f.result = RunFilterSmoother(declared, run.data, f.layout, opt);
-  if (!f.result.ekf.theta.allFinite() || !f.result.rts.theta.allFinite()) {
+  if (f.result.diverged_at_s >= 0.0 || !f.result.ekf.theta.allFinite() ||
+      !f.result.rts.theta.allFinite()) {
     // No number to write: a diverged filter's estimate is not a result.
-    f.error = run_yaml +
-              ": the filter diverged (its estimate is not finite): the readings are far from "
-              "the nominal model (check triad.bias_mV, triad.scale_mV_per_g and the readings' "
-              "unit)";
+    char why[120] = "its estimate is not finite";
+    if (f.result.diverged_at_s >= 0.0) {
+      std::snprintf(why, sizeof(why), "its covariance lost its positive definiteness at t = %.3g s",
+                    f.result.diverged_at_s);
+    }
+    f.error = run_yaml + ": the filter diverged (" + why +
+              "): the readings are far from the nominal model (check triad.bias_mV, "
+              "triad.scale_mV_per_g and the readings' unit)";
     return f;
   }
   f.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

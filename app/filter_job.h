@@ -58,7 +58,8 @@ struct FilterOutcome {
   // declared one, or with noise_mV: auto the readings' own (RunReadingNoise_mV).
   Eigen::Vector3d noise = Eigen::Vector3d::Zero();
   double seconds = 0.0;                 // the decision and the filter
-  // Not empty when the filter diverged (its estimate not finite): the reason,
+  // Not empty when the filter diverged (its covariance lost its positive
+  // definiteness, FilterResult::diverged_at_s, or its estimate is not finite): the reason,
   // one sentence; then there is no OUT (json is null).
   std::string error;
   nlohmann::json json;  // OUT.json of `filter` (without the provenance its writer adds)

@@ -648,7 +648,7 @@ class BatchSolve {
         C[e] = Ce;
       }
     }
-    res_.process_whitened_expected_acf = ExpectedProcessAutocorrelation(C, cov_a, 20);
+    res_.process_whitened_expected_acf = ExpectedProcessAutocorrelation(C, cov_a, 20, threads_);
     const WhitenessSummary w =
         ProcessWhiteness(res_.process_whitened, res_.process_whitened_expected_acf);
     res_.whiteness_p_value = w.p_value;

@@ -17,63 +17,39 @@ namespace triadcal {
 namespace {
 
 
-// The process step of the interval that ends at an epoch, with where it was
-// linearised (theta_lin_free empty: at the filtered theta of the epoch before).
-struct Interval {
-  ProcessStep step;
-  Eigen::VectorXd theta_lin_free;
-};
-
-struct EpochStore {
-  Eigen::VectorXd x;           // filtered state [V, S, theta_free]
-  std::vector<double> P_upper;  // packed upper triangle of the filtered covariance
-  Interval in;                  // interval from the previous epoch (empty at 0)
-};
-
-std::vector<double> Pack(const Eigen::MatrixXd& P) {
-  const int N = static_cast<int>(P.rows());
-  std::vector<double> out;
-  out.reserve(N * (N + 1) / 2);
-  for (int r = 0; r < N; ++r)
-    for (int c = r; c < N; ++c) out.push_back(P(r, c));
-  return out;
-}
-
-Eigen::MatrixXd Unpack(const std::vector<double>& v, int N) {
-  Eigen::MatrixXd P(N, N);
-  std::size_t i = 0;
-  for (int r = 0; r < N; ++r)
-    for (int c = r; c < N; ++c) P(r, c) = P(c, r) = v[i++];
-  return P;
-}
-
-// The augmented transition of [x; theta_free]: x_b = F x_a + u + U dtheta.
-Eigen::MatrixXd TransitionMatrix(const Interval& in, int n) {
+// The augmented process step of [x; theta_free] over one interval: x_b =
+// F x_a + u + U dtheta, theta_b = theta_a. The covariance's propagation is
+// the dense F P F^T: computing only the six rows it moves (O(6 N^2)) rounds
+// the V, S - theta block differently, and on the paper's 1-kHz run, where V
+// and S are known to micrometres, that was enough to make the filter
+// diverge.
+Eigen::MatrixXd PropagateCov(const ProcessStep& step, const Eigen::MatrixXd& P, int n) {
   Eigen::MatrixXd F = Eigen::MatrixXd::Identity(6 + n, 6 + n);
-  F.topLeftCorner<6, 6>() = in.step.F();
-  F.block(0, 6, 6, n) = in.step.U;
-  return F;
-}
-
-// x_b = f(x_a): the process model of state_space_model.h, linear about the
-// pass's linearisation point (the iterated smoother's Gauss-Newton model).
-Eigen::VectorXd Propagate(const Interval& in, const Eigen::VectorXd& x, int n) {
-  Eigen::VectorXd y = x;
-  Eigen::VectorXd delta = Eigen::VectorXd::Zero(n);
-  if (in.theta_lin_free.size() == n) delta = x.tail(n) - in.theta_lin_free;
-  y.head<6>() = StateSpaceModel::PredictLinear(in.step, x.head<6>(), delta);
-  return y;
-}
-
-Eigen::MatrixXd PropagateCov(const Interval& in, const Eigen::MatrixXd& P, int n) {
-  const Eigen::MatrixXd F = TransitionMatrix(in, n);
+  F.topLeftCorner<6, 6>() = step.F();
+  F.block(0, 6, 6, n) = step.U;
   Eigen::MatrixXd Pp = F * P * F.transpose();
-  Pp.topLeftCorner<6, 6>() += in.step.noise->Q;
+  Pp.topLeftCorner<6, 6>() += step.noise->Q;
   return 0.5 * (Pp + Pp.transpose());
 }
 
+// Joseph form, P <- (I - K H) P (I - K H)^T + K R K^T: a congruence plus a
+// positive term, so P stays positive definite when the measurement is far
+// more precise than the prediction (the first epoch's diffuse start,
+// noise-free or nearly noise-free runs), however K is rounded. The products
+// stay dense: as rank-6 corrections, P - K (H P) - ..., the same sum would
+// subtract numbers of P's size to leave R's (3-5 % of `filter`'s time).
+void JosephUpdate(const Eigen::MatrixXd& K, const Eigen::MatrixXd& H, const Eigen::MatrixXd& R,
+                  Eigen::MatrixXd* P) {
+  Eigen::MatrixXd IKH = -K * H;
+  IKH.diagonal().array() += 1.0;
+  *P = IKH * *P * IKH.transpose() + K * R * K.transpose();
+  *P = 0.5 * (*P + P->transpose());
+}
+
 struct PassResult {
-  std::vector<EpochStore> store;
+  Eigen::VectorXd x;  // filtered state [V, S, theta_free] at the last epoch
+  Eigen::MatrixXd P;  // and its covariance
+  double diverged_at_s = -1.0;  // the first epoch whose covariance is not one
   std::vector<FilterSeriesRow> series;
   Vec6 innovation_ss = Vec6::Zero();
   double nis_sum = 0.0;
@@ -99,10 +75,7 @@ double GyroUpdate(const StateSpaceModel& model, GyroMeasurements* gyro, std::siz
   const Eigen::LLT<Eigen::Matrix3d> llt(S);
   const Eigen::MatrixXd K = llt.solve(PHt.transpose()).transpose();
   *x += K * y;
-  Eigen::MatrixXd IKH = -K * H;
-  IKH.diagonal().array() += 1.0;
-  *P = IKH * *P * IKH.transpose() + K * g.S * K.transpose();
-  *P = 0.5 * (*P + P->transpose());
+  JosephUpdate(K, H, g.S, P);
   return y.dot(llt.solve(y));
 }
 
@@ -112,7 +85,6 @@ PassResult ForwardPass(const StateSpaceModel& model, GyroMeasurements* gyro, int
   const RunProblem& c = model.problem();
   const int n = model.num_free(), N = 6 + n;
   PassResult out;
-  out.store.reserve(c.epochs.size());
   Eigen::VectorXd x(N);
   Eigen::MatrixXd P = Eigen::MatrixXd::Zero(N, N);
   x.tail(n) = model.Free(c.prior.mean);
@@ -139,13 +111,15 @@ PassResult ForwardPass(const StateSpaceModel& model, GyroMeasurements* gyro, int
     }
   }
   for (std::size_t e = 0; e < E; ++e) {
-    EpochStore st;
     if (e > 0) {
+      // The process model linear about th_l (the iterated smoother's
+      // Gauss-Newton model): x_b = F x_a + u + U (theta - th_l).
       const Eigen::VectorXd th_l = theta_lin_free ? *theta_lin_free : Eigen::VectorXd(x.tail(n));
-      st.in.step = model.Process(e - 1, model.Expand(th_l), true);
-      if (theta_lin_free) st.in.theta_lin_free = *theta_lin_free;
-      x = Propagate(st.in, x, n);
-      P = PropagateCov(st.in, P, n);
+      const ProcessStep step = model.Process(e - 1, model.Expand(th_l), true);
+      const Eigen::VectorXd dtheta =
+          theta_lin_free ? Eigen::VectorXd(x.tail(n) - th_l) : Eigen::VectorXd::Zero(n);
+      x.head<6>() = StateSpaceModel::PredictLinear(step, x.head<6>(), dtheta);
+      P = PropagateCov(step, P, n);
     }
     // Measurement update with z = x - h(theta) = 0 (block B2).
     const std::size_t k = c.epochs[e];
@@ -163,12 +137,13 @@ PassResult ForwardPass(const StateSpaceModel& model, GyroMeasurements* gyro, int
     const Vec6 y = -h;
     const Eigen::MatrixXd K = llt.solve(PHt.transpose()).transpose();
     x += K * y;
-    // Joseph form: keeps P positive definite when the measurement is far more
-    // precise than the prediction (noise-free or nearly noise-free runs).
-    Eigen::MatrixXd IKH = -K * H;
-    IKH.diagonal().array() += 1.0;
-    P = IKH * P * IKH.transpose() + K * R * K.transpose();
-    P = 0.5 * (P + P.transpose());
+    JosephUpdate(K, H, R, &P);
+    // A covariance with a negative variance (or none at all) is no longer
+    // a covariance: the filter has diverged (readings far from the nominal
+    // model; the real runs and the paper's never come near).
+    if (out.diverged_at_s < 0.0 && (!P.allFinite() || (P.diagonal().array() < 0.0).any())) {
+      out.diverged_at_s = c.series.run->t_s[k];
+    }
     out.nis_sum += y.dot(llt.solve(y));
     out.innovation_ss += y.cwiseAbs2();
     if (e == 0) {
@@ -211,14 +186,13 @@ PassResult ForwardPass(const StateSpaceModel& model, GyroMeasurements* gyro, int
       row.innovation_sigma = S.diagonal().cwiseSqrt();
       out.series.push_back(std::move(row));
     }
-    st.x = x;
-    st.P_upper = Pack(P);
-    out.store.push_back(std::move(st));
     if (progress && e >= next_report) {
       progress(static_cast<double>(e) / E);
       next_report = e + std::max<std::size_t>(1, E / 50);
     }
   }
+  out.x = std::move(x);
+  out.P = std::move(P);
   return out;
 }
 
@@ -229,32 +203,16 @@ Estimate FullEstimate(const StateSpaceModel& model, const Eigen::VectorXd& theta
   return Estimate{model.Expand(theta_free), model.ExpandCovariance(cov_free)};
 }
 
-// Fixed-interval RTS smoother; returns the smoothed state and covariance at
-// the first epoch.
-Estimate Smooth(const StateSpaceModel& model, const PassResult& pass) {
-  const int n = model.num_free(), N = 6 + n;
-  const std::size_t E = pass.store.size();
-  Eigen::VectorXd xs = pass.store[E - 1].x;
-  Eigen::MatrixXd Ps = Unpack(pass.store[E - 1].P_upper, N);
-  for (std::size_t e = E - 1; e-- > 0;) {
-    const EpochStore& cur = pass.store[e];
-    const Interval& in = pass.store[e + 1].in;
-    const Eigen::MatrixXd Pf = Unpack(cur.P_upper, N);
-    const Eigen::MatrixXd F = TransitionMatrix(in, n);
-    const Eigen::VectorXd x_pred = Propagate(in, cur.x, n);
-    const Eigen::MatrixXd P_pred = PropagateCov(in, Pf, n);
-    // G = Pf F^T P_pred^-1, solved in the scaled coordinates of P_pred.
-    const Eigen::VectorXd d = P_pred.diagonal().cwiseMax(1e-300).cwiseSqrt();
-    const Eigen::MatrixXd Pn = d.cwiseInverse().asDiagonal() * P_pred * d.cwiseInverse().asDiagonal();
-    const Eigen::MatrixXd FPf = F * Pf;  // = (Pf F^T)^T
-    const Eigen::MatrixXd Gt =
-        d.cwiseInverse().asDiagonal() * Pn.ldlt().solve(d.cwiseInverse().asDiagonal() * FPf);
-    const Eigen::MatrixXd G = Gt.transpose();
-    xs = cur.x + G * (xs - x_pred);
-    Ps = Pf + G * (Ps - P_pred) * G.transpose();
-    Ps = 0.5 * (Ps + Ps.transpose());
-  }
-  return FullEstimate(model, xs.tail(n), Ps.bottomRightCorner(n, n));
+// The fixed-interval RTS smoother's estimate of the parameters at the first
+// epoch. They are constants (theta_b = theta_a, no process noise): given all
+// the epochs, theta at the first is theta at the last, whose smoothed
+// estimate is the filtered one. So the backward recursion would return the
+// last filtered theta and its covariance (to 1e-9 sigma on the real roll runs
+// and the paper's run, where it was run before it was replaced by this); it
+// would only improve the trajectory, which nothing here reads.
+Estimate SmoothedParameters(const StateSpaceModel& model, const PassResult& pass) {
+  const int n = model.num_free();
+  return FullEstimate(model, pass.x.tail(n), pass.P.bottomRightCorner(n, n));
 }
 
 }  // namespace
@@ -283,7 +241,6 @@ FilterResult RunFilterSmoother(const RunDescription& run, const RunData& data,
   res.epochs = static_cast<int>(c.epochs.size());
   res.rate_noise_rad_s = c.sigma_rate;
   const int passes = std::max(1, options.smoother_iterations);
-  const int n = model.num_free();
   // The gyro's increments, at its declared noise (floored).
   std::unique_ptr<GyroMeasurements> gyro;
   Eigen::Vector3d gyro_noise = c.gyro_noise_rad_s.cwiseMax(kGyroNoiseFloor_dps * kDegToRad);
@@ -296,14 +253,14 @@ FilterResult RunFilterSmoother(const RunDescription& run, const RunData& data,
     };
     PassResult pass = ForwardPass(model, gyro.get(), threads, p == 0 ? nullptr : &theta_lin_free,
                                   options.keep_series && p == 0, prog);
+    res.rts = SmoothedParameters(model, pass);
+    if (res.diverged_at_s < 0.0) res.diverged_at_s = pass.diverged_at_s;
     if (p == 0) {
-      const Eigen::MatrixXd P_end = Unpack(pass.store.back().P_upper, 6 + n);
-      res.ekf = FullEstimate(model, pass.store.back().x.tail(n), P_end.bottomRightCorner(n, n));
+      res.ekf = res.rts;  // the first pass's last filtered estimate
       res.series = std::move(pass.series);
     }
-    res.rts = Smooth(model, pass);
     theta_lin_free = model.Free(res.rts.theta);
-    const double E = static_cast<double>(pass.store.size());
+    const double E = static_cast<double>(c.epochs.size());
     res.innovation_rms = (pass.innovation_ss / E).cwiseSqrt();
     res.mean_nis = pass.nis_sum / E;
     res.gyro_measurements = pass.gyro_count;

@@ -29,16 +29,17 @@
 // noise is the run's gyro.noise_dps (with auto, the readings' own: the
 // caller's, sample_noise.h WithReadingNoise), at least kGyroNoiseFloor_dps.
 //
-// Smoother: the RTS recursion over the epochs. For constant parameters the
-// smoothed theta equals the final filtered theta of the same linearisation; the
-// smoother improves the trajectory, and with smoother_iterations > 1 the whole
-// pass is repeated linearised about the previous smoothed estimate (iterated
-// extended Kalman smoother, i.e. Gauss-Newton on the batch problem), which
-// removes the linearisation error of the early epochs.
+// Smoother: for constant parameters the RTS smoother's theta (at any epoch)
+// equals the final filtered theta of the same linearisation, so that is what
+// it returns; the backward recursion would only improve the trajectory,
+// which nothing reads. With smoother_iterations > 1 the whole pass is
+// repeated linearised about the previous smoothed estimate (iterated extended
+// Kalman smoother, i.e. Gauss-Newton on the batch problem), which removes the
+// linearisation error of the early epochs.
 //
-// Memory: per epoch the smoother keeps the filtered state, the packed upper
-// triangle of its covariance and the two 3 x n Jacobians of the interval
-// (~6 kB for n = 27); a 40-min run at epoch_s = 0.2 s needs ~75 MB.
+// Cost: each epoch's prediction moves only V and S, and each update is of
+// rank 6 (3 for a gyro measurement): O(N^2) an epoch for the N = 6 + n
+// states. Memory: the current state and covariance.
 #pragma once
 
 #include <functional>
@@ -92,7 +93,11 @@ struct FilterSeriesRow {
 
 struct FilterResult {
   Estimate ekf;  // end of the first forward pass
-  Estimate rts;  // smoothed, at the first epoch, after the last iteration
+  Estimate rts;  // smoothed (the last pass's last filtered theta: constants)
+  // The time of the first epoch at which the covariance lost its positive
+  // definiteness (a negative variance, or not finite): the filter diverged
+  // there and its estimates are no result. -1 when it never did.
+  double diverged_at_s = -1.0;
   Prior prior;
   std::vector<FilterSeriesRow> series;  // first forward pass, when asked
   int epochs = 0;

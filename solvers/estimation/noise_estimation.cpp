@@ -6,6 +6,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "solvers/estimation/parallel.h"
 #include "solvers/statistics/statistics.h"
 
 namespace triadcal {
@@ -30,11 +31,12 @@ WhitenessSummary ProcessWhiteness(const std::vector<Vec6>& process_whitened,
 }
 
 std::array<std::vector<double>, 6> ExpectedProcessAutocorrelation(
-    const std::vector<Eigen::MatrixXd>& C, const Eigen::MatrixXd& cov_free, int lags) {
+    const std::vector<Eigen::MatrixXd>& C, const Eigen::MatrixXd& cov_free, int lags,
+    int threads) {
   std::array<std::vector<double>, 6> rho;
   const std::size_t T = C.size();
   if (T == 0 || cov_free.rows() == 0) return rho;
-  for (int c = 0; c < 6; ++c) {
+  ParallelFor(6, threads, [&](std::size_t c) {
     std::vector<Eigen::VectorXd> a(T);  // cov j_t
     double trace_rest = 0.0;
     for (std::size_t t = 0; t < T; ++t) {
@@ -46,13 +48,13 @@ std::array<std::vector<double>, 6> ExpectedProcessAutocorrelation(
     // parameters: a 10-s run has 20), its share is not a small correction
     // and the ratio below is unstable (it reached -200): nothing is
     // subtracted then.
-    if (trace_rest < 0.5 * static_cast<double>(T)) continue;
+    if (trace_rest < 0.5 * static_cast<double>(T)) return;
     for (int k = 1; k <= lags && static_cast<std::size_t>(k) < T; ++k) {
       double h = 0.0;
       for (std::size_t t = 0; t + k < T; ++t) h += C[t + k].row(c).dot(a[t]);
       rho[c][k - 1] = std::clamp(-h / trace_rest, -1.0, 1.0);
     }
-  }
+  });
   return rho;
 }
 

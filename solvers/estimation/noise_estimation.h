@@ -58,8 +58,10 @@ WhitenessSummary ProcessWhiteness(const std::vector<Vec6>& process_whitened,
 // derivative by the free parameters (C[t], 6 x n_free) and cov their
 // covariance; rho_k = -sum_t H(t, t+k) / sum_t (1 - H(t, t)). Smooth
 // regressors make it negative at short lags, about -(parameters a channel
-// carries) / (epochs); the whiteness tests subtract it.
+// carries) / (epochs); the whiteness tests subtract it. The channels on
+// `threads`.
 std::array<std::vector<double>, 6> ExpectedProcessAutocorrelation(
-    const std::vector<Eigen::MatrixXd>& C, const Eigen::MatrixXd& cov_free, int lags);
+    const std::vector<Eigen::MatrixXd>& C, const Eigen::MatrixXd& cov_free, int lags,
+    int threads = 1);
 
 }  // namespace triadcal
