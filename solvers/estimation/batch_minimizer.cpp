@@ -266,10 +266,18 @@ bool BatchMinimizer::TryStep() {
   // are dropped meanwhile (formed again if the step is refused: a
   // reduction, no pass), the trial's theta part is formed once it is
   // accepted.
+  // Without a noise to move (none estimated, no gyro's profiled), the
+  // trial's reduction is its last: formed in full at once, and the current
+  // point's gradient is already the one at the trial's noise.
+  bool fixed_noise = noisy_.empty();
+  for (int r = 0; r < objective_.runs(); ++r) {
+    if (objective_.HasGyroPart(current_, r)) fixed_noise = false;
+  }
   const double before = Objective(current_);
   current_.reductions.clear();
   std::vector<Eigen::Vector3d> noise = noise_;
-  BatchObjective::Point trial = objective_.Evaluate(phi, noise, true, ThetaPart::kNone);
+  BatchObjective::Point trial = objective_.Evaluate(
+      phi, noise, true, fixed_noise ? ThetaPart::kGradientAndInformation : ThetaPart::kNone);
   if (trial.finite()) MaximiseNoise(&trial, &noise, ThetaPart::kNone);
   summary_.iterations += 1;
   summary_.passes += 1;
@@ -282,10 +290,15 @@ bool BatchMinimizer::TryStep() {
   Say(line);
   if (trial.finite() && actual > 0.0) {
     // The current point gives way (its passes too) before the trial's theta part is formed.
-    const Eigen::VectorXd g0 = GradientAtTrialNoise(trial, noise);
+    Eigen::VectorXd g0(nf);
+    if (fixed_noise) {
+      for (int a = 0; a < nf; ++a) g0[a] = current_.gradient[free_[a]];
+    } else {
+      g0 = GradientAtTrialNoise(trial, noise);
+    }
     const Eigen::VectorXd phi_current = current_.phi;
     current_ = BatchObjective::Point{};
-    objective_.Reweight(&trial, noise);
+    if (!fixed_noise) objective_.Reweight(&trial, noise);
     if (trial.finite()) {
       MeasureCurvature(trial, g0);
       const double rho = actual / predicted_;
