@@ -267,8 +267,7 @@ bool BatchMinimizer::TryStep() {
   // reduction, no pass), the trial's theta part is formed once it is
   // accepted.
   // Without a noise to move (none estimated, no gyro's profiled), the
-  // trial's reduction is its last: formed in full at once, and the current
-  // point's gradient is already the one at the trial's noise.
+  // current point's gradient is already the one at the trial's noise.
   bool fixed_noise = noisy_.empty();
   for (int r = 0; r < objective_.runs(); ++r) {
     if (objective_.HasGyroPart(current_, r)) fixed_noise = false;
@@ -276,8 +275,7 @@ bool BatchMinimizer::TryStep() {
   const double before = Objective(current_);
   current_.reductions.clear();
   std::vector<Eigen::Vector3d> noise = noise_;
-  BatchObjective::Point trial = objective_.Evaluate(
-      phi, noise, true, fixed_noise ? ThetaPart::kGradientAndInformation : ThetaPart::kNone);
+  BatchObjective::Point trial = objective_.Evaluate(phi, noise, true, ThetaPart::kNone);
   if (trial.finite()) MaximiseNoise(&trial, &noise, ThetaPart::kNone);
   summary_.iterations += 1;
   summary_.passes += 1;
@@ -298,7 +296,7 @@ bool BatchMinimizer::TryStep() {
     }
     const Eigen::VectorXd phi_current = current_.phi;
     current_ = BatchObjective::Point{};
-    if (!fixed_noise) objective_.Reweight(&trial, noise);
+    objective_.Reweight(&trial, noise);
     if (trial.finite()) {
       MeasureCurvature(trial, g0);
       const double rho = actual / predicted_;

@@ -120,7 +120,7 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
       pb[e].r0 = LQ[e] * raw0[e];
     }
   });
-  const ReducedOverStates at_states = ReduceOverStates(pb, mb, true, threads);
+  const ReducedOverStates at_states = ReduceOverStates(pb, mb, true);
   out.cost = at_states.cost;
   out.states.resize(E);
   out.process_residual.assign(E, Vec6::Zero());

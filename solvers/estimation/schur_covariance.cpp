@@ -117,7 +117,7 @@ Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process
 
 ReducedOverStates ReduceOverStates(const std::vector<ProcessBlock>& process,
                                    const std::vector<MeasurementBlock>& measurement,
-                                   bool with_states, int threads) {
+                                   bool with_states) {
   using Mat6 = Eigen::Matrix<double, 6, 6>;
   using Vec6 = Eigen::Matrix<double, 6, 1>;
   const std::size_t E = measurement.size();
@@ -163,23 +163,17 @@ ReducedOverStates ReduceOverStates(const std::vector<ProcessBlock>& process,
       *h += p.A.transpose() * p.r0;
     }
   };
-  // Each epoch's blocks before the elimination and each interval's
-  // off-diagonal block U_e = A_e^T B_e, independent of one another (on
-  // `threads`); the elimination itself runs in order.
-  std::vector<Mat6> S0(E), U(E - 1);
-  std::vector<Eigen::MatrixXd> G0(E);
-  std::vector<Vec6> h0(E);
-  ParallelFor(E, threads, [&](std::size_t e) {
-    block(e, &S0[e], &G0[e], &h0[e]);
-    if (e + 1 < E) U[e] = process[e].A.transpose() * process[e].B;
-  });
-  Mat6 S = S0[0];
-  Eigen::MatrixXd G = std::move(G0[0]);
-  Vec6 h = h0[0];
+  Mat6 S;
+  Eigen::MatrixXd G;
+  Vec6 h;
+  block(0, &S, &G, &h);
   double hSh = 0.0;
   // For the back substitution: x_e = S_e^-1 (-h_e - U_e x_{e+1}).
   std::vector<Mat6> Sinv_U(with_states ? E : 0);
   std::vector<Vec6> Sinv_h(with_states ? E : 0);
+  Mat6 Sn;
+  Eigen::MatrixXd Gn;
+  Vec6 hn;
   for (std::size_t e = 0; e < E; ++e) {
     const Eigen::LLT<Mat6> llt(S);
     const Vec6 Sih = llt.solve(h);
@@ -192,11 +186,14 @@ ReducedOverStates ReduceOverStates(const std::vector<ProcessBlock>& process,
     hSh += h.dot(Sih);
     if (with_states) Sinv_h[e] = Sih;
     if (e + 1 == E) break;
-    const Mat6 SiU = llt.solve(U[e]);
+    const ProcessBlock& p = process[e];
+    const Mat6 U = p.A.transpose() * p.B;
+    const Mat6 SiU = llt.solve(U);
     if (with_states) Sinv_U[e] = SiU;
-    S = S0[e + 1] - U[e].transpose() * SiU;
-    if (with_theta) G = G0[e + 1] - U[e].transpose() * SiG;
-    h = h0[e + 1] - U[e].transpose() * Sih;
+    block(e + 1, &Sn, &Gn, &hn);
+    S = Sn - U.transpose() * SiU;
+    if (with_theta) G = Gn - U.transpose() * SiG;
+    h = hn - U.transpose() * Sih;
   }
   out.cost = 0.5 * (rr - hSh);
   out.information = 0.5 * (out.information + out.information.transpose());

@@ -54,8 +54,6 @@ Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process
 //   cost      = 0.5 |r0|^2 - 0.5 b_x^T H_xx^-1 b_x,       b = J^T r0
 //   gradient  = b_t - H_tx H_xx^-1 b_x
 //   x_optimal = -H_xx^-1 b_x            (when asked: back substitution)
-//
-// The blocks of each epoch are formed on `threads`, the elimination in order.
 struct ReducedOverStates {
   double cost = 0.0;             // 0.5 |r|^2 at the optimal states
   Eigen::VectorXd gradient;      // d cost / d theta at the optimal states (n)
@@ -64,7 +62,7 @@ struct ReducedOverStates {
 };
 ReducedOverStates ReduceOverStates(const std::vector<ProcessBlock>& process,
                                    const std::vector<MeasurementBlock>& measurement,
-                                   bool with_states = false, int threads = 1);
+                                   bool with_states = false);
 
 // The reduced gradient split by epoch (the prediction-error decomposition of
 // a state-space model's likelihood). T_e is the problem truncated after epoch e
