@@ -37,9 +37,9 @@
 // Kalman smoother, i.e. Gauss-Newton on the batch problem), which removes the
 // linearisation error of the early epochs.
 //
-// Cost: each epoch's prediction moves only V and S, and each update is of
-// rank 6 (3 for a gyro measurement): O(N^2) an epoch for the N = 6 + n
-// states. Memory: the current state and covariance.
+// Cost: O(N^3) an epoch for the N = 6 + n states (the covariance's
+// propagation and the Joseph update are dense products: kalman_smoother.cpp
+// says why). Memory: the current state and covariance.
 #pragma once
 
 #include <functional>

@@ -38,7 +38,8 @@ struct MeasurementBlock {  // residual couples x_e and theta
 // the rows on theta alone (priors, constraints). *scale, when given, gets
 // the diagonal before the elimination (H_tt's): what the elimination
 // subtracts from, so that a parameter's information resolves to about
-// 1e-16 of it (InformationResolution, batch_solver.h).
+// 1e-16 of it (InformationResolution, batch_solver.h). With threads > 1 the
+// data's sum and the eliminated one are formed at once.
 Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process,
                                         const std::vector<MeasurementBlock>& measurement,
                                         const Eigen::MatrixXd& theta_rows,
