@@ -269,6 +269,7 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
                   {"kernel_bias_sigma_factor_max", r.hac_kernel_bias_factor_max}};
   }
   out["initial"] = {{"parameters", ParametersJson(layout, r.initial.theta, r.initial.cov, {})}};
+  if (!r.start_note.empty()) out["initial"]["note"] = r.start_note;
   if (correlations) {
     out["correlation"] = CorrelationJson(layout, r.estimate.cov);
     // Given the considered parameters at their nominal values: what two fits

@@ -876,6 +876,38 @@ TEST_F(CliReliability, DivergedFilterSaysSoAndWritesNothing) {
   EXPECT_FALSE(std::filesystem::exists(Path("out.json")));
 }
 
+// A run read as counts with offsets of 1500 declared 0, through `fit`: the
+// RTS start's filter diverges, so the fit starts from the nominal values with
+// the scale and offset fitted, says so, and converges at the truth (it took
+// the diverged estimate as its start and stopped there, not converged).
+TEST_F(CliReliability, FitStartsFromNominalWhenItsFilterDiverges) {
+  const std::string sc = WriteText("sc.yaml", "profile: {duration_s: 20, rate_hz: 100}\n");
+  ASSERT_EQ(Run("simulate " + sc + " -o " + Path("sim") + " --seed 11 -q").exit_code, 0);
+  WriteText("counts.yaml",
+            "data: sim/run.csv\ncolumns:\n  wx: {source: wx, unit: counts, counts_per_g: 174}\n"
+            "  wy: {source: wy, unit: counts, counts_per_g: 174}\n"
+            "  wz: {source: wz, unit: counts, counts_per_g: 174}\n");
+  const CliResult r = Run("fit " + Path("counts.yaml") + " -o " + Path("out.json"));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("triadcal: warning: " + Path("counts.yaml") +
+                       ": the RTS smoother diverged (its covariance lost its positive "
+                       "definiteness at t = "),
+            std::string::npos)
+      << r.err;
+  const nlohmann::json j = nlohmann::json::parse(ReadFile(Path("out.json")));
+  EXPECT_TRUE(j["converged"].get<bool>());
+  EXPECT_NE(j["initial"]["note"].get<std::string>().find("started from the nominal values"),
+            std::string::npos);
+  // At the simulated truth: scale factors and offsets within 4 sigma.
+  const nlohmann::json truth = nlohmann::json::parse(ReadFile(Path("sim/truth.json")));
+  for (const char* name : {"Kx", "Ky", "Kz", "W0x", "W0y", "W0z"}) {
+    const nlohmann::json& p = j["parameters"][name];
+    EXPECT_LT(std::abs(p["value"].get<double>() - truth["parameters"][name].get<double>()),
+              4.0 * p["sigma"].get<double>())
+        << name << " " << p.dump();
+  }
+}
+
 // batch names its units for each run's readings: Kx was "mV/g" for counts.
 TEST_F(CliReliability, BatchUnitsFollowEachRunsReadings) {
   CliResult r_failed;

@@ -90,11 +90,12 @@ Eigen::Vector3d StartNoise(const RunDescription& run, const RunData& data,
   return RunReadingNoise_mV(run, data);
 }
 
-// The start of the minimiser.
+// The start of the minimiser. With the RTS start, *diverged_at_s gets the
+// time at which the filter diverged (the nominal values are returned then).
 Estimate Initialise(const RunDescription& run, const RunData& data, const ParameterLayout& layout,
                     const RunProblem& p, const BatchOptions& opt,
-                    const std::vector<std::string>& not_estimated,
-                    const Eigen::Vector3d& noise) {
+                    const std::vector<std::string>& not_estimated, const Eigen::Vector3d& noise,
+                    double* diverged_at_s) {
   Estimate e{p.prior.mean, Eigen::MatrixXd(p.prior.sigma.array().square().matrix().asDiagonal())};
   if (opt.init == BatchInit::kGiven) {
     if (opt.init_theta.size() != p.n) throw std::invalid_argument("init_theta has the wrong size");
@@ -123,7 +124,14 @@ Estimate Initialise(const RunDescription& run, const RunData& data, const Parame
   // thinned filter took the real slow run's fit from 3 steps to 7 (same
   // estimates), and cost 0.8 s more.
   fo.gyro = false;
-  return RunFilterSmoother(start, thin, layout, fo).rts;
+  const FilterResult fr = RunFilterSmoother(start, thin, layout, fo);
+  // A diverged filter's estimate is no estimate (`filter` refuses to print
+  // it): the caller starts from the nominal values instead.
+  if (fr.diverged_at_s >= 0.0 || !fr.rts.theta.allFinite()) {
+    if (diverged_at_s) *diverged_at_s = std::max(fr.diverged_at_s, 0.0);
+    return e;
+  }
+  return fr.rts;
 }
 
 // Residuals at the solution, raw and whitened, and their summaries.
@@ -532,8 +540,20 @@ class BatchSolve {
     std::vector<std::string> not_estimated = decision_.held;
     not_estimated.insert(not_estimated.end(), decision_.consider.begin(),
                          decision_.consider.end());
-    res_.initial = Initialise(run_, data_, layout_, p_, opt_, not_estimated, noise0_);
-    if (opt_.init == BatchInit::kNominal && decision_.theta.size() == p_.n) {
+    double diverged_at_s = -1.0;
+    res_.initial = Initialise(run_, data_, layout_, p_, opt_, not_estimated, noise0_,
+                              &diverged_at_s);
+    if (diverged_at_s >= 0.0) {
+      char why[200];
+      std::snprintf(why, sizeof(why),
+                    "the RTS smoother diverged (its covariance lost its positive definiteness "
+                    "at t = %.3g s): started from the nominal values, scale and offset fitted",
+                    diverged_at_s);
+      res_.start_note = why;
+      Say(why);
+    }
+    if ((opt_.init == BatchInit::kNominal || diverged_at_s >= 0.0) &&
+        decision_.theta.size() == p_.n) {
       res_.initial.theta = decision_.theta;  // the nominal values, scale and offset fitted
     }
     res_.init_seconds = Seconds(t_start_);

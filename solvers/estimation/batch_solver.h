@@ -24,7 +24,7 @@
 //      its direction are estimated relative to it. No misfit can move a
 //      parameter that is not estimated.
 //   2. The start: the EKF + RTS smoother on the samples thinned to 25 Hz (init_decimation_hz), or
-//      the nominal values.
+//      the nominal values (also when that filter diverged: start_note says so).
 //   3. The minimum (batch_minimizer.h): Levenberg-Marquardt on theta with the
 //      trajectory solved for exactly at every step (run_evaluation.h) and the
 //      reading noise of each channel at its maximum likelihood.
@@ -204,6 +204,9 @@ struct ResidualStats {
 struct BatchResult {
   Estimate estimate;            // theta and its covariance (SI)
   Estimate initial;             // the starting point (with the RTS sigma when from RTS)
+  // Not empty when the start is not the one asked for, and why (the RTS
+  // smoother diverged: the nominal values, scale and offset fitted).
+  std::string start_note;
   // Not estimated: the structural nulls and the user's holds (held), and the
   // parameters the run does not determine (consider); both at nominal.
   std::vector<std::string> held, consider;
