@@ -207,8 +207,9 @@ Estimate FullEstimate(const StateSpaceModel& model, const Eigen::VectorXd& theta
 // epoch. They are constants (theta_b = theta_a, no process noise): given all
 // the epochs, theta at the first is theta at the last, whose smoothed
 // estimate is the filtered one. So the backward recursion would return the
-// last filtered theta and its covariance (to 4e-9 sigma on the real roll runs
-// and the paper's run, where it was run before it was replaced by this); it
+// last filtered theta and its covariance (theta to 4e-9 sigma, sigma to 1e-8
+// of itself on the real roll runs and the paper's run, where it was run
+// before it was replaced by this); it
 // would only improve the trajectory, which nothing here reads.
 Estimate SmoothedParameters(const StateSpaceModel& model, const PassResult& pass) {
   const int n = model.num_free();
