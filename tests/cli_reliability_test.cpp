@@ -861,11 +861,17 @@ TEST_F(CliReliability, ObservabilityUnitsFollowTheReadings) {
 // diverged and where (exit 4, no file); it crashed in the naming of the weak
 // directions (an empty matrix to Eigen's eigensolver), and once the
 // smoother's backward recursion was gone it wrote the diverged estimates.
+// A run.yaml reading `data`'s readings as counts at 174 counts/g with the
+// offsets left at 0 (the readings hold 1500).
+std::string CountsYaml(const std::string& data) {
+  return "data: " + data +
+         "\ncolumns:\n  wx: {source: wx, unit: counts, counts_per_g: 174}\n"
+         "  wy: {source: wy, unit: counts, counts_per_g: 174}\n"
+         "  wz: {source: wz, unit: counts, counts_per_g: 174}\n";
+}
+
 TEST_F(CliReliability, DivergedFilterSaysSoAndWritesNothing) {
-  WriteText("counts.yaml",
-            "data: run.csv\ncolumns:\n  wx: {source: wx, unit: counts, counts_per_g: 174}\n"
-            "  wy: {source: wy, unit: counts, counts_per_g: 174}\n"
-            "  wz: {source: wz, unit: counts, counts_per_g: 174}\n");
+  WriteText("counts.yaml", CountsYaml("run.csv"));
   const CliResult r = Run("filter " + Path("counts.yaml") + " -o " + Path("out.json"));
   EXPECT_EQ(r.exit_code, 4) << r.err;
   EXPECT_NE(r.err.find("triadcal: error: " + Path("counts.yaml") +
@@ -883,10 +889,7 @@ TEST_F(CliReliability, DivergedFilterSaysSoAndWritesNothing) {
 TEST_F(CliReliability, FitStartsFromNominalWhenItsFilterDiverges) {
   const std::string sc = WriteText("sc.yaml", "profile: {duration_s: 20, rate_hz: 100}\n");
   ASSERT_EQ(Run("simulate " + sc + " -o " + Path("sim") + " --seed 11 -q").exit_code, 0);
-  WriteText("counts.yaml",
-            "data: sim/run.csv\ncolumns:\n  wx: {source: wx, unit: counts, counts_per_g: 174}\n"
-            "  wy: {source: wy, unit: counts, counts_per_g: 174}\n"
-            "  wz: {source: wz, unit: counts, counts_per_g: 174}\n");
+  WriteText("counts.yaml", CountsYaml("sim/run.csv"));
   const CliResult r = Run("fit " + Path("counts.yaml") + " -o " + Path("out.json"));
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("triadcal: warning: " + Path("counts.yaml") +
