@@ -222,6 +222,15 @@ bool BatchMinimizer::ComputeStep() {
 
 Eigen::VectorXd BatchMinimizer::GradientAtTrialNoise(
     const BatchObjective::Point& trial, const std::vector<Eigen::Vector3d>& trial_noise) const {
+  // The noise has not moved (none estimated: the decision's scale-and-offset
+  // fit) and no gyro's is profiled: the current gradient is the one asked for.
+  bool moved = trial_noise != noise_;
+  for (int r = 0; r < objective_.runs(); ++r) moved = moved || objective_.HasGyroPart(current_, r);
+  if (!moved) {
+    Eigen::VectorXd g0(free_.size());
+    for (std::size_t a = 0; a < free_.size(); ++a) g0[a] = current_.gradient[free_[a]];
+    return g0;
+  }
   BatchObjective::Point at = objective_.AtNoise(current_, trial_noise, ThetaPart::kGradient);
   objective_.ReweightGyro(&at, trial);
   Eigen::VectorXd g0(free_.size());
@@ -266,12 +275,6 @@ bool BatchMinimizer::TryStep() {
   // are dropped meanwhile (formed again if the step is refused: a
   // reduction, no pass), the trial's theta part is formed once it is
   // accepted.
-  // Without a noise to move (none estimated, no gyro's profiled), the
-  // current point's gradient is already the one at the trial's noise.
-  bool fixed_noise = noisy_.empty();
-  for (int r = 0; r < objective_.runs(); ++r) {
-    if (objective_.HasGyroPart(current_, r)) fixed_noise = false;
-  }
   const double before = Objective(current_);
   current_.reductions.clear();
   std::vector<Eigen::Vector3d> noise = noise_;
@@ -288,12 +291,7 @@ bool BatchMinimizer::TryStep() {
   Say(line);
   if (trial.finite() && actual > 0.0) {
     // The current point gives way (its passes too) before the trial's theta part is formed.
-    Eigen::VectorXd g0(nf);
-    if (fixed_noise) {
-      for (int a = 0; a < nf; ++a) g0[a] = current_.gradient[free_[a]];
-    } else {
-      g0 = GradientAtTrialNoise(trial, noise);
-    }
+    const Eigen::VectorXd g0 = GradientAtTrialNoise(trial, noise);
     const Eigen::VectorXd phi_current = current_.phi;
     current_ = BatchObjective::Point{};
     objective_.Reweight(&trial, noise);

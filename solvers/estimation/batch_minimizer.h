@@ -98,8 +98,9 @@ class BatchMinimizer {
   bool ComputeStep();
   bool TryStep();
   // The current point's gradient in the free unknowns at the trial's noise
-  // (the current point reweighted: a reduction, no pass), before the trial's
-  // theta part is formed (one point's blocks held at a time).
+  // (the current point reweighted: a reduction, no pass; none when the noise
+  // did not move), before the trial's theta part is formed (one point's
+  // blocks held at a time).
   Eigen::VectorXd GradientAtTrialNoise(const BatchObjective::Point& trial,
                                        const std::vector<Eigen::Vector3d>& trial_noise) const;
   // g0: GradientAtTrialNoise.

@@ -63,6 +63,32 @@ TEST(SchurElimination, InformationIsTheDenseSchurComplement) {
   }
 }
 
+// On two threads the data's sum and the eliminated one are formed at once:
+// the same sums in the same order, so the same bits as on one, over several
+// chunks of 64 epochs (and the dense complement).
+TEST(SchurElimination, TwoThreadsGiveTheOneThreadInformation) {
+  std::mt19937_64 rng(13);
+  const int E = 150, n = 7;
+  const BlockProblem b = RandomBlocks(E, n, &rng);
+  const Eigen::MatrixXd prior = Eigen::MatrixXd::Identity(n, n) * 0.5;
+  Eigen::VectorXd scale1, scale2;
+  const Eigen::MatrixXd one = ThetaInformationBySchur(b.process, b.measurement, prior, &scale1, 1);
+  const Eigen::MatrixXd two = ThetaInformationBySchur(b.process, b.measurement, prior, &scale2, 2);
+  EXPECT_EQ(one, two);
+  EXPECT_EQ(scale1, scale2);
+  const Dense d = Assemble(b, n);
+  const Eigen::MatrixXd H = d.J.transpose() * d.J;
+  const int m = 6 * E;
+  const Eigen::MatrixXd want =
+      H.bottomRightCorner(n, n) -
+      H.bottomLeftCorner(n, m) * H.topLeftCorner(m, m).ldlt().solve(H.topRightCorner(m, n)) +
+      prior.transpose() * prior;
+  EXPECT_LT((two - want).norm(), 1e-9 * want.norm());
+  // The scale is the diagonal before the elimination.
+  EXPECT_LT((scale2 - (H.bottomRightCorner(n, n).diagonal() + prior.colwise().squaredNorm().transpose())).norm(),
+            1e-12 * scale2.norm());
+}
+
 TEST(SchurElimination, ReducedCostGradientAndStatesAreTheDenseOnes) {
   std::mt19937_64 rng(12);
   const int E = 25, n = 4;
