@@ -911,6 +911,38 @@ TEST_F(CliReliability, FitStartsFromNominalWhenItsFilterDiverges) {
   }
 }
 
+// The same misdeclared counts run from a start whose filter lost the track
+// without diverging (the paper's experiment, 20 s at 50 Hz, seed 3): the fit
+// heads for a degenerate optimum (Kz towards 0, where the priors' offsets of
+// 0 cost less) and does not converge. It says so, with what a step would
+// still gain. It said the damping had reached 1e10: the secant's update had
+// lost its positive definiteness to rounding (a gradient change of 1e13),
+// and the step it then tried was the last step's again.
+TEST_F(CliReliability, FitFromALostStartSaysHowFarItIs) {
+  std::string sc = ReadFile(std::string(TRIADCAL_SOURCE_DIR) +
+                            "/examples/paper-experiment3/scenario.yaml");
+  for (const auto& [from, to] : {std::pair<std::string, std::string>{"duration_s: 90 ",
+                                                                     "duration_s: 20 "},
+                                 {"rate_hz: 1000 ", "rate_hz: 50 "}}) {
+    ASSERT_NE(sc.find(from), std::string::npos) << from;
+    sc.replace(sc.find(from), from.size(), to);
+  }
+  WriteText("sc.yaml", sc);
+  ASSERT_EQ(Run("simulate " + Path("sc.yaml") + " -o " + Path("sim") + " --seed 3 -q").exit_code,
+            0);
+  WriteText("counts.yaml", CountsYaml("sim/run.csv"));
+  const CliResult r = Run("fit " + Path("counts.yaml") + " -o " + Path("out.json"));
+  EXPECT_EQ(r.exit_code, 4) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(ReadFile(Path("out.json")));
+  EXPECT_FALSE(j["converged"].get<bool>());
+  EXPECT_EQ(j["verdict"]["termination"].get<std::string>().rfind("not converged after 40 steps: "
+                                                                 "a Newton step would still "
+                                                                 "lower -log L by ",
+                                                                 0),
+            0u)
+      << j["verdict"]["termination"];
+}
+
 // batch names its units for each run's readings: Kx was "mV/g" for counts.
 TEST_F(CliReliability, BatchUnitsFollowEachRunsReadings) {
   CliResult r_failed;

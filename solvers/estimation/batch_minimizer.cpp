@@ -15,6 +15,11 @@ constexpr double kMaxNoiseStep = 2.0;     // in log sigma, one Newton step
 // No reading is better than this share of its nominal scale factor (1 ug):
 // keeps a noise-free run's estimated noise finite.
 constexpr double kNoiseFloorOfScale = 1e-6;
+// The damping beyond which no step is sought.
+constexpr double kMaxDamping = 1e10;
+constexpr const char* kNoDescent =
+    "not converged: no step along the gradient lowers the cost (the damping reached 1e10; the "
+    "cost is not smooth here, or a parameter has left the model's range)";
 
 }  // namespace
 
@@ -82,10 +87,8 @@ BatchObjective::Point BatchMinimizer::Minimize(const Eigen::VectorXd& phi0,
       break;
     }
     TryStep();
-    if (mu_ > 1e10) {
-      summary_.termination =
-          "not converged: no step along the gradient lowers the cost (the damping reached "
-          "1e10; the cost is not smooth here, or a parameter has left the model's range)";
+    if (mu_ > kMaxDamping) {
+      summary_.termination = kNoDescent;
       break;
     }
     if (options_.fraction) options_.fraction(1.0 - std::pow(0.7, summary_.iterations));
@@ -215,7 +218,10 @@ bool BatchMinimizer::ComputeStep() {
     }
     mu_ = std::max(mu_ * nu_, 1e-4);
     nu_ *= 2.0;
-    if (mu_ > 1e10) return true;  // Minimize reports it
+    if (mu_ > kMaxDamping) {
+      summary_.termination = kNoDescent;
+      return false;
+    }
   }
   return true;
 }
@@ -261,6 +267,17 @@ void BatchMinimizer::MeasureCurvature(const BatchObjective::Point& trial,
   // Only a curvature the step confirms (y^T d > 0) keeps B positive definite.
   if (!(dBd > 0.0) || !(yd > 0.0) || !std::isfinite(yd)) return;
   B += y * y.transpose() / yd - Bd * Bd.transpose() / dBd;
+  // In exact arithmetic it does; in rounding, not when the step's gradient
+  // change dwarfs H's smallest curvature (a start far from the run: offsets
+  // of 1500 counts declared 0, y 1e13, B's smallest pivot then -3e13, and
+  // no damping made the model positive again). Then what the step measured
+  // is lost to rounding: the model is Gauss-Newton's alone.
+  const Eigen::LDLT<Eigen::MatrixXd> check(B);
+  if (check.info() != Eigen::Success || !check.isPositive() ||
+      !(check.vectorD().minCoeff() > 0.0)) {
+    secant_.resize(0, 0);
+    return;
+  }
   secant_ = B - H1;
 }
 
