@@ -41,11 +41,15 @@ nlohmann::json FitUnit(const FitSettings& settings, const ManifestEntry& e, int 
     j["warnings"] = run.warnings;
     FitSettings fs = settings;
     fs.threads = 1;  // the result must not depend on the split (see above)
-    j["calibration"] = FitRun(fs, e.run_path, run, session).json;
+    FitOutcome fit = FitRun(fs, e.run_path, run, session);
+    j["calibration"] = std::move(fit.json);
+    for (const std::string& w : fit.warnings) j["warnings"].push_back(w);
     if (e.diagnose) {
       DiagnoseSettings ds;  // `triadcal diagnose` with its defaults
       ds.threads = 1;
-      j["diagnose"] = DiagnoseRun(ds, e.run_path, run, nullptr, session).json;
+      DiagnoseOutcome d = DiagnoseRun(ds, e.run_path, run, nullptr, session);
+      j["diagnose"] = std::move(d.json);
+      for (const std::string& w : d.warnings) j["warnings"].push_back(w);
     }
   } catch (const InputError& err) {
     j["status"] = "error";

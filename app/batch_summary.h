@@ -29,7 +29,7 @@ struct UnitResult {
   double largest_change_sigma = 0.0;  // signed; 0 without a previous calibration
   bool diagnosed = false;
   std::vector<std::string> diagnose_selected;  // effects the closed loop added
-  std::vector<std::string> warnings;           // the run's load warnings
+  std::vector<std::string> warnings;           // the run's: loading, and its jobs'
   double seconds = 0.0;                        // execution time (not a result)
 };
 

@@ -20,6 +20,7 @@ nlohmann::json StateJson(const LoadedRun& run, const ParameterLayout& layout, co
   j["parameters"] = ParametersJson(layout, r.estimate.theta, r.estimate.cov, rep.not_estimable);
   MarkRelative(r.relative_to, &j["parameters"]);
   j["held"] = r.held;
+  if (!r.start_note.empty()) j["initial"] = {{"note", r.start_note}};
   AddConsiderJson(layout, r, &j);
   j["chi2_per_dof"] = r.chi2_per_dof;
   j["residual"] = ResidualReportJson(rr);
@@ -204,6 +205,10 @@ DiagnoseOutcome DiagnoseRun(const DiagnoseSettings& s, const std::string& run_ya
   opt.fraction = session.fraction;
   DiagnoseOutcome out;
   out.result = Diagnose(run.description, run.data, opt);
+  if (!out.result.before.start_note.empty()) {
+    out.warnings.push_back(run_yaml + ": " + out.result.before.start_note);
+    if (session.warning) session.warning(out.warnings.back());
+  }
   out.json = DiagnoseJson(run_yaml, run, s.alpha, out.result, truth);
   return out;
 }

@@ -39,6 +39,9 @@ struct DiagnoseSettings {
 struct DiagnoseOutcome {
   DiagnosisResult result;
   nlohmann::json json;  // OUT.json of `diagnose` (without the provenance)
+  // Its warnings (also said through the session): where the declared model's
+  // fit did not start as asked (BatchResult::start_note), naming the run.
+  std::vector<std::string> warnings;
 };
 
 // Validates the settings and runs the closed loop on `run` (read from

@@ -142,6 +142,10 @@ FitOutcome FitRun(const FitSettings& a, const std::string& run_yaml, const Loade
   opt.progress = session.stage;
   opt.fraction = session.fraction;
   f.result = SolveBatch(run.description, run.data, f.layout, opt);
+  if (!f.result.start_note.empty()) {
+    f.warnings.push_back(run_yaml + ": " + f.result.start_note);
+    if (session.warning) session.warning(f.warnings.back());
+  }
   f.report = MakeFitReport(f.layout, f.result);
   f.json = FitJson(f.layout, f.result, f.report, a.correlations);
   f.json["command"] = "fit";

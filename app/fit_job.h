@@ -61,6 +61,9 @@ struct FitOutcome {
   BatchResult result;
   FitReport report;
   nlohmann::json json;  // OUT.json of `fit` (without the provenance its writer adds)
+  // The fit's warnings (also said through the session): where it did not
+  // start as asked (BatchResult::start_note), naming the run.
+  std::vector<std::string> warnings;
 };
 
 // The batch solver's options of these settings (no progress set).

@@ -911,6 +911,37 @@ TEST_F(CliReliability, FitStartsFromNominalWhenItsFilterDiverges) {
   }
 }
 
+// The same run through diagnose and batch: each says where its fit started
+// (diagnose and batch said nothing; the OUT of fit alone carried the note).
+TEST_F(CliReliability, DiagnoseAndBatchSayWhereTheFitStarted) {
+  const std::string sc = WriteText("sc.yaml", "profile: {duration_s: 20, rate_hz: 100}\n");
+  ASSERT_EQ(Run("simulate " + sc + " -o " + Path("sim") + " --seed 11 -q").exit_code, 0);
+  const std::string yaml = WriteText("counts.yaml", CountsYaml("sim/run.csv"));
+  const std::string note =
+      ": the RTS smoother diverged (its covariance lost its positive definiteness at t = ";
+  const CliResult d = Run("diagnose " + yaml + " -o " + Path("d.json"));
+  EXPECT_EQ(d.exit_code, 0) << d.err;
+  EXPECT_NE(d.err.find("triadcal: warning: " + yaml + note), std::string::npos) << d.err;
+  const nlohmann::json j = nlohmann::json::parse(ReadFile(Path("d.json")));
+  EXPECT_NE(j["before"]["initial"]["note"].get<std::string>().find("started from the nominal"),
+            std::string::npos);
+  WriteText("manifest.csv", "serial,run\nC1,counts.yaml\n");
+  const CliResult b =
+      Run("batch " + Path("manifest.csv") + " -o " + Path("b") + " --date 2024-01-02");
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  std::string summary;
+  for (const auto& e : fs::directory_iterator(Path("b"))) {
+    if (e.path().extension() == ".json") summary = ReadFile(e.path().string());
+  }
+  const nlohmann::json s = nlohmann::json::parse(summary);
+  ASSERT_EQ(s["results"].size(), 1u);
+  bool said = false;
+  for (const auto& w : s["results"][0]["warnings"]) {
+    said = said || w.get<std::string>().find(note) != std::string::npos;
+  }
+  EXPECT_TRUE(said) << s["results"][0]["warnings"].dump();
+}
+
 // The same misdeclared counts run from a start whose filter lost the track
 // without diverging (the paper's experiment, 20 s at 50 Hz, seed 3): the fit
 // heads for a degenerate optimum (Kz towards 0, where the priors' offsets of

@@ -48,9 +48,6 @@ int RunFit(FitArgs a, Session& session) {
   const ParameterLayout& layout = f.layout;
   const BatchResult& r = f.result;
   const FitReport& rep = f.report;
-  if (!r.start_note.empty()) {
-    std::fprintf(stderr, "triadcal: warning: %s: %s\n", a.run_yaml.c_str(), r.start_note.c_str());
-  }
   const std::string warning = NoiseWarning(a.run_yaml, run, r);
   if (!warning.empty()) std::fprintf(stderr, "triadcal: warning: %s\n", warning.c_str());
   for (const std::string& w : ImplausibleResultWarnings(f.json["parameters"], a.out_json)) {
