@@ -111,11 +111,62 @@ double Correlation(const std::vector<double>& a, const std::vector<double>& b) {
   return aa > 0.0 && bb > 0.0 ? ab / std::sqrt(aa * bb) : 0.0;
 }
 
+namespace {
+
+// The largest prime factor of n (n >= 1).
+std::size_t LargestPrimeFactor(std::size_t n) {
+  std::size_t largest = 1;
+  for (std::size_t p = 2; p * p <= n; ++p) {
+    while (n % p == 0) {
+      largest = p;
+      n /= p;
+    }
+  }
+  return std::max(largest, n);
+}
+
+}  // namespace
+
+std::vector<std::complex<double>> Dft(const std::vector<double>& x) {
+  const std::size_t N = x.size();
+  std::vector<std::complex<double>> X;
+  Eigen::FFT<double> fft;
+  // Kiss FFT's radices are 2, 3, 4 and 5; any other prime factor p of N takes
+  // O(N p) (the gyro's residual series of the real fast roll run, 14000
+  // intervals with a prime factor of some thousands: 2 s of a 10-s fit).
+  if (N <= 1) return std::vector<std::complex<double>>(x.begin(), x.end());
+  if (LargestPrimeFactor(N) <= 5) {
+    fft.fwd(X, x);
+    return X;
+  }
+  // Bluestein: X_k = w_k sum_n (x_n w_n) conj(w_{k-n}), w_n = exp(-i pi n^2 / N),
+  // a circular convolution of length M >= 2N - 1 (a power of 2) by three FFTs.
+  std::size_t M = 1;
+  while (M < 2 * N - 1) M *= 2;
+  const double pi = 3.14159265358979323846;
+  std::vector<std::complex<double>> w(N), a(M), b(M);
+  for (std::size_t n = 0; n < N; ++n) {
+    // n^2 mod 2N keeps the angle exact for long series.
+    const std::size_t q = static_cast<std::size_t>((static_cast<unsigned long long>(n) * n) %
+                                                   (2ULL * N));
+    w[n] = std::polar(1.0, -pi * static_cast<double>(q) / static_cast<double>(N));
+    a[n] = x[n] * w[n];
+    b[n] = std::conj(w[n]);
+    if (n > 0) b[M - n] = b[n];
+  }
+  std::vector<std::complex<double>> A, B, c;
+  fft.fwd(A, a);
+  fft.fwd(B, b);
+  for (std::size_t k = 0; k < M; ++k) A[k] *= B[k];
+  fft.inv(c, A);  // scaled by 1 / M
+  X.resize(N);
+  for (std::size_t k = 0; k < N; ++k) X[k] = w[k] * c[k];
+  return X;
+}
+
 Spectrum Periodogram(const std::vector<double>& x, double dt_s) {
   const std::vector<double> c = Centered(x);
-  Eigen::FFT<double> fft;
-  std::vector<std::complex<double>> X;
-  fft.fwd(X, c);
+  const std::vector<std::complex<double>> X = Dft(c);
   Spectrum s;
   const std::size_t N = c.size();
   for (std::size_t k = 0; k <= N / 2; ++k) {

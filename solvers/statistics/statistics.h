@@ -2,6 +2,7 @@
 // Ljung-Box portmanteau test of whiteness, correlation, and the periodogram.
 #pragma once
 
+#include <complex>
 #include <vector>
 
 namespace triadcal {
@@ -52,6 +53,11 @@ WhitenessTest LjungBox(const std::vector<double>& x, int lags,
 
 // Pearson correlation of two equally long series.
 double Correlation(const std::vector<double>& a, const std::vector<double>& b);
+
+// The discrete Fourier transform X_k = sum_n x_n exp(-2 pi i k n / N), k = 0
+// .. N-1, in O(N log N) for any N (Bluestein's algorithm where N has a prime
+// factor above 5).
+std::vector<std::complex<double>> Dft(const std::vector<double>& x);
 
 // One-sided periodogram of a uniformly sampled series (mean removed): power at
 // frequencies k / (N dt), k = 0 .. N/2. Power is |X_k|^2 / N (same units^2).
