@@ -293,7 +293,94 @@ TRIADCAL_FLATTEN TRIADCAL_NOINLINE void SizeEffect(const ModelConfig& cfg, const
   }
 }
 
+// The sensor stage at readings z (size-corrected): u_i = (z_i - W0_i(t)) /
+// s_i with s_i = K_i (+- dK_i with the scale asymmetry, the sign of z_i -
+// W0_i), and W solving F(W) = M W + W o (K W) + Q(W) - u = 0 with J^-1 =
+// (dF/dW)^-1 there.
+struct SensorStage {
+  Vec3<double> W, u, s, sgn;
+  Mat3<double> Jf_inv;
+};
+
+SensorStage SensorStageAt(const ModelConfig& cfg, const double* th, const Eigen::Vector3d& z,
+                          const SampleContext& ctx) {
+  SensorStage st;
+  st.W = SpecificForceFromReadings_g(cfg, th, Vec3<double>(z), ctx, &st.Jf_inv);
+  const Vec3<double> w0 = ZeroOffset_mV(cfg, th, ctx);
+  const int o_a = cfg.layout.offset(Effect::kScaleAsymmetry);
+  for (int i = 0; i < 3; ++i) {
+    const double v = z[i] - w0[i];
+    st.sgn[i] = v < 0.0 ? -1.0 : 1.0;
+    st.s[i] = th[kKx + i] + (o_a >= 0 ? st.sgn[i] * th[o_a + i] : 0.0);
+    st.u[i] = v / st.s[i];
+  }
+  return st;
+}
+
+// The sensor stage's columns: each of its parameters moves F along one axis
+// e_i (the columns of dF/dtheta in b1_jacobian.h), so its column is A's
+// column i times that: A = -J^-1 gives dW/dtheta, A = -g C J^-1 da/dtheta.
+void SensorStageColumns(const ModelConfig& cfg, const double* th, const SensorStage& st,
+                        const SampleContext& ctx, const Mat3<double>& A,
+                        Eigen::Ref<Eigen::MatrixXd> J) {
+  const ParameterLayout& layout = cfg.layout;
+  const Vec3<double>& W = st.W;
+  const Vec3<double>& u = st.u;
+  const Vec3<double>& s = st.s;
+  for (int i = 0; i < 3; ++i) {
+    J.col(kKx + i) = A.col(i) * (u[i] / s[i]);
+    J.col(kW0x + i) = A.col(i) * (1.0 / s[i]);
+  }
+  J.col(kAlphaX) = A.col(1) * W.x();
+  J.col(kAlphaY) = -A.col(0) * W.y();
+  J.col(kBetaX) = -A.col(2) * W.x();
+  J.col(kBetaZ) = A.col(0) * W.z();
+  J.col(kGammaY) = A.col(2) * W.y();
+  J.col(kGammaZ) = -A.col(1) * W.z();
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) J.col(kKxx + 3 * i + j) = A.col(i) * (W[i] * W[j]);
+  }
+  // Zero-offset effects (catalogue): dF/d theta_e,i = x_e / s_i e_i.
+  for (const ParameterLayout::ZeroOffsetTerm& term : layout.zero_offset_terms()) {
+    const double x = ZeroOffsetSignalValue(cfg, term.signal, ctx);
+    for (int i = 0; i < 3; ++i) J.col(term.offset + i) = A.col(i) * (x / s[i]);
+  }
+  // scale_asymmetry: dF/d dK_i = sgn_i u_i / s_i e_i.
+  const int o_a = layout.offset(Effect::kScaleAsymmetry);
+  if (o_a >= 0) {
+    for (int i = 0; i < 3; ++i) J.col(o_a + i) = A.col(i) * (st.sgn[i] * u[i] / s[i]);
+  }
+  // cross_quadratic: dF/d d_i = (W_j^2 - W_k^2) e_i, dF/d p_i = W_j W_k e_i.
+  const int o_q = layout.offset(Effect::kCrossQuadratic);
+  if (o_q >= 0) {
+    for (int i = 0; i < 3; ++i) {
+      const int j = kCrossAxes[i][0], k = kCrossAxes[i][1];
+      J.col(o_q + 2 * i) = A.col(i) * (W[j] * W[j] - W[k] * W[k]);
+      J.col(o_q + 2 * i + 1) = A.col(i) * (W[j] * W[k]);
+    }
+  }
+}
+
+// One fill when J is contiguous (a Ref's setZero goes column by column, a
+// memset call each: 8 % of a 40-min fit's time).
+void FillZero(Eigen::Ref<Eigen::MatrixXd> J) {
+  if (J.outerStride() == J.rows()) {
+    std::fill_n(J.data(), J.size(), 0.0);
+  } else {
+    J.setZero();
+  }
+}
+
 }  // namespace
+
+void SpecificForceWithJacobian(const ModelConfig& cfg, const double* theta,
+                               const Eigen::Vector3d& readings_mV, const SampleContext& ctx,
+                               Eigen::Vector3d* W, Eigen::Ref<Eigen::MatrixXd> dW) {
+  FillZero(dW);
+  const SensorStage st = SensorStageAt(cfg, theta, readings_mV, ctx);
+  *W = st.W;
+  SensorStageColumns(cfg, theta, st, ctx, -st.Jf_inv, dW);
+}
 
 TRIADCAL_FLATTEN void AccelerationWithJacobian(const ModelConfig& cfg, const double* th,
                               const BenchAngles<double>& rec, const Eigen::Vector3d& z_in,
@@ -301,13 +388,7 @@ TRIADCAL_FLATTEN void AccelerationWithJacobian(const ModelConfig& cfg, const dou
                               Eigen::Ref<Eigen::MatrixXd> J) {
   const ParameterLayout& layout = cfg.layout;
   const double g = cfg.g_mps2;
-  // One fill when J is contiguous (a Ref's setZero goes column by column, a
-  // memset call each: 8 % of a 40-min fit's time).
-  if (J.outerStride() == J.rows()) {
-    std::fill_n(J.data(), J.size(), 0.0);
-  } else {
-    J.setZero();
-  }
+  FillZero(J);
 
   BenchAngles<double> b = rec;
   const std::vector<int>& angle_params = layout.StageParams(EffectStage::kAngle);
@@ -329,22 +410,11 @@ TRIADCAL_FLATTEN void AccelerationWithJacobian(const ModelConfig& cfg, const dou
   const Mat3<double> C_L1 = Rzp * Ryp;
   const Mat3<double> C = C_L1 * C_12;
 
-  // Sensor stage: u_i = (z_i - W0_i(t)) / s_i with s_i = K_i (+- dK_i with the
-  // scale asymmetry, the sign of z_i - W0_i), and F(W) = M W + W o (K W) + Q(W) - u.
-  Mat3<double> Jf_inv;  // (dF/dW)^-1 at W
-  const Vec3<double> W = SpecificForceFromReadings_g(cfg, th, Vec3<double>(z), ctx, &Jf_inv);
-  const Vec3<double> w0 = ZeroOffset_mV(cfg, th, ctx);
-  const int o_a = layout.offset(Effect::kScaleAsymmetry);
-  const int o_q = layout.offset(Effect::kCrossQuadratic);
-  Vec3<double> u, s, sgn;
-  for (int i = 0; i < 3; ++i) {
-    const double v = z[i] - w0[i];
-    sgn[i] = v < 0.0 ? -1.0 : 1.0;
-    s[i] = th[kKx + i] + (o_a >= 0 ? sgn[i] * th[o_a + i] : 0.0);
-    u[i] = v / s[i];
-  }
+  const SensorStage st = SensorStageAt(cfg, th, z, ctx);
+  const Vec3<double>& W = st.W;
+  const Vec3<double>& s = st.s;
   // gC J^-1: each column of dF/dtheta maps to da by -gC J^-1.
-  const Mat3<double> T = -g * C * Jf_inv;
+  const Mat3<double> T = -g * C * st.Jf_inv;
 
   const Vec3<double> CW = C * W;
   *a_out = g * CW;
@@ -360,36 +430,7 @@ TRIADCAL_FLATTEN void AccelerationWithJacobian(const ModelConfig& cfg, const dou
     J.col(o_eps) =
         g * C_L1 * (Vec3<double>::UnitZ().cross(C12W) - C_12 * Vec3<double>::UnitZ().cross(W));
   }
-  for (int i = 0; i < 3; ++i) {
-    J.col(kKx + i) = T.col(i) * (u[i] / s[i]);
-    J.col(kW0x + i) = T.col(i) * (1.0 / s[i]);
-  }
-  J.col(kAlphaX) = T.col(1) * W.x();
-  J.col(kAlphaY) = -T.col(0) * W.y();
-  J.col(kBetaX) = -T.col(2) * W.x();
-  J.col(kBetaZ) = T.col(0) * W.z();
-  J.col(kGammaY) = T.col(2) * W.y();
-  J.col(kGammaZ) = -T.col(1) * W.z();
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) J.col(kKxx + 3 * i + j) = T.col(i) * (W[i] * W[j]);
-  }
-  // Zero-offset effects (catalogue): dF/d theta_e,i = x_e / s_i e_i.
-  for (const ParameterLayout::ZeroOffsetTerm& term : layout.zero_offset_terms()) {
-    const double x = ZeroOffsetSignalValue(cfg, term.signal, ctx);
-    for (int i = 0; i < 3; ++i) J.col(term.offset + i) = T.col(i) * (x / s[i]);
-  }
-  // scale_asymmetry: dF/d dK_i = sgn_i u_i / s_i e_i.
-  if (o_a >= 0) {
-    for (int i = 0; i < 3; ++i) J.col(o_a + i) = T.col(i) * (sgn[i] * u[i] / s[i]);
-  }
-  // cross_quadratic: dF/d d_i = (W_j^2 - W_k^2) e_i, dF/d p_i = W_j W_k e_i.
-  if (o_q >= 0) {
-    for (int i = 0; i < 3; ++i) {
-      const int j = kCrossAxes[i][0], k = kCrossAxes[i][1];
-      J.col(o_q + 2 * i) = T.col(i) * (W[j] * W[j] - W[k] * W[k]);
-      J.col(o_q + 2 * i + 1) = T.col(i) * (W[j] * W[k]);
-    }
-  }
+  SensorStageColumns(cfg, th, st, ctx, T, J);
   // Angle-stage effects move C only through the two bench angles, as
   // dtheta_c and dlambda2 do: chain rule.
   for (std::size_t q = 0; q < angle_params.size(); ++q) {

@@ -57,6 +57,16 @@ void AccelerationWithJacobian(const ModelConfig& cfg, const double* theta,
                               const Eigen::Vector3d& readings_mV, const SampleContext& ctx,
                               Eigen::Vector3d* a, Eigen::Ref<Eigen::MatrixXd> J);
 
+// The specific force W [g] at O from the readings as they are (no size
+// correction: SpecificForceFromReadings_g) and dW/dtheta (3 x layout.size(),
+// into *dW: the readings model's columns, zero elsewhere), written out as in
+// AccelerationWithJacobian (dW/dtheta = -J^-1 dF/dtheta). The gyro's
+// g-sensitivity acts through it. Any layout: every readings-model parameter
+// of the catalogue is written out, and no Jets are needed.
+void SpecificForceWithJacobian(const ModelConfig& cfg, const double* theta,
+                               const Eigen::Vector3d& readings_mV, const SampleContext& ctx,
+                               Eigen::Vector3d* W, Eigen::Ref<Eigen::MatrixXd> dW);
+
 // Block B2 (ReferenceMotion in bench_model.h) with its Jacobian written out:
 // the velocity and position of O in L and their derivatives (J: 6 x
 // layout.size(), rows v then p, zero where B2 does not depend). Requires

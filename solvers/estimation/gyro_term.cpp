@@ -9,6 +9,7 @@
 
 #include <ceres/jet.h>
 
+#include "core/model/b1_jacobian.h"
 #include "core/model/gyro_model.h"
 #include "solvers/estimation/parallel.h"
 
@@ -35,11 +36,6 @@ constexpr AngleEntry kAngleEntries[6] = {{1, 0, 1.0},  {0, 1, -1.0}, {2, 0, -1.0
 // most 1 + 4 + 2) as Jets.
 constexpr int kAngleJet = 8;
 using AngleJet = ceres::Jet<double, kAngleJet>;
-
-// The accelerometer's sensor-stage parameters (the readings model: W of the
-// g-sensitivity depends on them), as Jets.
-constexpr int kSensorJet = 40;
-using SensorJet = ceres::Jet<double, kSensorJet>;
 
 // The readings model's parameters: the base sensor block and the sensor-stage effects'.
 std::vector<int> SensorStageIndices(const ParameterLayout& layout) {
@@ -190,16 +186,10 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
   std::vector<AngleJet> th_jet(n);
   for (int i = 0; i < n; ++i) th_jet[i] = AngleJet(th[i]);
   for (int q = 0; q < na; ++q) th_jet[angle_idx[q]].v[q] = 1.0;
-  // W's derivatives by the accelerometer's sensor-stage parameters.
+  // W's derivatives by the accelerometer's sensor-stage parameters (the
+  // readings model: W of the g-sensitivity depends on them).
   const std::vector<int> sensor_idx = SensorStageIndices(cfg.layout);
   const int ns = static_cast<int>(sensor_idx.size());
-  if (ns > kSensorJet) throw std::logic_error("EvaluateGyroPass: sensor stage too large");
-  std::vector<SensorJet> th_sensor;
-  if (with_jacobian) {
-    th_sensor.resize(n);
-    for (int i = 0; i < n; ++i) th_sensor[i] = SensorJet(th[i]);
-    for (int q = 0; q < ns; ++q) th_sensor[sensor_idx[q]].v[q] = 1.0;
-  }
   auto bench_at = [&](std::size_t k) {
     return BenchAnglesAt(cfg, th_jet, angle_idx, p.series.Recorded(k));
   };
@@ -221,7 +211,9 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
     Eigen::Matrix<double, 3, kLocal> Jl = Eigen::Matrix<double, 3, kLocal>::Zero();
     Eigen::Matrix<double, 3, 9> JI = Eigen::Matrix<double, 3, 9>::Zero();
     Eigen::Matrix<double, 3, kAngleJet> Ja = Eigen::Matrix<double, 3, kAngleJet>::Zero();
-    Eigen::Matrix<double, 3, kSensorJet> Js = Eigen::Matrix<double, 3, kSensorJet>::Zero();
+    Eigen::Matrix<double, 3, Eigen::Dynamic> Js = Eigen::MatrixXd::Zero(3, ns);
+    Eigen::Matrix<double, 3, Eigen::Dynamic> dW_all(3, with_jacobian ? n : 0);
+    Eigen::Matrix<double, 3, Eigen::Dynamic> dW(3, ns);
     Eigen::Matrix<double, 3, 6> Je = Eigen::Matrix<double, 3, 6>::Zero();  // dK, k2 columns
     std::array<double, 6> mom = {0, 0, 0, 0, 0, 0};
     SampleSeries::Walk recorded(p.series, k0);
@@ -231,14 +223,9 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
       const SampleContext ctx{d.t_s[k], d.has_temp() ? d.temp_C[k] : 0.0};
       // The specific force at O from the accelerometers, at theta.
       Vec3d W;
-      Eigen::Matrix<double, 3, kSensorJet> dW;
       if (with_jacobian) {
-        const Vec3<SensorJet> Wj = SpecificForceFromReadings_g<SensorJet>(
-            cfg, th_sensor.data(), d.readings_mV(k).cast<SensorJet>(), ctx);
-        for (int i = 0; i < 3; ++i) {
-          W[i] = Wj[i].a;
-          dW.row(i) = Wj[i].v.transpose();
-        }
+        SpecificForceWithJacobian(cfg, th, d.readings_mV(k), ctx, &W, dW_all);
+        for (int q = 0; q < ns; ++q) dW.col(q) = dW_all.col(sensor_idx[q]);
       } else {
         W = SpecificForceFromReadings_g<double>(cfg, th, d.readings_mV(k), ctx);
       }
