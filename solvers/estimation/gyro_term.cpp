@@ -99,11 +99,20 @@ Mat3d WeightOf(const std::array<double, 6>& m, const Vec3d& u) {
   return W;
 }
 
-// The channels' covariance sum_i v_i W(u_i), u_i = Mg^-1 e_i (the columns of U).
-Mat3d ChannelCovariance(const std::array<double, 6>& m, const Vec3d& v, const Mat3d& U) {
+// W(u_i) of each channel, u_i = Mg^-1 e_i (the columns of U).
+std::array<Mat3d, 3> ChannelWeights(const std::array<double, 6>& m, const Mat3d& U) {
+  return {WeightOf(m, U.col(0)), WeightOf(m, U.col(1)), WeightOf(m, U.col(2))};
+}
+
+// The channels' covariance sum_i v_i W(u_i).
+Mat3d Combine(const std::array<Mat3d, 3>& w, const Vec3d& v) {
   Mat3d W = Mat3d::Zero();
-  for (int i = 0; i < 3; ++i) W += v[i] * WeightOf(m, U.col(i));
+  for (int i = 0; i < 3; ++i) W += v[i] * w[i];
   return W;
+}
+
+Mat3d ChannelCovariance(const std::array<double, 6>& m, const Vec3d& v, const Mat3d& U) {
+  return Combine(ChannelWeights(m, U), v);
 }
 
 // The angle noise of the recorded angles in the residual (inner, outer).
@@ -321,6 +330,16 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
       pass.J_info[i] = JI;
     }
   });
+  pass.weights.resize(count_in);
+  pass.cross_weights.resize(count_in);
+  pass.weights_ref.resize(count_in);
+  pass.cross_weights_ref.resize(count_in);
+  ParallelFor(count_in, threads, [&](std::size_t i) {
+    pass.weights[i] = ChannelWeights(pass.moments[i], pass.Mg_inv);
+    pass.cross_weights[i] = ChannelWeights(pass.cross_moments[i], pass.Mg_inv);
+    pass.weights_ref[i] = ChannelWeights(pass.moments[i], pass.Mg_inv_ref);
+    pass.cross_weights_ref[i] = ChannelWeights(pass.cross_moments[i], pass.Mg_inv_ref);
+  });
   return pass;
 }
 
@@ -376,8 +395,20 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
   const Vec3d var_ref = noise_rad_s.cwiseQuotient(pass.K_ref).cwiseAbs2();
   const bool same_ref = (pass.K - pass.K_ref).cwiseAbs().maxCoeff() == 0.0 &&
                         (Mi - pass.Mg_inv_ref).cwiseAbs().maxCoeff() == 0.0;
-  // Channel i's noise direction before the rotation: u_i = Mg^-1 e_i.
-  const auto& channels = ChannelCovariance;
+  // The channels' covariance of interval k (own, or with the next: cross),
+  // by the pass's weights unless other Mg^-1 are asked for.
+  const bool own_weights = mg_inv == nullptr && pass.weights.size() == K;
+  auto channels = [&](std::size_t k, bool cross, const Vec3d& v) {
+    if (own_weights) return Combine(cross ? pass.cross_weights[k] : pass.weights[k], v);
+    return ChannelCovariance(cross ? pass.cross_moments[k] : pass.moments[k], v, Mi);
+  };
+  auto channels_ref = [&](std::size_t k, bool cross, const Vec3d& v) {
+    if (pass.weights_ref.size() == K) {
+      return Combine(cross ? pass.cross_weights_ref[k] : pass.weights_ref[k], v);
+    }
+    return ChannelCovariance(cross ? pass.cross_moments[k] : pass.moments[k], v,
+                             pass.Mg_inv_ref);
+  };
   const Mat3d R3 = AngleCovariance(pass.angle_var);
   GyroReduction out;
   out.noise_rad_s = noise_rad_s;
@@ -409,11 +440,15 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
   }
   Eigen::MatrixXd Jnu_prev(3, m), Jnu(3, m), Jk(3, m);
   Eigen::MatrixXd Inu_prev(3, m), Inu(3, m), Ik(3, m);  // the information's form
-  Mat3d Sref_prev, Cref_prev;
+  Eigen::MatrixXd Jz(3, m), Iz(3, m);  // whitened (no allocation per interval)
+  Eigen::VectorXd sc(m);
+  Mat3d Cref_prev;
+  Eigen::LLT<Mat3d> llt_ref_prev;  // of the last interval's Sr
   double log_det_ref = 0.0;
   Eigen::VectorXd grad = Eigen::VectorXd::Zero(m);
   Eigen::MatrixXd info = Eigen::MatrixXd::Zero(m, m);
-  Mat3d S_prev, C_prev;
+  Mat3d C_prev;
+  Eigen::LLT<Mat3d> llt_prev;  // of the last interval's S
   Vec3d nu_prev;
   bool chained = false;  // the previous interval is used and shares this one's first epoch
   int used = 0;
@@ -425,7 +460,7 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
       continue;
     }
     ++used;
-    const Mat3d C = 2.0 * R3 + channels(pass.moments[k], var, Mi);
+    const Mat3d C = 2.0 * R3 + channels(k, false, var);
     Vec3d nu = pass.r[k];
     if (jac) {
       for (int q = 0; q < m; ++q) Jk.col(q) = pass.J[k].col(cols[q]);
@@ -436,7 +471,7 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
     }
     Mat3d S = C;
     if (chained) {
-      const Mat3d Gk = S_prev.llt().solve(C_prev).transpose();  // C_prev^T S_prev^-1
+      const Mat3d Gk = llt_prev.solve(C_prev).transpose();  // C_prev^T S_prev^-1
       S -= Gk * C_prev;
       nu -= Gk * nu_prev;
       if (jac) {
@@ -449,12 +484,12 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
     }
     if (!same_ref) {
       // The log-determinant at the reference scale factors.
-      const Mat3d Cr = 2.0 * R3 + channels(pass.moments[k], var_ref, pass.Mg_inv_ref);
+      const Mat3d Cr = 2.0 * R3 + channels_ref(k, false, var_ref);
       Mat3d Sr = Cr;
-      if (chained) Sr -= Cref_prev.transpose() * Sref_prev.llt().solve(Cref_prev);
+      if (chained) Sr -= Cref_prev.transpose() * llt_ref_prev.solve(Cref_prev);
       log_det_ref += 0.5 * std::log(Sr.determinant());
-      Cref_prev = -R3 + channels(pass.cross_moments[k], var_ref, pass.Mg_inv_ref);
-      Sref_prev = Sr;
+      Cref_prev = -R3 + channels_ref(k, true, var_ref);
+      llt_ref_prev.compute(Sr);
     }
     const Eigen::LLT<Mat3d> llt(S);
     const Mat3d L = llt.matrixL();
@@ -463,22 +498,24 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
     out.whitened[k] = z;
     out.cost += 0.5 * z.squaredNorm();
     if (jac) {
-      const Eigen::MatrixXd Jz = L.triangularView<Eigen::Lower>().solve(Jnu);
-      const Eigen::VectorXd sc = Jz.transpose() * z;
+      Jz = Jnu;
+      L.triangularView<Eigen::Lower>().solveInPlace(Jz);
+      sc.noalias() = Jz.transpose() * z;
       if (with_scores) {
         Eigen::VectorXd full = Eigen::VectorXd::Zero(n);
         for (int q = 0; q < m; ++q) full[cols[q]] = sc[q];
         out.scores.push_back(std::move(full));
       }
       grad += sc;
-      const Eigen::MatrixXd Iz = L.triangularView<Eigen::Lower>().solve(Inu);
+      Iz = Inu;
+      L.triangularView<Eigen::Lower>().solveInPlace(Iz);
       info.noalias() += Iz.transpose() * Iz;
       Jnu_prev = Jnu;
       Inu_prev = Inu;
     }
     // The covariance of this residual with the next one.
-    C_prev = -R3 + channels(pass.cross_moments[k], var, Mi);
-    S_prev = S;
+    C_prev = -R3 + channels(k, true, var);
+    llt_prev = llt;
     nu_prev = nu;
     chained = true;
   }

@@ -89,6 +89,11 @@ struct GyroPass {
   // channel i's covariance per unit variance is W(u_i) = sum w^2 (P u_i)(P
   // u_i)^T with u_i = Mg^-1 e_i (WeightOf), at any Mg.
   std::vector<std::array<double, 6>> moments, cross_moments;
+  // The same as matrices per interval and channel: W(u_i) at the pass's
+  // Mg^-1 and at the reference's (ReduceGyro sums them scaled by each
+  // channel's variance, at every noise it is asked for).
+  std::vector<std::array<Eigen::Matrix3d, 3>> weights, cross_weights;
+  std::vector<std::array<Eigen::Matrix3d, 3>> weights_ref, cross_weights_ref;
   Eigen::Matrix3d Mg_inv = Eigen::Matrix3d::Identity();      // at theta
   Eigen::Matrix3d Mg_inv_ref = Eigen::Matrix3d::Identity();  // at the reference
   double angle_var = 0.0;           // [rad^2] of each recorded angle
