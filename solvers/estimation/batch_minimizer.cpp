@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 namespace triadcal {
 namespace {
@@ -204,15 +205,13 @@ bool BatchMinimizer::ComputeStep() {
   }
   // The model of -log L: the Hessian above plus the curvature the last step
   // measured (MeasureCurvature), damped until positive definite.
-  Eigen::MatrixXd B = H;
-  if (secant_.rows() == H.rows()) B += secant_;
-  const Eigen::VectorXd scale = H.diagonal().cwiseAbs().cwiseMax(1e-300);
+  Eigen::MatrixXd B;
+  Eigen::VectorXd scale;
+  DampingModel(H, &B, &scale);
   for (;;) {
-    Eigen::MatrixXd D = B;
-    D.diagonal() += mu_ * scale;
-    const Eigen::LDLT<Eigen::MatrixXd> ldlt(D);
-    if (ldlt.info() == Eigen::Success && ldlt.isPositive() && ldlt.vectorD().minCoeff() > 0.0) {
-      step_ = -ldlt.solve(g);
+    bool ok = false;
+    step_ = DampedStep(B, g, scale, mu_, &ok);
+    if (ok) {
       predicted_ = -(g.dot(step_) + 0.5 * step_.dot(B * step_));
       if (predicted_ > 0.0) break;
     }
@@ -224,6 +223,59 @@ bool BatchMinimizer::ComputeStep() {
     }
   }
   return true;
+}
+
+void BatchMinimizer::DampingModel(const Eigen::MatrixXd& H, Eigen::MatrixXd* B,
+                                  Eigen::VectorXd* scale) const {
+  *B = H;
+  if (secant_.rows() == H.rows()) *B += secant_;
+  *scale = H.diagonal().cwiseAbs().cwiseMax(1e-300);
+}
+
+Eigen::VectorXd BatchMinimizer::DampedStep(const Eigen::MatrixXd& B, const Eigen::VectorXd& g,
+                                           const Eigen::VectorXd& scale, double mu,
+                                           bool* ok) const {
+  Eigen::MatrixXd D = B;
+  D.diagonal() += mu * scale;
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(D);
+  *ok = ldlt.info() == Eigen::Success && ldlt.isPositive() && ldlt.vectorD().minCoeff() > 0.0;
+  return *ok ? Eigen::VectorXd(-ldlt.solve(g)) : Eigen::VectorXd();
+}
+
+void BatchMinimizer::RaiseDamping(double rise) {
+  // At least Nielsen's doubling. Beyond it, the damping whose step is as
+  // long (in diag H's metric) as the minimum of the parabola through -log L
+  // at the current point, its slope there along the refused step d and its
+  // value at d: alpha = -g.d / (2 (rise - g.d)), within 0.1 .. 0.5 of d.
+  // Nielsen's rule alone starts at 1e-4 of diag H, where the step is still
+  // the refused one: the real fast roll run with the gyro refused three
+  // such steps in a row (a pass each).
+  const double grown = std::max(mu_ * nu_, 1e-4);
+  nu_ *= 2.0;
+  Eigen::VectorXd g;
+  Eigen::MatrixXd H, B;
+  Eigen::VectorXd scale;
+  Model(current_, &g, &H);
+  DampingModel(H, &B, &scale);
+  const double slope = g.dot(step_), bend = rise - slope;
+  if (!(std::isfinite(rise) && slope < 0.0 && bend > 0.0) || !current_.finite()) {
+    mu_ = grown;
+    return;
+  }
+  const double alpha = std::clamp(-slope / (2.0 * bend), 0.1, 0.5);
+  auto length = [&](double mu) {
+    bool ok = false;
+    const Eigen::VectorXd d = DampedStep(B, g, scale, mu, &ok);
+    return ok ? std::sqrt(d.cwiseAbs2().dot(scale)) : std::numeric_limits<double>::infinity();
+  };
+  const double target = alpha * std::sqrt(step_.cwiseAbs2().dot(scale));
+  // The step's length falls as the damping rises: bisection in log mu.
+  double lo = std::log(std::max(mu_, 1e-12)), hi = std::log(kMaxDamping);
+  for (int it = 0; it < 50 && hi - lo > 1e-3; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (length(std::exp(mid)) > target ? lo : hi) = mid;
+  }
+  mu_ = std::max(std::exp(hi), grown);
 }
 
 Eigen::VectorXd BatchMinimizer::GradientAtTrialNoise(
@@ -324,11 +376,11 @@ bool BatchMinimizer::TryStep() {
     }
     // A gradient not finite: refused after all, the current point evaluated again.
     current_ = objective_.Evaluate(phi_current, noise_, true, ThetaPart::kGradientAndInformation);
-  } else {
-    objective_.Reweight(&current_, noise_);
+    RaiseDamping(std::numeric_limits<double>::infinity());
+    return false;
   }
-  mu_ = std::max(mu_ * nu_, 1e-4);
-  nu_ *= 2.0;
+  objective_.Reweight(&current_, noise_);
+  RaiseDamping(trial.finite() ? -actual : std::numeric_limits<double>::infinity());
   return false;
 }
 

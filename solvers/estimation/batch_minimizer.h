@@ -34,7 +34,8 @@
 //                     else the damped step (B + mu diag H) d = -g, B = H + S
 //   TryStep           evaluate the trial (one pass); accept it when -log L
 //                     fell (damping by Nielsen's rule on the gain ratio),
-//                     else raise the damping
+//                     else raise the damping (RaiseDamping: to the step's
+//                     length a parabola along the refused one gives)
 //   MeasureCurvature  the change of the gradient along the accepted step, at
 //                     fixed noise, into S (BFGS on H + S)
 //
@@ -97,6 +98,14 @@ class BatchMinimizer {
   // False when converged (or stopped: summary_.termination says why).
   bool ComputeStep();
   bool TryStep();
+  // After a refused step that raised -log L by `rise` (not finite: unknown).
+  void RaiseDamping(double rise);
+  // The damped step (B + mu diag(scale)) d = -g; false in *ok when that
+  // matrix is not positive definite.
+  Eigen::VectorXd DampedStep(const Eigen::MatrixXd& B, const Eigen::VectorXd& g,
+                             const Eigen::VectorXd& scale, double mu, bool* ok) const;
+  // The model's matrix B = H + S and the damping's scale |diag H| at the current point.
+  void DampingModel(const Eigen::MatrixXd& H, Eigen::MatrixXd* B, Eigen::VectorXd* scale) const;
   // The current point's gradient in the free unknowns at the trial's noise
   // (the current point reweighted: a reduction, no pass; none when the noise
   // did not move), before the trial's theta part is formed (one point's
