@@ -111,6 +111,13 @@ Mat3d Combine(const std::array<Mat3d, 3>& w, const Vec3d& v) {
   return W;
 }
 
+// X = L^-1 B for a 3 x 3 lower-triangular L, row by row (B: 3 x m).
+void ForwardSubstitute(const Mat3d& L, const Eigen::MatrixXd& B, Eigen::MatrixXd* X) {
+  X->row(0) = B.row(0) / L(0, 0);
+  X->row(1) = (B.row(1) - L(1, 0) * X->row(0)) / L(1, 1);
+  X->row(2) = (B.row(2) - L(2, 0) * X->row(0) - L(2, 1) * X->row(1)) / L(2, 2);
+}
+
 Mat3d ChannelCovariance(const std::array<double, 6>& m, const Vec3d& v, const Mat3d& U) {
   return Combine(ChannelWeights(m, U), v);
 }
@@ -498,8 +505,7 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
     out.whitened[k] = z;
     out.cost += 0.5 * z.squaredNorm();
     if (jac) {
-      Jz = Jnu;
-      L.triangularView<Eigen::Lower>().solveInPlace(Jz);
+      ForwardSubstitute(L, Jnu, &Jz);
       sc.noalias() = Jz.transpose() * z;
       if (with_scores) {
         Eigen::VectorXd full = Eigen::VectorXd::Zero(n);
@@ -507,9 +513,14 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
         out.scores.push_back(std::move(full));
       }
       grad += sc;
-      Iz = Inu;
-      L.triangularView<Eigen::Lower>().solveInPlace(Iz);
-      info.noalias() += Iz.transpose() * Iz;
+      ForwardSubstitute(L, Inu, &Iz);
+      // The rank-3 update of the information, its lower triangle (mirrored below).
+      for (int r = 0; r < 3; ++r) {
+        for (int b = 0; b < m; ++b) {
+          const double v = Iz(r, b);
+          for (int a = b; a < m; ++a) info(a, b) += Iz(r, a) * v;
+        }
+      }
       Jnu_prev = Jnu;
       Inu_prev = Inu;
     }
@@ -520,6 +531,7 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
     chained = true;
   }
   out.degrees_of_freedom = 3 * used;
+  info.triangularView<Eigen::StrictlyUpper>() = info.transpose();
   if (!same_ref) out.log_det = log_det_ref;
   out.neg_log_l = out.cost + rho * out.log_det;
   if (jac) {
