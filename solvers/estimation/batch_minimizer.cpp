@@ -316,21 +316,27 @@ void BatchMinimizer::MeasureCurvature(const BatchObjective::Point& trial,
   if (secant_.rows() == H1.rows()) B += secant_;
   const Eigen::VectorXd Bd = B * step_;
   const double dBd = step_.dot(Bd), yd = y.dot(step_);
-  // Only a curvature the step confirms (y^T d > 0) keeps B positive definite.
-  if (!(dBd > 0.0) || !(yd > 0.0) || !std::isfinite(yd)) return;
-  B += y * y.transpose() / yd - Bd * Bd.transpose() / dBd;
-  // In exact arithmetic it does; in rounding, not when the step's gradient
-  // change dwarfs H's smallest curvature (a start far from the run: offsets
-  // of 1500 counts declared 0, y 1e13, B's smallest pivot then -3e13, and
-  // no damping made the model positive again). Then what the step measured
-  // is lost to rounding: the model is Gauss-Newton's alone.
-  const Eigen::LDLT<Eigen::MatrixXd> check(B);
-  if (check.info() != Eigen::Success || !check.isPositive() ||
-      !(check.vectorD().minCoeff() > 0.0)) {
-    secant_.resize(0, 0);
-    return;
+  auto positive = [](const Eigen::MatrixXd& M) {
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(M);
+    return ldlt.info() == Eigen::Success && ldlt.isPositive() && ldlt.vectorD().minCoeff() > 0.0;
+  };
+  // Only a curvature the step confirms (y^T d > 0) keeps B positive definite:
+  // in exact arithmetic. In rounding, not when the step's gradient change
+  // dwarfs H's smallest curvature (a start far from the run: offsets of 1500
+  // counts declared 0, y 1e13, B's smallest pivot then -3e13). And without
+  // an update the last S is on a new H: the real medium roll run's refit of
+  // gyro_nonlinearity in diagnose, after a step with y^T d < 0, had no
+  // positive model below a damping of 1.6 diag H, and took 12 steps instead
+  // of 4 to come back. A model that is not positive definite keeps no S:
+  // Gauss-Newton's alone.
+  if (dBd > 0.0 && yd > 0.0 && std::isfinite(yd)) {
+    const Eigen::MatrixXd updated = B + y * y.transpose() / yd - Bd * Bd.transpose() / dBd;
+    if (positive(updated)) {
+      secant_ = updated - H1;
+      return;
+    }
   }
-  secant_ = B - H1;
+  if (secant_.rows() == H1.rows() && !positive(B)) secant_.resize(0, 0);
 }
 
 bool BatchMinimizer::TryStep() {
