@@ -2,7 +2,7 @@
 """The estimation core's speed and behaviour targets (issue 31), measured in one run.
 
 usage: bench/solver_speed.py [--workdir DIR] [--repeats N] [--skip-real]
-                             [--skip-40min] [--skip-diagnose]
+                             [--skip-40min] [--skip-diagnose] [--gyro]
        (TRIADCAL=path/to/triadcal to use another binary)
 
 One command at a time, each timed with os.wait4 (wall, CPU = user + system of
@@ -18,6 +18,9 @@ measured in this invocation, so a loaded machine slows both sides.
             (examples/paper-experiment3/scenario.yaml): fit CPU <= 0.5x filter CPU.
   40min     the same at 1 kHz for 40 min (bench/scenarios/paper-40min.yaml):
             fit <= 1.5 s wall and <= 200 MB peak.
+  gyro      (--gyro) the three real roll runs with their gyro triad
+            (examples/single-axis-roll/*_gyro.yaml): filter, fit and diagnose
+            timed, the fit's steps; a table, no targets (SPEC section 10).
   shaft     a vertical-shaft run (bench/scenarios/vertical-shaft.yaml) through a
             flawed logger: readings quantised to 0.01 g, angles 8.6 ms late,
             time stamps jittered (uniform +-2 ms), and vibration (reading noise
@@ -133,6 +136,36 @@ def real_runs(a, work, result):
                    f"selected {','.join(row['selected']) or 'none'}")
 
 
+def gyro_runs(a, work, result):
+    if not os.path.isdir(SHARED):
+        print("gyro: the shared data folder is absent; skipped")
+        return
+    print("\n| run with gyro | filter s (CPU) | fit s (CPU) | fit steps | converged "
+          "| diagnose s (CPU) | selected |")
+    print("|---|---|---|---|---|---|---|")
+    result["gyro"] = {}
+    for name in ("slow", "medium", "fast"):
+        run = os.path.join(ROOT, f"examples/single-axis-roll/{name}_gyro.yaml")
+        fil = median_of([BIN, "filter", run, "-o", os.path.join(work, name + "_gyro_filter.json"),
+                         "--force", "-q"], a.repeats)
+        fit_out = os.path.join(work, name + "_gyro_fit.json")
+        fit = median_of([BIN, "fit", run, "-o", fit_out, "--force", "-q"], a.repeats, ok=(0, 4))
+        fj = json.load(open(fit_out))
+        row = {"filter": fil, "fit": fit, "fit_steps": fj["iterations"]["steps"],
+               "converged": fj["converged"]}
+        diag_txt = "- | -"
+        if not a.skip_diagnose:
+            diag_out = os.path.join(work, name + "_gyro_diagnose.json")
+            diag = timed([BIN, "diagnose", run, "-o", diag_out, "--force", "-q"], ok=(0, 4))
+            row["diagnose"] = diag
+            row["selected"] = json.load(open(diag_out)).get("selected", [])
+            diag_txt = (f"{diag['wall_s']:.2f} ({diag['cpu_s']:.2f}) | "
+                        f"{','.join(row['selected']) or '-'}")
+        result["gyro"][name] = row
+        print(f"| {name} | {fil['wall_s']:.2f} ({fil['cpu_s']:.2f}) | {fit['wall_s']:.2f} "
+              f"({fit['cpu_s']:.2f}) | {row['fit_steps']} | {row['converged']} | {diag_txt} |")
+
+
 def simulated(a, work, result):
     for name, scenario, check in (
             ("paper-90s", os.path.join(ROOT, "examples/paper-experiment3/scenario.yaml"), "cpu"),
@@ -219,6 +252,7 @@ def main():
     p.add_argument("--skip-real", action="store_true")
     p.add_argument("--skip-40min", action="store_true")
     p.add_argument("--skip-diagnose", action="store_true")
+    p.add_argument("--gyro", action="store_true")
     a = p.parse_args()
     work = a.workdir or tempfile.mkdtemp(prefix="solver_speed.")
     os.makedirs(work, exist_ok=True)
@@ -226,6 +260,8 @@ def main():
     result = {"real": {}}
     if not a.skip_real:
         real_runs(a, work, result)
+    if a.gyro:
+        gyro_runs(a, work, result)
     simulated(a, work, result)
     flawed_shaft(a, work, result)
     result["targets"] = targets
