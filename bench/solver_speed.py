@@ -86,6 +86,26 @@ def target(name, ok, text):
     print(f"{'PASS' if ok else 'MISS'}  {name}: {text}")
 
 
+def filter_fit_diagnose(a, work, name, run):
+    """filter and fit (medians of a.repeats) and diagnose (once, unless
+    --skip-diagnose) on run: the row, and diagnose's OUT (or None)."""
+    fil = median_of([BIN, "filter", run, "-o", os.path.join(work, name + "_filter.json"),
+                     "--force", "-q"], a.repeats)
+    fit_out = os.path.join(work, name + "_fit.json")
+    fit = median_of([BIN, "fit", run, "-o", fit_out, "--force", "-q"], a.repeats, ok=(0, 4))
+    fj = json.load(open(fit_out))
+    row = {"filter": fil, "fit": fit, "fit_steps": fj["iterations"]["steps"],
+           "converged": fj["converged"]}
+    dj = None
+    if not a.skip_diagnose:
+        diag_out = os.path.join(work, name + "_diagnose.json")
+        row["diagnose"] = timed([BIN, "diagnose", run, "-o", diag_out, "--force", "-q"],
+                                ok=(0, 4))
+        dj = json.load(open(diag_out))
+        row["selected"] = dj.get("selected", [])
+    return row, dj
+
+
 def real_runs(a, work, result):
     if not os.path.isdir(SHARED):
         print("real: the shared data folder is absent; skipped")
@@ -94,21 +114,10 @@ def real_runs(a, work, result):
           "| diagnose s | diagnose/fit | selected | not separable |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     for name, yaml in REAL.items():
-        run = os.path.join(ROOT, yaml)
-        fil = median_of([BIN, "filter", run, "-o", os.path.join(work, name + "_filter.json"),
-                         "--force", "-q"], a.repeats)
-        fit_out = os.path.join(work, name + "_fit.json")
-        fit = median_of([BIN, "fit", run, "-o", fit_out, "--force", "-q"], a.repeats, ok=(0, 4))
-        fj = json.load(open(fit_out))
-        row = {"filter": fil, "fit": fit, "fit_steps": fj["iterations"]["steps"],
-               "converged": fj["converged"]}
-        diag_txt = "-"
-        if not a.skip_diagnose:
-            diag_out = os.path.join(work, name + "_diagnose.json")
-            diag = timed([BIN, "diagnose", run, "-o", diag_out, "--force", "-q"], ok=(0, 4))
-            dj = json.load(open(diag_out))
-            row["diagnose"] = diag
-            row["selected"] = dj.get("selected", [])
+        row, dj = filter_fit_diagnose(a, work, name, os.path.join(ROOT, yaml))
+        fil, fit = row["filter"], row["fit"]
+        if dj is not None:
+            diag = row["diagnose"]
             # Candidates the loop named as not separable from the base parameters.
             row["not_separable"] = sorted({t["effect"] for t in dj.get("tests", [])
                                            if "not separable" in (t.get("note") or "")})
@@ -146,19 +155,11 @@ def gyro_runs(a, work, result):
     result["gyro"] = {}
     for name in ("slow", "medium", "fast"):
         run = os.path.join(ROOT, f"examples/single-axis-roll/{name}_gyro.yaml")
-        fil = median_of([BIN, "filter", run, "-o", os.path.join(work, name + "_gyro_filter.json"),
-                         "--force", "-q"], a.repeats)
-        fit_out = os.path.join(work, name + "_gyro_fit.json")
-        fit = median_of([BIN, "fit", run, "-o", fit_out, "--force", "-q"], a.repeats, ok=(0, 4))
-        fj = json.load(open(fit_out))
-        row = {"filter": fil, "fit": fit, "fit_steps": fj["iterations"]["steps"],
-               "converged": fj["converged"]}
+        row, _ = filter_fit_diagnose(a, work, name + "_gyro", run)
+        fil, fit = row["filter"], row["fit"]
         diag_txt = "- | -"
-        if not a.skip_diagnose:
-            diag_out = os.path.join(work, name + "_gyro_diagnose.json")
-            diag = timed([BIN, "diagnose", run, "-o", diag_out, "--force", "-q"], ok=(0, 4))
-            row["diagnose"] = diag
-            row["selected"] = json.load(open(diag_out)).get("selected", [])
+        if "diagnose" in row:
+            diag = row["diagnose"]
             diag_txt = (f"{diag['wall_s']:.2f} ({diag['cpu_s']:.2f}) | "
                         f"{','.join(row['selected']) or '-'}")
         result["gyro"][name] = row

@@ -1,15 +1,52 @@
 // The analytic Jacobian of block B1 against automatic differentiation of the
 // templated model and against central differences.
 #include "core/model/b1_jacobian.h"
-#include "core/model/run_description.h"
 
 #include <ceres/jet.h>
 #include <gtest/gtest.h>
 
+#include <functional>
 #include <random>
 
 namespace triadcal {
 namespace {
+
+// The sensor's and the bench's parameters drawn about a typical triad (174
+// mV/g, 1500 mV), the effects' at twice their typical size where `away`,
+// else at zero.
+Eigen::VectorXd RandomTheta(const ParameterLayout& layout, std::mt19937_64& rng,
+                            const std::function<bool(Effect)>& away) {
+  std::normal_distribution<double> nrm(0.0, 1.0);
+  Eigen::VectorXd th = Eigen::VectorXd::Zero(layout.size());
+  for (int i = 0; i < 3; ++i) th[kKx + i] = 174 + 5 * nrm(rng);
+  for (int i = 0; i < 3; ++i) th[kW0x + i] = 1500 + 20 * nrm(rng);
+  for (int i = kAlphaX; i <= kGammaZ; ++i) th[i] = 0.02 * nrm(rng);
+  for (int i = kKxx; i <= kKzz; ++i) th[i] = 0.005 * nrm(rng);
+  for (int i = kDpsi; i <= kDlambda2; ++i) th[i] = 0.02 * nrm(rng);
+  for (Effect e : layout.effects()) {
+    const EffectSpec& spec = GetEffectSpec(e);
+    for (std::size_t q = 0; q < spec.params.size(); ++q) {
+      const ParamSpec& p = spec.params[q];
+      const double size = p.typical * p.si_per_unit * (spec.scale_relative ? th[kKx] : 1.0);
+      th[layout.offset(e) + q] = away(e) ? 2.0 * size * nrm(rng) : 0.0;
+    }
+  }
+  return th;
+}
+
+// Each column of J (3 x layout.size()) against the central difference of f.
+void ExpectCentralDifferences(const ParameterLayout& layout, const Eigen::VectorXd& th,
+                              const Eigen::MatrixXd& J, double tolerance,
+                              const std::function<Eigen::Vector3d(const Eigen::VectorXd&)>& f) {
+  for (int c = 0; c < layout.size(); ++c) {
+    const double h = 1e-6 * std::max(1.0, std::abs(th[c]));
+    Eigen::VectorXd tp = th, tm = th;
+    tp[c] += h;
+    tm[c] -= h;
+    const Eigen::Vector3d d = (f(tp) - f(tm)) / (2 * h);
+    EXPECT_LT((d - J.col(c)).norm(), tolerance * (1 + d.norm())) << layout.info(c).name;
+  }
+}
 
 TEST(B1Jacobian, AnalyticMatchesAutomaticAndNumeric) {
   constexpr int N = 64;
@@ -41,22 +78,9 @@ TEST(B1Jacobian, AnalyticMatchesAutomaticAndNumeric) {
     const int n = cfg.layout.size();
     ASSERT_LE(n, N);
     for (int trial = 0; trial < 20; ++trial) {
-      Eigen::VectorXd th = Eigen::VectorXd::Zero(n);
-      for (int i = 0; i < 3; ++i) th[kKx + i] = 174 + 5 * nrm(rng);
-      for (int i = 0; i < 3; ++i) th[kW0x + i] = 1500 + 20 * nrm(rng);
-      for (int i = kAlphaX; i <= kGammaZ; ++i) th[i] = 0.02 * nrm(rng);
-      for (int i = kKxx; i <= kKzz; ++i) th[i] = 0.005 * nrm(rng);
-      for (int i = kDpsi; i <= kDlambda2; ++i) th[i] = 0.02 * nrm(rng);
-      for (Effect e : cfg.layout.effects()) {
-        const EffectSpec& spec = GetEffectSpec(e);
-        for (std::size_t q = 0; q < spec.params.size(); ++q) {
-          const ParamSpec& p = spec.params[q];
-          const double size = p.typical * p.si_per_unit * (spec.scale_relative ? th[kKx] : 1.0);
-          const bool away =
-              variant == 1 || variant >= 4 || (variant == 3 && e != Effect::kSizeEffect);
-          th[cfg.layout.offset(e) + q] = away ? 2.0 * size * nrm(rng) : 0.0;
-        }
-      }
+      const Eigen::VectorXd th = RandomTheta(cfg.layout, rng, [&](Effect e) {
+        return variant == 1 || variant >= 4 || (variant == 3 && e != Effect::kSizeEffect);
+      });
       BenchAngles<double> rec;
       for (int i = 0; i < 2; ++i) {
         rec.axis[i].angle = (3 - i) * nrm(rng);
@@ -80,17 +104,10 @@ TEST(B1Jacobian, AnalyticMatchesAutomaticAndNumeric) {
               << cfg.layout.info(c).name;
         }
       }
-      for (int c = 0; c < n; ++c) {
-        const double h = 1e-6 * std::max(1.0, std::abs(th[c]));
-        Eigen::VectorXd tp = th, tm = th;
-        tp[c] += h;
-        tm[c] -= h;
-        const Eigen::Vector3d d =
-            (AccelerationFromReadings_L<double>(cfg, tp.data(), rec, z, ctx) -
-             AccelerationFromReadings_L<double>(cfg, tm.data(), rec, z, ctx)) /
-            (2 * h);
-        EXPECT_LT((d - Ja.col(c)).norm(), 1e-6 * (1 + d.norm())) << cfg.layout.info(c).name;
-      }
+      ExpectCentralDifferences(
+          cfg.layout, th, Ja, 1e-6, [&](const Eigen::VectorXd& t) -> Eigen::Vector3d {
+            return AccelerationFromReadings_L<double>(cfg, t.data(), rec, z, ctx);
+          });
     }
   }
 }
@@ -114,19 +131,7 @@ TEST(B1Jacobian, SpecificForceMatchesAutomaticAndNumeric) {
   ASSERT_LE(n, N);
   ASSERT_GT(n, 64);
   for (int trial = 0; trial < 20; ++trial) {
-    Eigen::VectorXd th = NominalTheta(RunDescription(), cfg.layout);
-    for (int i = 0; i < 3; ++i) th[kKx + i] = 174 + 5 * nrm(rng);
-    for (int i = 0; i < 3; ++i) th[kW0x + i] = 1500 + 20 * nrm(rng);
-    for (int i = kAlphaX; i <= kGammaZ; ++i) th[i] = 0.02 * nrm(rng);
-    for (int i = kKxx; i <= kKzz; ++i) th[i] = 0.005 * nrm(rng);
-    for (Effect e : cfg.layout.effects()) {
-      const EffectSpec& spec = GetEffectSpec(e);
-      for (std::size_t q = 0; q < spec.params.size(); ++q) {
-        const ParamSpec& p = spec.params[q];
-        const double size = p.typical * p.si_per_unit * (spec.scale_relative ? th[kKx] : 1.0);
-        th[cfg.layout.offset(e) + q] = 2.0 * size * nrm(rng);
-      }
-    }
+    const Eigen::VectorXd th = RandomTheta(cfg.layout, rng, [](Effect) { return true; });
     const Eigen::Vector3d z(1500 + 150 * nrm(rng), 1500 + 150 * nrm(rng), 1500 + 150 * nrm(rng));
     const SampleContext ctx{40.0 * std::abs(nrm(rng)), 20 + 5 * nrm(rng)};
     Eigen::Vector3d W;
@@ -142,16 +147,10 @@ TEST(B1Jacobian, SpecificForceMatchesAutomaticAndNumeric) {
             << cfg.layout.info(c).name;
       }
     }
-    for (int c = 0; c < n; ++c) {
-      const double h = 1e-6 * std::max(1.0, std::abs(th[c]));
-      Eigen::VectorXd tp = th, tm = th;
-      tp[c] += h;
-      tm[c] -= h;
-      const Eigen::Vector3d d = (SpecificForceFromReadings_g<double>(cfg, tp.data(), z, ctx) -
-                                 SpecificForceFromReadings_g<double>(cfg, tm.data(), z, ctx)) /
-                                (2 * h);
-      EXPECT_LT((d - dW.col(c)).norm(), 1e-7 * (1 + d.norm())) << cfg.layout.info(c).name;
-    }
+    ExpectCentralDifferences(
+        cfg.layout, th, dW, 1e-7, [&](const Eigen::VectorXd& t) -> Eigen::Vector3d {
+          return SpecificForceFromReadings_g<double>(cfg, t.data(), z, ctx);
+        });
   }
 }
 
