@@ -357,8 +357,8 @@ void GyroIncrementCovariance(const GyroPass& pass, std::size_t i,
   // angle noise at both ends (shared, with the opposite sign, with the next).
   const Vec3d var = noise_rad_s.cwiseQuotient(pass.K).cwiseAbs2();
   const Mat3d R3 = AngleCovariance(pass.angle_var);
-  *own = 2.0 * R3 + ChannelCovariance(pass.moments[i], var, pass.Mg_inv);
-  *with_next = -R3 + ChannelCovariance(pass.cross_moments[i], var, pass.Mg_inv);
+  *own = 2.0 * R3 + Combine(pass.weights[i], var);
+  *with_next = -R3 + Combine(pass.cross_weights[i], var);
 }
 
 GyroSummary SummariseGyro(const RunProblem& p, const GyroPass& pass, const GyroReduction& red) {

@@ -209,8 +209,8 @@ Estimate FullEstimate(const StateSpaceModel& model, const Eigen::VectorXd& theta
 // estimate is the filtered one. So the backward recursion would return the
 // last filtered theta and its covariance (theta to 4e-9 sigma, sigma to 1e-8
 // of itself on the real roll runs and the paper's run, where it was run
-// before it was replaced by this); it
-// would only improve the trajectory, which nothing here reads.
+// before it was replaced by this); it would only improve the trajectory,
+// which nothing here reads.
 Estimate SmoothedParameters(const StateSpaceModel& model, const PassResult& pass) {
   const int n = model.num_free();
   return FullEstimate(model, pass.x.tail(n), pass.P.bottomRightCorner(n, n));
