@@ -12,6 +12,10 @@ namespace {
 // Variance-component steps of the noise at the start (reductions only).
 constexpr int kNoiseSteps = 30;
 constexpr double kNoiseTolerance = 1e-6;  // in log sigma
+// A Newton step of the noise below this is its last: applied without a
+// reduction to confirm it, as its error is of the order of its square
+// (sqrt(kNoiseTolerance): within the tolerance).
+constexpr double kLastNoiseStep = 1e-3;
 constexpr double kMaxNoiseStep = 2.0;     // in log sigma, one Newton step
 // No reading is better than this share of its nominal scale factor (1 ug):
 // keeps a noise-free run's estimated noise finite.
@@ -149,6 +153,10 @@ void BatchMinimizer::MaximiseNoise(BatchObjective::Point* pt, std::vector<Eigen:
       }
     }
     if (largest < kNoiseTolerance) break;
+    if (largest < kLastNoiseStep) {
+      *noise = trial_noise;
+      break;
+    }
     bool lowered = false;
     for (int halving = 0; halving < 20 && !lowered; ++halving) {
       BatchObjective::Point trial = objective_.AtNoise(*pt, trial_noise, ThetaPart::kNone);
@@ -167,7 +175,8 @@ void BatchMinimizer::MaximiseNoise(BatchObjective::Point* pt, std::vector<Eigen:
     }
     if (!lowered) break;  // at the maximum to rounding
   }
-  // Without a theta part, pt is reduced at *noise already.
+  // Without a theta part, pt stays reduced at the noise before the last
+  // step (within kLastNoiseStep of *noise).
   if (theta_part != ThetaPart::kNone) objective_.Reweight(pt, *noise, theta_part);
 }
 

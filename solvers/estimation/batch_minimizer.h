@@ -122,7 +122,8 @@ class BatchMinimizer {
   void Model(const BatchObjective::Point& pt, Eigen::VectorXd* g, Eigen::MatrixXd* H) const;
   double NoiseFloor(int run, int channel) const;
   // The noises of the runs that estimate them at their maximum at pt, its
-  // reductions formed there with theta_part.
+  // reductions formed there with theta_part (with kNone they may stay at
+  // the noise before Newton's last step, within kLastNoiseStep).
   void MaximiseNoise(BatchObjective::Point* pt, std::vector<Eigen::Vector3d>* noise,
                      ThetaPart theta_part) const;
 
