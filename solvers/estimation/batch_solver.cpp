@@ -284,7 +284,7 @@ std::vector<int> SupportedByInformation(const Eigen::MatrixXd& information,
 HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data,
                                   const ParameterLayout& layout, const HoldPolicy& o,
                                   double epoch_s, const AngleDerivativeOptions& derivatives,
-                                  int decimation_hz, int threads) {
+                                  int decimation_hz, int threads, SharedRunWork* shared) {
   const int n = layout.size();
   if (threads <= 0) threads = DefaultThreads();
   auto index_of = [&](const std::string& name) {
@@ -309,8 +309,12 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
     // (a degenerate direction has no information there; a sensor's offsets
     // are tens to hundreds of mg, and at nominal zero offsets a reading that
     // never changes -- the shaft of a single-axis run -- would look like a
-    // specific force that cross-couples), on the samples thinned to
-    // decimation_hz (the data information scales with the samples).
+    // specific force that cross-couples). That point is found on the samples
+    // thinned to decimation_hz; the information there is all the samples'
+    // (one pass): thinned, the increments' quadrature is coarser than the
+    // motion and the information of a weak direction is not the fit's (real
+    // pitch run at 31 Hz: Ky's 0.079 prior units left, 0.0039 at 100 Hz;
+    // alpha_x's 6.2e8, 8.1e8 at 100 Hz).
     const std::size_t m = ThinningFactor(data, decimation_hz);
     const RunData thin = Decimate(data, m);
     const RunProblem pt = BuildRunProblem(run, thin, layout, epoch_s, derivatives);
@@ -328,11 +332,17 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
     }
     BatchMinimizer scale_and_offset(objective, scale_offset, mo);
     MinimizerSummary summary;
-    const BatchObjective::Point at =
-        scale_and_offset.Minimize(pt.prior.mean, {pt.noise_mV}, &summary);
+    BatchObjective::Point at = scale_and_offset.Minimize(pt.prior.mean, {pt.noise_mV}, &summary);
     d.theta = at.phi;
-    const Eigen::MatrixXd info_si =
-        at.data_information * static_cast<double>(m) + ConstraintInformation(pt);
+    if (m > 1) {
+      const RunProblem full = BuildRunProblem(run, data, layout, epoch_s, derivatives, shared);
+      std::vector<std::shared_ptr<const RunPass>> weights;
+      if (shared) weights.push_back(shared->Weights(full, threads));
+      BatchObjective all({LinkedRun{&full, {}, {}}}, A, b, full.prior.mean, threads, weights);
+      all.HoldGyroNoise();
+      at = all.Evaluate(d.theta, {full.noise_mV}, true);
+    }
+    const Eigen::MatrixXd info_si = at.data_information + ConstraintInformation(pt);
     const Eigen::VectorXd& s = pt.prior.sigma;
     d.information = s.asDiagonal() * info_si * s.asDiagonal();
     d.information = 0.5 * (d.information + d.information.transpose());
@@ -344,8 +354,7 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
     for (const Direction& dir : nulls) d.unsupported.push_back(dir.named);
     // Below the information's resolution a parameter has none.
     const Eigen::VectorXd resolution =
-        InformationResolution(at.data_information_scale * static_cast<double>(m))
-            .cwiseProduct(s.cwiseAbs2());
+        InformationResolution(at.data_information_scale).cwiseProduct(s.cwiseAbs2());
     Eigen::VectorXd min_info = resolution.cwiseMax(o.min_information);
     Eigen::VectorXd priority(n);
     for (int i = 0; i < n; ++i) priority[i] = HoldPriority(layout, i);
@@ -436,7 +445,7 @@ HoldDecision DecideHeldParameters(const RunDescription& run, const RunData& data
   at_start.noise_channel_mV = StartNoise(run, data, opt);
   at_start.noise_mV = (*at_start.noise_channel_mV).maxCoeff();
   return ChooseHeldParameters(at_start, data, layout, opt.holding, opt.epoch_s, opt.derivatives,
-                              opt.init_decimation_hz, opt.threads);
+                              opt.init_decimation_hz, opt.threads, opt.shared);
 }
 
 namespace {
@@ -446,7 +455,8 @@ class BatchSolve {
  public:
   BatchSolve(const RunDescription& run, const RunData& data, const ParameterLayout& layout,
              const BatchOptions& opt)
-      : run_(run), data_(data), layout_(layout), opt_(opt) {}
+      : run_(run), data_(data), layout_(layout), opt_(opt),
+        shared_(opt.shared ? opt.shared : &own_shared_) {}
 
   BatchResult Run() {
     SetUp();
@@ -482,7 +492,7 @@ class BatchSolve {
     if (opt_.sigma != "auto" && opt_.sigma != "white" && opt_.sigma != "hac") {
       throw OptionError("sigma", "unknown '" + opt_.sigma + "' (auto, white, hac)");
     }
-    p_ = BuildRunProblem(run_, data_, layout_, opt_.epoch_s, opt_.derivatives, opt_.shared);
+    p_ = BuildRunProblem(run_, data_, layout_, opt_.epoch_s, opt_.derivatives, shared_);
     res_.prior = p_.prior;
     res_.epochs = static_cast<int>(p_.epochs.size());
     res_.noise_declared_mV = run_.ChannelNoise_mV();
@@ -510,7 +520,9 @@ class BatchSolve {
     } else {
       Say("choosing the parameters this run determines");
       Fraction(0.0);
-      decision_ = DecideHeldParameters(run_, data_, layout_, opt_);
+      BatchOptions o = opt_;
+      o.shared = shared_;  // the decision's full pass shares the fit's weights
+      decision_ = DecideHeldParameters(run_, data_, layout_, o);
     }
     res_.held = decision_.held;
     res_.consider = decision_.consider;
@@ -568,7 +580,7 @@ class BatchSolve {
     t_solve_ = std::chrono::steady_clock::now();
     PriorAndConstraintRows(p_, &A_, &b_);
     std::vector<std::shared_ptr<const RunPass>> weights;
-    if (opt_.shared) weights.push_back(opt_.shared->Weights(p_, threads_));
+    weights.push_back(shared_->Weights(p_, threads_));
     objective_.emplace(std::vector<LinkedRun>{LinkedRun{&p_, {}, {}}}, A_, b_, p_.prior.mean,
                        threads_, std::move(weights));
     MinimizerOptions mo;
@@ -734,6 +746,10 @@ class BatchSolve {
   const RunData& data_;
   const ParameterLayout& layout_;
   const BatchOptions& opt_;
+  // The work the decision and the fit share (their weights' reference pass,
+  // the angles' derivatives): opt_.shared, or this fit's own.
+  SharedRunWork own_shared_;
+  SharedRunWork* shared_;
   std::chrono::steady_clock::time_point t_start_, t_solve_;
   int threads_ = 1;
   RunProblem p_;

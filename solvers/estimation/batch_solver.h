@@ -14,9 +14,10 @@
 // The steps of SolveBatch:
 //
 //   1. What the run determines, decided before the fit (ChooseHeldParameters):
-//      the data information in prior units, by a pivoted Cholesky, at the
-//      nominal values (scale factors and offsets fitted) and the declared
-//      noise (or the readings' own with noise_mV: auto). A parameter the data determine at least as well as
+//      the data information of all the samples in prior units, by a
+//      pivoted Cholesky, at the nominal values (scale factors and offsets
+//      fitted on the samples thinned to 25 Hz) and the declared noise (or
+//      the readings' own with noise_mV: auto). A parameter the data determine at least as well as
 //      its prior is estimated; one they do not stays at its nominal value,
 //      its prior uncertainty carried into the others' sigma (a consider
 //      covariance, as in Schmidt-Kalman filtering); one the data know nothing
@@ -111,12 +112,15 @@ struct HoldDecision {
   Eigen::VectorXd theta;
 };
 
-// At the nominal values with the scale factors and zero offsets fitted, at
-// run's noise.
+// At the nominal values with the scale factors and zero offsets fitted (on
+// the samples thinned to decimation_hz), at run's noise, from the
+// information of all the samples there. shared: work to share with a fit of
+// the same run (its weights' reference pass), or null.
 HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data,
                                   const ParameterLayout& layout, const HoldPolicy& policy,
                                   double epoch_s, const AngleDerivativeOptions& derivatives,
-                                  int decimation_hz = 25, int threads = 0);
+                                  int decimation_hz = 25, int threads = 0,
+                                  SharedRunWork* shared = nullptr);
 
 // The rule behind HoldPolicy::auto_hold, for any parameter vector: a pivoted
 // Cholesky of the information in prior units (information, n x n: data and
