@@ -99,6 +99,10 @@ BatchObjective::Point BatchMinimizer::Minimize(const Eigen::VectorXd& phi0,
     if (options_.fraction) options_.fraction(1.0 - std::pow(0.7, summary_.iterations));
   }
   summary_.final_cost = current_.cost;
+  // The steps formed the theta part by the free unknowns alone.
+  if (options_.full_information && current_.finite() && !current_.passes.empty()) {
+    objective_.Reweight(&current_, noise_);
+  }
   *summary = summary_;
   return current_;
 }
@@ -110,7 +114,7 @@ ThetaPart BatchMinimizer::FullUnlessNoisy() const {
 void BatchMinimizer::IterationZero(const Eigen::VectorXd& phi0) {
   // With a noise to estimate, the full reduction is formed at its maximum
   // (MaximiseNoise), not at the start noise.
-  current_ = objective_.Evaluate(phi0, noise_, true, FullUnlessNoisy());
+  current_ = objective_.Evaluate(phi0, noise_, true, FullUnlessNoisy(), &free_);
   summary_.passes += 1;
   summary_.initial_cost = current_.cost;
   for (int r : noisy_) {
@@ -119,7 +123,7 @@ void BatchMinimizer::IterationZero(const Eigen::VectorXd& phi0) {
   if (current_.finite()) {
     MaximiseNoise(&current_, &noise_, ThetaPart::kGradientAndInformation);
   } else {
-    objective_.Reweight(&current_, noise_);  // the point returned has every part
+    objective_.Reweight(&current_, noise_, ThetaPart::kGradientAndInformation, &free_);
   }
 }
 
@@ -177,7 +181,7 @@ void BatchMinimizer::MaximiseNoise(BatchObjective::Point* pt, std::vector<Eigen:
   }
   // Without a theta part, pt stays reduced at the noise before the last
   // step (within kLastNoiseStep of *noise).
-  if (theta_part != ThetaPart::kNone) objective_.Reweight(pt, *noise, theta_part);
+  if (theta_part != ThetaPart::kNone) objective_.Reweight(pt, *noise, theta_part, &free_);
 }
 
 bool BatchMinimizer::ComputeStep() {
@@ -298,7 +302,8 @@ Eigen::VectorXd BatchMinimizer::GradientAtTrialNoise(
     for (std::size_t a = 0; a < free_.size(); ++a) g0[a] = current_.gradient[free_[a]];
     return g0;
   }
-  BatchObjective::Point at = objective_.AtNoise(current_, trial_noise, ThetaPart::kGradient);
+  BatchObjective::Point at =
+      objective_.AtNoise(current_, trial_noise, ThetaPart::kGradient, &free_);
   objective_.ReweightGyro(&at, trial);
   Eigen::VectorXd g0(free_.size());
   for (std::size_t a = 0; a < free_.size(); ++a) g0[a] = at.gradient[free_[a]];
@@ -378,7 +383,7 @@ bool BatchMinimizer::TryStep() {
     const Eigen::VectorXd g0 = GradientAtTrialNoise(trial, noise);
     const Eigen::VectorXd phi_current = current_.phi;
     current_ = BatchObjective::Point{};
-    objective_.Reweight(&trial, noise);
+    objective_.Reweight(&trial, noise, ThetaPart::kGradientAndInformation, &free_);
     if (trial.finite()) {
       MeasureCurvature(trial, g0);
       const double rho = actual / predicted_;
@@ -390,11 +395,12 @@ bool BatchMinimizer::TryStep() {
       return true;
     }
     // A gradient not finite: refused after all, the current point evaluated again.
-    current_ = objective_.Evaluate(phi_current, noise_, true, ThetaPart::kGradientAndInformation);
+    current_ = objective_.Evaluate(phi_current, noise_, true, ThetaPart::kGradientAndInformation,
+                                   &free_);
     RaiseDamping(std::numeric_limits<double>::infinity());
     return false;
   }
-  objective_.Reweight(&current_, noise_);
+  objective_.Reweight(&current_, noise_, ThetaPart::kGradientAndInformation, &free_);
   RaiseDamping(trial.finite() ? -actual : std::numeric_limits<double>::infinity());
   return false;
 }

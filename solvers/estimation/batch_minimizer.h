@@ -64,6 +64,10 @@ struct MinimizerOptions {
   std::vector<bool> estimate_noise;
   std::function<void(const std::string&)> progress;
   std::function<void(double)> fraction;  // 0..1 along the iterations (estimated)
+  // The point returned with its gradient and information by every unknown
+  // (one reduction more: the steps form them by the free ones alone), its
+  // reductions' blocks kept; else by the free ones.
+  bool full_information = true;
 };
 
 struct MinimizerSummary {
@@ -81,7 +85,8 @@ class BatchMinimizer {
   BatchMinimizer(const BatchObjective& objective, std::vector<int> free, MinimizerOptions options);
 
   // From phi0 (all m unknowns; those not free stay) and each run's starting
-  // noise. Returns the final point (with the Jacobian, at the final noises).
+  // noise. Returns the final point (with the Jacobian, at the final noises;
+  // options.full_information says by which unknowns).
   BatchObjective::Point Minimize(const Eigen::VectorXd& phi0,
                                  const std::vector<Eigen::Vector3d>& noise0,
                                  MinimizerSummary* summary);

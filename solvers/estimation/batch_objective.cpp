@@ -50,7 +50,8 @@ Eigen::MatrixXd BatchObjective::MapOf(int r) const {
 
 BatchObjective::Point BatchObjective::Evaluate(const Eigen::VectorXd& phi,
                                                const std::vector<Eigen::Vector3d>& noise,
-                                               bool with_jacobian, ThetaPart theta_part) const {
+                                               bool with_jacobian, ThetaPart theta_part,
+                                               const std::vector<int>* free) const {
   Point pt;
   pt.phi = phi;
   pt.passes.reserve(runs_.size());
@@ -75,29 +76,47 @@ BatchObjective::Point BatchObjective::Evaluate(const Eigen::VectorXd& phi,
         ReduceGyroAtBestNoise(*pt.gyro_passes[r], gyro_noise_hint_[r], fitted, true, threads_);
     if (pt.gyro[r].noise_rad_s.allFinite()) gyro_noise_hint_[r] = pt.gyro[r].noise_rad_s;
   }
-  Reweight(&pt, noise, theta_part);
+  Reweight(&pt, noise, theta_part, free);
   return pt;
 }
 
+std::vector<int> BatchObjective::ColumnsOf(int r, const std::vector<int>& free) const {
+  const LinkedRun& lr = runs_[r];
+  if (lr.map.size() == 0) return free;
+  std::vector<int> cols;
+  for (int i = 0; i < lr.map.rows(); ++i) {
+    for (int j : free) {
+      if (lr.map(i, j) != 0.0) {
+        cols.push_back(i);
+        break;
+      }
+    }
+  }
+  return cols;
+}
+
 void BatchObjective::Reweight(Point* pt, const std::vector<Eigen::Vector3d>& noise,
-                              ThetaPart theta_part) const {
+                              ThetaPart theta_part, const std::vector<int>* free) const {
   pt->reductions.clear();
   for (int r = 0; r < runs(); ++r) {
+    std::vector<int> cols;
+    if (free) cols = ColumnsOf(r, *free);
     pt->reductions.push_back(Reduce(*runs_[r].problem, *pt->passes[r], *weights_[r], noise[r],
-                                    threads_, theta_part));
+                                    threads_, theta_part, free ? &cols : nullptr));
   }
   Assemble(pt);
 }
 
 BatchObjective::Point BatchObjective::AtNoise(const Point& pt,
                                               const std::vector<Eigen::Vector3d>& noise,
-                                              ThetaPart theta_part) const {
+                                              ThetaPart theta_part,
+                                              const std::vector<int>* free) const {
   Point at;
   at.phi = pt.phi;
   at.passes = pt.passes;
   at.gyro_passes = pt.gyro_passes;
   at.gyro = pt.gyro;
-  Reweight(&at, noise, theta_part);
+  Reweight(&at, noise, theta_part, free);
   return at;
 }
 

@@ -81,19 +81,24 @@ class BatchObjective {
   // One pass over every run's samples at phi, each reduced at noise[r].
   // theta_part: what the reductions form (run_evaluation.h); the pass keeps
   // its Jacobian whatever it is, for a caller that moves the noise first and
-  // reduces in full there (BatchMinimizer::MaximiseNoise).
+  // reduces in full there (BatchMinimizer::MaximiseNoise). free: the theta
+  // part by these unknowns only (the gradient and the runs' information
+  // zero in the others, no blocks kept; the gyro's part is whole), or null
+  // for all.
   Point Evaluate(const Eigen::VectorXd& phi, const std::vector<Eigen::Vector3d>& noise,
-                 bool with_jacobian,
-                 ThetaPart theta_part = ThetaPart::kGradientAndInformation) const;
+                 bool with_jacobian, ThetaPart theta_part = ThetaPart::kGradientAndInformation,
+                 const std::vector<int>* free = nullptr) const;
   // The same point at other noises (no pass over the samples), its
   // reductions forming theta_part (without the information, pt has none;
   // without the gradient, neither).
   void Reweight(Point* pt, const std::vector<Eigen::Vector3d>& noise,
-                ThetaPart theta_part = ThetaPart::kGradientAndInformation) const;
+                ThetaPart theta_part = ThetaPart::kGradientAndInformation,
+                const std::vector<int>* free = nullptr) const;
   // pt at other noises as a new point (its passes shared, its reductions
   // formed anew: pt's are not copied).
   Point AtNoise(const Point& pt, const std::vector<Eigen::Vector3d>& noise,
-                ThetaPart theta_part = ThetaPart::kGradientAndInformation) const;
+                ThetaPart theta_part = ThetaPart::kGradientAndInformation,
+                const std::vector<int>* free = nullptr) const;
   // The same point with each gyro's part at the gyro noise of `other` (not
   // at its own maximum): what a change of the gradient at fixed noise needs.
   void ReweightGyro(Point* pt, const Point& other) const;
@@ -111,6 +116,8 @@ class BatchObjective {
 
  private:
   void Assemble(Point* pt) const;
+  // Run r's parameters that the unknowns `free` move.
+  std::vector<int> ColumnsOf(int r, const std::vector<int>& free) const;
 
   std::vector<LinkedRun> runs_;
   std::vector<std::shared_ptr<const RunPass>> weights_;  // per run, at weights_phi

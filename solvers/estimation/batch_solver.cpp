@@ -326,6 +326,7 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
     MinimizerOptions mo;
     mo.max_iterations = 3;  // a point to linearise at, not an estimate
     mo.tolerance = 5e-3;
+    mo.full_information = m == 1;  // else the information is the full pass's (below)
     std::vector<int> scale_offset = {kKx, kKy, kKz, kW0x, kW0y, kW0z};
     if (objective.has_gyro(0)) {  // the gyro's too: a bias of degrees per second is common
       for (int i = kGKx; i <= kGW0z; ++i) scale_offset.push_back(layout.gyro_offset() + i);

@@ -83,7 +83,8 @@ std::shared_ptr<const RunPass> SharedRunWork::Weights(const RunProblem& p, int t
 }
 
 RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& weights,
-                    const Eigen::Vector3d& noise_mV, int threads, ThetaPart theta_part) {
+                    const Eigen::Vector3d& noise_mV, int threads, ThetaPart theta_part,
+                    const std::vector<int>* columns) {
   if (!weights.with_noise) throw std::logic_error("Reduce: the weights' pass has no noise weights");
   if (pass.with_noise) throw std::logic_error("Reduce: the weights' pass has no increments");
   const RunPass& wp = weights;
@@ -196,6 +197,27 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
   // information with the states eliminated. The gradient alone keeps no
   // Jacobian: each epoch's share is summed in order.
   const bool information = theta_part == ThetaPart::kGradientAndInformation;
+  // The columns formed (all n, or the caller's): col[c] is theta's index of
+  // column c, and k_col[i] the column of K_i (-1 when not formed).
+  std::vector<int> col;
+  if (columns) {
+    col = *columns;
+  } else {
+    col.resize(n);
+    for (int i = 0; i < n; ++i) col[i] = i;
+  }
+  const int nc = static_cast<int>(col.size());
+  const bool all_columns = nc == n;
+  std::array<int, 3> k_col = {-1, -1, -1};
+  for (int c = 0; c < nc; ++c) {
+    if (col[c] >= kKx && col[c] <= kKz) k_col[col[c] - kKx] = c;
+  }
+  auto columns_of = [&](const Eigen::MatrixXd& M) -> Eigen::MatrixXd {
+    if (all_columns) return M;
+    Eigen::MatrixXd out(M.rows(), nc);
+    for (int c = 0; c < nc; ++c) out.col(c) = M.col(col[c]);
+    return out;
+  };
   std::vector<Eigen::VectorXd> share_m, share_p;  // without the information: N^T r0, C^T r0
   if (!information) {
     share_m.resize(E);
@@ -203,7 +225,7 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
   }
   ParallelFor(E, threads, [&](std::size_t e) {
     const MeasurementStep& m = pass.measurement[e];
-    mb[e].N = -wp.LR[e] * m.H;
+    mb[e].N = -wp.LR[e] * columns_of(m.H);
     mb[e].r0 = wp.LR[e] * out.measurement_residual[e];
     if (!information) {
       share_m[e].noalias() = mb[e].N.transpose() * mb[e].r0;
@@ -213,40 +235,57 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
     const ProcessStep& s = pass.process[e];
     const Vec6& r = out.process_residual[e + 1];
     const ProcessNoise& w = *wp.process[e].noise;
-    pb[e].C = -LQ[e] * s.U;
+    pb[e].C = -LQ[e] * columns_of(s.U);
     pb[e].r0 = LQ[e] * r;
     for (int i = 0; i < 3; ++i) {
+      if (k_col[i] < 0) continue;
       // d var_i / d K_i = -2 var_i / K_i. The whitening L = R^-1 of Q = R R^T
       // moves as dL = -Phi(L dQ L^T) L, Phi the lower triangle with half the
       // diagonal (the Cholesky factor's derivative), and L r = r0.
       Mat6 X = LQ[e] * w.channel_weight[i] * LQ[e].transpose();
       X.diagonal() *= 0.5;
       const Vec6 dLr = -(X.triangularView<Eigen::Lower>() * pb[e].r0);
-      pb[e].C.col(kKx + i) += dLr * (-2.0 * var[i] / theta[kKx + i]);
+      pb[e].C.col(k_col[i]) += dLr * (-2.0 * var[i] / theta[kKx + i]);
     }
     if (!information) {
       share_p[e].noalias() = pb[e].C.transpose() * pb[e].r0;
       pb[e].C.resize(6, 0);
     }
   });
-  if (information) {
-    out.information =
-        ThetaInformationBySchur(pb, mb, Eigen::MatrixXd::Zero(0, n), &out.information_scale,
-                                threads);
-  }
-  out.gradient = Eigen::VectorXd::Zero(n);
+  Eigen::VectorXd gradient = Eigen::VectorXd::Zero(nc);
   for (std::size_t e = 0; e < E; ++e) {
     if (information) {
-      out.gradient.noalias() += mb[e].N.transpose() * mb[e].r0;
-      if (e + 1 < E) out.gradient.noalias() += pb[e].C.transpose() * pb[e].r0;
+      gradient.noalias() += mb[e].N.transpose() * mb[e].r0;
+      if (e + 1 < E) gradient.noalias() += pb[e].C.transpose() * pb[e].r0;
     } else {
-      out.gradient += share_m[e];
-      if (e + 1 < E) out.gradient += share_p[e];
+      gradient += share_m[e];
+      if (e + 1 < E) gradient += share_p[e];
     }
   }
+  if (all_columns) {
+    out.gradient = std::move(gradient);
+  } else {
+    out.gradient = Eigen::VectorXd::Zero(n);
+    for (int c = 0; c < nc; ++c) out.gradient[col[c]] = gradient[c];
+  }
   if (!information) return out;
-  out.process_blocks = std::move(pb);
-  out.measurement_blocks = std::move(mb);
+  Eigen::VectorXd scale;
+  const Eigen::MatrixXd info =
+      ThetaInformationBySchur(pb, mb, Eigen::MatrixXd::Zero(0, nc), &scale, threads);
+  if (all_columns) {
+    out.information = info;
+    out.information_scale = scale;
+    out.process_blocks = std::move(pb);
+    out.measurement_blocks = std::move(mb);
+    return out;
+  }
+  // Over the columns formed; zero elsewhere, and no blocks kept.
+  out.information = Eigen::MatrixXd::Zero(n, n);
+  out.information_scale = Eigen::VectorXd::Zero(n);
+  for (int a = 0; a < nc; ++a) {
+    out.information_scale[col[a]] = scale[a];
+    for (int b = 0; b < nc; ++b) out.information(col[a], col[b]) = info(a, b);
+  }
   return out;
 }
 

@@ -128,9 +128,13 @@ enum class ThetaPart { kNone, kGradient, kGradientAndInformation };
 // sensitive axes in L, the angle noise through B2) whitens the residuals
 // (above). The scale factors' part of the process weight is always pass's
 // theta. The theta part needs the pass's Jacobian.
+// columns: the theta part by these parameters only (indices into theta; the
+// gradient and information are zero in the others, and no blocks are kept),
+// or null for all of them.
 RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& weights,
                     const Eigen::Vector3d& noise_mV, int threads,
-                    ThetaPart theta_part = ThetaPart::kGradientAndInformation);
+                    ThetaPart theta_part = ThetaPart::kGradientAndInformation,
+                    const std::vector<int>* columns = nullptr);
 
 // The reading noise that maximises the (restricted) likelihood at the
 // reduction's theta, one step of the variance-component iteration from the
