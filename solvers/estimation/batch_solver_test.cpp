@@ -227,6 +227,43 @@ TEST(HoldDecision, IsTheInformationOfAllTheSamples) {
   }
 }
 
+// The minimiser's steps reduce by the free parameters alone: the gradient
+// and the information with the states eliminated are the sub-vector and the
+// sub-matrix of the whole reduction's (the elimination acts on each column
+// alone), zero elsewhere; the cost and the noise's parts do not change.
+TEST(RunReduction, BySomeColumnsIsTheWholeOnesPart) {
+  const Scenario s = PaperScenario(50.0, 30.0, 2.0, 15.0, 6);
+  const RunData data = Simulate(s);
+  const RunProblem p = BuildRunProblem(s.run, data, ParameterLayout(), 0.5, {});
+  Eigen::VectorXd at = p.prior.mean;
+  at.head<6>() = s.truth.head<6>();
+  const RunPass pass = EvaluatePass(p, at, true, 1);
+  const RunPass weights = WeightsPass(p, p.prior.mean, 1);
+  const RunReduction whole = Reduce(p, pass, weights, p.noise_mV, 1);
+  const std::vector<int> cols = {kKy, kW0x, kAlphaX, kKzz, kDz2};  // K_y's whitening term too
+  for (ThetaPart part : {ThetaPart::kGradient, ThetaPart::kGradientAndInformation}) {
+    const RunReduction some = Reduce(p, pass, weights, p.noise_mV, 1, part, &cols);
+    EXPECT_EQ(some.cost, whole.cost);
+    EXPECT_EQ(some.channel_quadratic, whole.channel_quadratic);
+    ASSERT_EQ(some.gradient.size(), p.n);
+    for (int i = 0; i < p.n; ++i) {
+      const bool in = std::find(cols.begin(), cols.end(), i) != cols.end();
+      EXPECT_NEAR(some.gradient[i], in ? whole.gradient[i] : 0.0,
+                  1e-9 * whole.gradient.cwiseAbs().maxCoeff())
+          << i;
+      if (part != ThetaPart::kGradientAndInformation) continue;
+      ASSERT_EQ(some.information.rows(), p.n);
+      EXPECT_TRUE(some.process_blocks.empty());
+      for (int j = 0; j < p.n; ++j) {
+        const bool both = in && std::find(cols.begin(), cols.end(), j) != cols.end();
+        EXPECT_NEAR(some.information(i, j), both ? whole.information(i, j) : 0.0,
+                    1e-9 * std::sqrt(whole.information(i, i) * whole.information(j, j)))
+            << i << " " << j;
+      }
+    }
+  }
+}
+
 // A structural null's information is what the states' elimination leaves of
 // sums 1e13 times larger: rounding, above or below null_information by the
 // order of the sums (real slow roll run: dy2 considered or held as the
