@@ -281,6 +281,38 @@ std::vector<int> SupportedByInformation(const Eigen::MatrixXd& information,
   return kept;
 }
 
+// The decision's point: the nominal values with the scale factors and zero
+// offsets (the gyro's too) fitted, three Levenberg-Marquardt steps on the
+// samples thinned by m; with m = 1 *at is that point with its information by
+// every unknown. The thinned run is gone when it returns (the decision's
+// full pass comes after it: the 40-min 1-kHz run's peak memory).
+Eigen::VectorXd ScaleAndOffsetPoint(const RunDescription& run, const RunData& data,
+                                    const ParameterLayout& layout, double epoch_s,
+                                    const AngleDerivativeOptions& derivatives, std::size_t m,
+                                    int threads, BatchObjective::Point* at) {
+  const RunData thin = Decimate(data, m);
+  const RunProblem pt = BuildRunProblem(run, thin, layout, epoch_s, derivatives);
+  Eigen::MatrixXd A;
+  Eigen::VectorXd b;
+  PriorAndConstraintRows(pt, &A, &b);
+  BatchObjective objective({LinkedRun{&pt, {}, {}}}, A, b, pt.prior.mean, threads);
+  objective.HoldGyroNoise();
+  MinimizerOptions mo;
+  mo.max_iterations = 3;  // a point to linearise at, not an estimate
+  mo.tolerance = 5e-3;
+  mo.full_information = m == 1;  // else the information is the full pass's
+  std::vector<int> scale_offset = {kKx, kKy, kKz, kW0x, kW0y, kW0z};
+  if (objective.has_gyro(0)) {  // the gyro's too: a bias of degrees per second is common
+    for (int i = kGKx; i <= kGW0z; ++i) scale_offset.push_back(layout.gyro_offset() + i);
+  }
+  BatchMinimizer scale_and_offset(objective, scale_offset, mo);
+  MinimizerSummary summary;
+  BatchObjective::Point point = scale_and_offset.Minimize(pt.prior.mean, {pt.noise_mV}, &summary);
+  const Eigen::VectorXd theta = point.phi;
+  if (m == 1) *at = std::move(point);
+  return theta;
+}
+
 HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data,
                                   const ParameterLayout& layout, const HoldPolicy& o,
                                   double epoch_s, const AngleDerivativeOptions& derivatives,
@@ -316,32 +348,18 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
     // pitch run at 31 Hz: Ky's 0.079 prior units left, 0.0039 at 100 Hz;
     // alpha_x's 6.2e8, 8.1e8 at 100 Hz).
     const std::size_t m = ThinningFactor(data, decimation_hz);
-    const RunData thin = Decimate(data, m);
-    const RunProblem pt = BuildRunProblem(run, thin, layout, epoch_s, derivatives);
-    Eigen::MatrixXd A;
-    Eigen::VectorXd b;
-    PriorAndConstraintRows(pt, &A, &b);
-    BatchObjective objective({LinkedRun{&pt, {}, {}}}, A, b, pt.prior.mean, threads);
-    objective.HoldGyroNoise();
-    MinimizerOptions mo;
-    mo.max_iterations = 3;  // a point to linearise at, not an estimate
-    mo.tolerance = 5e-3;
-    mo.full_information = m == 1;  // else the information is the full pass's (below)
-    std::vector<int> scale_offset = {kKx, kKy, kKz, kW0x, kW0y, kW0z};
-    if (objective.has_gyro(0)) {  // the gyro's too: a bias of degrees per second is common
-      for (int i = kGKx; i <= kGW0z; ++i) scale_offset.push_back(layout.gyro_offset() + i);
-    }
-    BatchMinimizer scale_and_offset(objective, scale_offset, mo);
-    MinimizerSummary summary;
-    BatchObjective::Point at = scale_and_offset.Minimize(pt.prior.mean, {pt.noise_mV}, &summary);
-    d.theta = at.phi;
+    BatchObjective::Point at;
+    d.theta = ScaleAndOffsetPoint(run, data, layout, epoch_s, derivatives, m, threads, &at);
+    const RunProblem pt = BuildRunProblem(run, data, layout, epoch_s, derivatives, shared);
     if (m > 1) {
-      const RunProblem full = BuildRunProblem(run, data, layout, epoch_s, derivatives, shared);
+      Eigen::MatrixXd A;
+      Eigen::VectorXd b;
+      PriorAndConstraintRows(pt, &A, &b);
       std::vector<std::shared_ptr<const RunPass>> weights;
-      if (shared) weights.push_back(shared->Weights(full, threads));
-      BatchObjective all({LinkedRun{&full, {}, {}}}, A, b, full.prior.mean, threads, weights);
+      if (shared) weights.push_back(shared->Weights(pt, threads));
+      BatchObjective all({LinkedRun{&pt, {}, {}}}, A, b, pt.prior.mean, threads, weights);
       all.HoldGyroNoise();
-      at = all.Evaluate(d.theta, {full.noise_mV}, true);
+      at = all.Evaluate(d.theta, {pt.noise_mV}, true);
     }
     const Eigen::MatrixXd info_si = at.data_information + ConstraintInformation(pt);
     const Eigen::VectorXd& s = pt.prior.sigma;
