@@ -585,9 +585,11 @@ BatchResult Loop::RefitCandidate(const CandidateInformation& c, CandidateTest* t
   // round's noise still holds the misfit of the effect being tested:
   // real medium roll run, chi2/dof 0.05 after the 8.6-ms latency and the
   // drift at the first fit's noise); its likelihood ratio is taken at
-  // the round's noise, the same for every candidate (cost_at_noise).
+  // the round's noise, the same for every candidate (cost_at_noise). The
+  // estimate starts at the round's noise (StartNoise), near its maximum.
   BatchOptions refit_opt = fit_opt_;
   refit_opt.cost_at_noise = fit_.noise_used_mV;
+  refit_opt.noise_override = fit_.noise_used_mV;
   BatchResult r = FitLayout(run_, data_, aug, start, decision, refit_opt, true,
                             fit_opt_.estimate_noise ? nullptr : &fit_.noise_used_mV);
   TestRefit(c, aug, r, t);

@@ -185,7 +185,9 @@ struct BatchOptions {
   // likelihood; run.yaml's noise_mV is the start). Off: the noise stays as
   // given (declared, or noise_override).
   bool estimate_noise = true;
-  Eigen::Vector3d noise_override = Eigen::Vector3d::Zero();  // > 0: the noise to use [reading units]
+  // > 0: the noise to use [reading units], or with estimate_noise where its
+  // estimate starts.
+  Eigen::Vector3d noise_override = Eigen::Vector3d::Zero();
   // > 0: also the cost at the minimum with the residuals weighted by this
   // noise (BatchResult::cost_at_noise; a reduction, no pass over the
   // samples): the loop's likelihood ratio at the round's noise, from a
