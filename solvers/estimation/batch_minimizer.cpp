@@ -99,8 +99,13 @@ BatchObjective::Point BatchMinimizer::Minimize(const Eigen::VectorXd& phi0,
     if (options_.fraction) options_.fraction(1.0 - std::pow(0.7, summary_.iterations));
   }
   summary_.final_cost = current_.cost;
-  // The steps formed the theta part by the free unknowns alone.
-  if (options_.full_information && current_.finite() && !current_.passes.empty()) {
+  // The steps formed the theta part by the free unknowns alone (a reduction
+  // by every column keeps its blocks: then it is whole already).
+  bool whole = true;
+  for (const RunReduction& red : current_.reductions) {
+    whole = whole && !red.measurement_blocks.empty();
+  }
+  if (options_.full_information && !whole && current_.finite() && !current_.passes.empty()) {
     objective_.Reweight(&current_, noise_);
   }
   *summary = summary_;

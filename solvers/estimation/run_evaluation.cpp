@@ -207,7 +207,8 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
     for (int i = 0; i < n; ++i) col[i] = i;
   }
   const int nc = static_cast<int>(col.size());
-  const bool all_columns = nc == n;
+  bool all_columns = nc == n;  // every column, in theta's order
+  for (int c = 0; c < nc && all_columns; ++c) all_columns = col[c] == c;
   std::array<int, 3> k_col = {-1, -1, -1};
   for (int c = 0; c < nc; ++c) {
     if (col[c] >= kKx && col[c] <= kKz) k_col[col[c] - kKx] = c;
@@ -270,11 +271,11 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
   }
   if (!information) return out;
   Eigen::VectorXd scale;
-  const Eigen::MatrixXd info =
+  Eigen::MatrixXd info =
       ThetaInformationBySchur(pb, mb, Eigen::MatrixXd::Zero(0, nc), &scale, threads);
   if (all_columns) {
-    out.information = info;
-    out.information_scale = scale;
+    out.information = std::move(info);
+    out.information_scale = std::move(scale);
     out.process_blocks = std::move(pb);
     out.measurement_blocks = std::move(mb);
     return out;
