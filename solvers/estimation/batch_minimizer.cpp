@@ -20,6 +20,11 @@ constexpr double kMaxNoiseStep = 2.0;     // in log sigma, one Newton step
 // No reading is better than this share of its nominal scale factor (1 ug):
 // keeps a noise-free run's estimated noise finite.
 constexpr double kNoiseFloorOfScale = 1e-6;
+// The model of -log L profiled over the noise holds the noise's response to
+// a step to second order in log sigma; beyond this change of log sigma
+// (10 %) the exponential has bent away from it, and the step is taken at
+// fixed noise instead (NoiseCoupling).
+constexpr double kMaxCoupledNoiseStep = 0.1;
 // The damping beyond which no step is sought.
 constexpr double kMaxDamping = 1e10;
 constexpr const char* kNoDescent =
@@ -204,7 +209,15 @@ bool BatchMinimizer::ComputeStep() {
   Eigen::VectorXd g;
   Eigen::MatrixXd H;
   Model(current_, &g, &H);
-  const Eigen::LDLT<Eigen::MatrixXd> newton(H);
+  FormCoupling(current_);
+  // The decrement of -log L profiled over the noise (Gauss-Newton's
+  // Hessian less the noise's coupling), or Gauss-Newton's where that is not
+  // positive definite (far from the minimum).
+  Eigen::LDLT<Eigen::MatrixXd> newton(H - Coupling());
+  if (newton.info() != Eigen::Success || !newton.isPositive() ||
+      !(newton.vectorD().minCoeff() > 0.0)) {
+    newton.compute(H);
+  }
   summary_.newton_decrement = 0.5 * g.dot(newton.solve(g));
   if (!std::isfinite(summary_.newton_decrement)) {
     summary_.termination = "the information matrix is singular";
@@ -221,8 +234,21 @@ bool BatchMinimizer::ComputeStep() {
     summary_.termination = why;
     return false;
   }
-  // The model of -log L: the Hessian above plus the curvature the last step
-  // measured (MeasureCurvature), damped until positive definite.
+  // The model of -log L profiled over the noise: the Hessian above plus the
+  // curvature the last step measured (MeasureCurvature), less the noise's
+  // coupling, damped until positive definite. Where the step would move the
+  // noise beyond kMaxCoupledNoiseStep, the step at fixed noise.
+  const double mu = mu_, nu = nu_;
+  couple_ = !coupling_.empty();
+  if (couple_ && DampedModelStep(g, H) && NoiseStepOf(step_) <= kMaxCoupledNoiseStep) return true;
+  couple_ = false;
+  mu_ = mu;
+  nu_ = nu;
+  summary_.newton_decrement = 0.5 * g.dot(H.ldlt().solve(g));
+  return DampedModelStep(g, H);
+}
+
+bool BatchMinimizer::DampedModelStep(const Eigen::VectorXd& g, const Eigen::MatrixXd& H) {
   Eigen::MatrixXd B;
   Eigen::VectorXd scale;
   DampingModel(H, &B, &scale);
@@ -231,7 +257,7 @@ bool BatchMinimizer::ComputeStep() {
     step_ = DampedStep(B, g, scale, mu_, &ok);
     if (ok) {
       predicted_ = -(g.dot(step_) + 0.5 * step_.dot(B * step_));
-      if (predicted_ > 0.0) break;
+      if (predicted_ > 0.0) return true;
     }
     mu_ = std::max(mu_ * nu_, 1e-4);
     nu_ *= 2.0;
@@ -240,14 +266,55 @@ bool BatchMinimizer::ComputeStep() {
       return false;
     }
   }
-  return true;
 }
 
 void BatchMinimizer::DampingModel(const Eigen::MatrixXd& H, Eigen::MatrixXd* B,
                                   Eigen::VectorXd* scale) const {
   *B = H;
   if (secant_.rows() == H.rows()) *B += secant_;
+  if (couple_) *B -= Coupling();
   *scale = H.diagonal().cwiseAbs().cwiseMax(1e-300);
+}
+
+void BatchMinimizer::FormCoupling(const BatchObjective::Point& pt) {
+  const int nf = static_cast<int>(free_.size());
+  coupling_.clear();
+  for (std::size_t k = 0; k < noisy_.size(); ++k) {
+    const int r = noisy_[k];
+    if (r >= static_cast<int>(pt.reductions.size())) continue;
+    const RunReduction& red = pt.reductions[r];
+    if (red.gradient_by_log_noise.rows() != objective_.run(r).problem->n) continue;
+    // At the noise's maximum H_ss is positive definite; elsewhere (a noise
+    // held at its floor) the coupling is left out.
+    const Eigen::Matrix3d H_ss = NoiseHessian(red, rho_[k]);
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(H_ss);
+    if (ldlt.info() != Eigen::Success || !ldlt.isPositive() ||
+        !(ldlt.vectorD().minCoeff() > 0.0)) {
+      continue;
+    }
+    const Eigen::MatrixXd G_phi = objective_.MapOf(r).transpose() * red.gradient_by_log_noise;
+    NoiseCoupling c;
+    c.G.resize(nf, 3);
+    for (int a = 0; a < nf; ++a) c.G.row(a) = G_phi.row(free_[a]);
+    c.H_ss = H_ss;
+    coupling_.push_back(std::move(c));
+  }
+}
+
+Eigen::MatrixXd BatchMinimizer::Coupling() const {
+  const int nf = static_cast<int>(free_.size());
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(nf, nf);
+  for (const NoiseCoupling& c : coupling_) out.noalias() += c.G * c.H_ss.ldlt().solve(c.G.transpose());
+  return out;
+}
+
+double BatchMinimizer::NoiseStepOf(const Eigen::VectorXd& d) const {
+  double largest = 0.0;
+  for (const NoiseCoupling& c : coupling_) {
+    const Eigen::Vector3d ds = c.H_ss.ldlt().solve(c.G.transpose() * d);
+    largest = std::max(largest, ds.cwiseAbs().maxCoeff());
+  }
+  return largest;
 }
 
 Eigen::VectorXd BatchMinimizer::DampedStep(const Eigen::MatrixXd& B, const Eigen::VectorXd& g,

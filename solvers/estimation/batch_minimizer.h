@@ -109,8 +109,27 @@ class BatchMinimizer {
   // matrix is not positive definite.
   Eigen::VectorXd DampedStep(const Eigen::MatrixXd& B, const Eigen::VectorXd& g,
                              const Eigen::VectorXd& scale, double mu, bool* ok) const;
-  // The model's matrix B = H + S and the damping's scale |diag H| at the current point.
+  // The model's matrix B = H + S (less Coupling() with couple_) and the
+  // damping's scale |diag H| at the current point.
   void DampingModel(const Eigen::MatrixXd& H, Eigen::MatrixXd* B, Eigen::VectorXd* scale) const;
+  // step_ and predicted_ from the model at the current point (gradient g,
+  // Gauss-Newton's H), the damping raised until it is positive definite and
+  // predicts a decrease; false (termination said) when none does.
+  bool DampedModelStep(const Eigen::VectorXd& g, const Eigen::MatrixXd& H);
+  // Profiling a run's estimated noise couples it to theta: with G = d
+  // gradient / d log sigma (RunReduction::gradient_by_log_noise, in the free
+  // unknowns) and H_ss its noise's Hessian (NoiseHessian), -log L's Hessian
+  // loses G H_ss^-1 G^T and a step d moves log sigma by -H_ss^-1 G^T d.
+  struct NoiseCoupling {
+    Eigen::MatrixXd G;  // free unknowns x 3
+    Eigen::Matrix3d H_ss;
+  };
+  // coupling_ at pt: the runs whose noise is estimated and at a maximum.
+  void FormCoupling(const BatchObjective::Point& pt);
+  // sum over coupling_ of G H_ss^-1 G^T (zero without an estimated noise).
+  Eigen::MatrixXd Coupling() const;
+  // The largest change of log sigma the step d predicts.
+  double NoiseStepOf(const Eigen::VectorXd& d) const;
   // The current point's gradient in the free unknowns at the trial's noise
   // (the current point reweighted: a reduction, no pass; none when the noise
   // did not move), before the trial's theta part is formed (one point's
@@ -138,6 +157,8 @@ class BatchMinimizer {
   std::vector<int> noisy_;      // the runs whose noise is estimated
   std::vector<double> rho_;     // their restricted-likelihood share (run_evaluation.h)
   MinimizerSummary summary_;
+  std::vector<NoiseCoupling> coupling_;  // at the current point
+  bool couple_ = false;                  // the step's model is profiled over the noise
   std::vector<Eigen::Vector3d> noise_;
   BatchObjective::Point current_;
   Eigen::VectorXd step_;       // over the free unknowns

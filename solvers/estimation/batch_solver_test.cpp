@@ -264,6 +264,69 @@ TEST(RunReduction, BySomeColumnsIsTheWholeOnesPart) {
   }
 }
 
+// The coupling of theta and the noise: d gradient / d log sigma_i, the
+// states solved for again at each noise, against central differences of the
+// gradient at noises exp(+-h) times the point's, at a point off the minimum
+// (the nominal values, the residual far from white) where it is large.
+TEST(RunReduction, GradientByLogNoiseIsTheGradientsDerivative) {
+  const Scenario s = PaperScenario(50.0, 30.0, 2.0, 15.0, 6);
+  const RunData data = Simulate(s);
+  const RunProblem p = BuildRunProblem(s.run, data, ParameterLayout(), 0.5, {});
+  Eigen::VectorXd at = p.prior.mean;
+  at.head<3>() = s.truth.head<3>();
+  const RunPass pass = EvaluatePass(p, at, true, 1);
+  const RunPass weights = WeightsPass(p, p.prior.mean, 1);
+  const Eigen::Vector3d noise(1.3, 0.8, 1.1);
+  const RunReduction red = Reduce(p, pass, weights, noise, 1);
+  ASSERT_EQ(red.gradient_by_log_noise.rows(), p.n);
+  ASSERT_EQ(red.gradient_by_log_noise.cols(), 3);
+  const double h = 1e-4;
+  for (int i = 0; i < 3; ++i) {
+    Eigen::Vector3d up = noise, down = noise;
+    up[i] *= std::exp(h);
+    down[i] *= std::exp(-h);
+    const Eigen::VectorXd numeric =
+        (Reduce(p, pass, weights, up, 1, ThetaPart::kGradient).gradient -
+         Reduce(p, pass, weights, down, 1, ThetaPart::kGradient).gradient) /
+        (2.0 * h);
+    const double big = numeric.cwiseAbs().maxCoeff();
+    ASSERT_GT(big, 0.0);
+    for (int j = 0; j < p.n; ++j) {
+      EXPECT_NEAR(red.gradient_by_log_noise(j, i), numeric[j], 1e-5 * big) << i << " " << j;
+    }
+  }
+}
+
+// The noise's Hessian (NoiseHessian, from a reduction with the information)
+// is that of -log L with the states solved for at each noise: central
+// differences of its gradient rho N - q, each side reduced afresh.
+TEST(RunReduction, NoiseHessianIsTheNoiseGradientsDerivative) {
+  const Scenario s = PaperScenario(50.0, 30.0, 2.0, 15.0, 6);
+  const RunData data = Simulate(s);
+  const RunProblem p = BuildRunProblem(s.run, data, ParameterLayout(), 0.5, {});
+  Eigen::VectorXd at = p.prior.mean;
+  at.head<3>() = s.truth.head<3>();
+  const RunPass pass = EvaluatePass(p, at, true, 1);
+  const RunPass weights = WeightsPass(p, p.prior.mean, 1);
+  const Eigen::Vector3d noise(1.3, 0.8, 1.1);
+  const double rho = 0.9;
+  const Eigen::Matrix3d H = NoiseHessian(Reduce(p, pass, weights, noise, 1), rho);
+  auto gradient = [&](const Eigen::Vector3d& n) {
+    const RunReduction r = Reduce(p, pass, weights, n, 1, ThetaPart::kNone);
+    return Eigen::Vector3d(rho * r.channel_trace - r.channel_quadratic);
+  };
+  const double h = 1e-4;
+  for (int j = 0; j < 3; ++j) {
+    Eigen::Vector3d up = noise, down = noise;
+    up[j] *= std::exp(h);
+    down[j] *= std::exp(-h);
+    const Eigen::Vector3d numeric = (gradient(up) - gradient(down)) / (2.0 * h);
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_NEAR(H(i, j), numeric[i], 1e-5 * H.diagonal().cwiseAbs().maxCoeff()) << i << " " << j;
+    }
+  }
+}
+
 // A structural null's information is what the states' elimination leaves of
 // sums 1e13 times larger: rounding, above or below null_information by the
 // order of the sums (real slow roll run: dy2 considered or held as the

@@ -150,6 +150,10 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
     Eigen::Matrix3d qq, tt;
   };
   std::vector<Parts> comp(E - 1);
+  // The noise's pseudo-residuals p_i (RunReduction::gradient_by_log_noise),
+  // with the information only.
+  const bool information = pass.with_jacobian && theta_part == ThetaPart::kGradientAndInformation;
+  std::vector<std::array<Vec6, 3>> pseudo(information ? E - 1 : 0);
   ParallelFor(E - 1, threads, [&](std::size_t e) {
     const ProcessNoise& qn = *wp.process[e].noise;
     // Q's whitening from step 1: Q^-1 v = LQ^T LQ v.
@@ -171,6 +175,7 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
       QinvQiw[i] = solve_q(QiQinv_r[i]);
       c.q[i] = w.dot(QiQinv_r[i]);
       c.N[i] = A[i].trace();
+      if (information) pseudo[e][i] = -2.0 * (L * QiQinv_r[i]);
     }
     // Both symmetric: q_ij = (Q_i w)^T Q^-1 (Q_j w), tr(A_i A_j) = sum A_i o A_j^T.
     for (int i = 0; i < 3; ++i) {
@@ -196,7 +201,6 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
   // gradient J_theta^T r (J_x^T r = 0 at the optimal states) and the
   // information with the states eliminated. The gradient alone keeps no
   // Jacobian: each epoch's share is summed in order.
-  const bool information = theta_part == ThetaPart::kGradientAndInformation;
   // The columns formed (all n, or the caller's): col[c] is theta's index of
   // column c, and k_col[i] the column of K_i (-1 when not formed).
   std::vector<int> col;
@@ -220,6 +224,8 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
     return out;
   };
   std::vector<Eigen::VectorXd> share_m, share_p;  // without the information: N^T r0, C^T r0
+  // With the information: each K_i column's part from the weights' derivative.
+  std::vector<std::array<Vec6, 3>> k_weight(information ? E - 1 : 0);
   if (!information) {
     share_m.resize(E);
     share_p.resize(E);
@@ -247,6 +253,7 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
       X.diagonal() *= 0.5;
       const Vec6 dLr = -(X.triangularView<Eigen::Lower>() * pb[e].r0);
       pb[e].C.col(k_col[i]) += dLr * (-2.0 * var[i] / theta[kKx + i]);
+      if (information) k_weight[e][i] = dLr * (-2.0 * var[i] / theta[kKx + i]);
     }
     if (!information) {
       share_p[e].noalias() = pb[e].C.transpose() * pb[e].r0;
@@ -270,9 +277,48 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
     for (int c = 0; c < nc; ++c) out.gradient[col[c]] = gradient[c];
   }
   if (!information) return out;
+  // The noise's coupling, eliminated with the information: the probe's
+  // columns are the pseudo-residuals p_i and the K_i columns' weights' part
+  // (whose derivative by the noise is added exactly below).
+  SchurProbe probe;
+  probe.columns.resize(E - 1);
+  Eigen::Matrix3d pp = Eigen::Matrix3d::Zero();
+  for (std::size_t e = 0; e + 1 < E; ++e) {
+    Eigen::Matrix<double, 6, Eigen::Dynamic>& c = probe.columns[e];
+    c.setZero(6, 6);
+    for (int i = 0; i < 3; ++i) {
+      c.col(i) = pseudo[e][i];
+      if (k_col[i] >= 0) c.col(3 + i) = k_weight[e][i];
+    }
+    pp.noalias() += c.leftCols<3>().transpose() * c.leftCols<3>();
+  }
   Eigen::VectorXd scale;
-  Eigen::MatrixXd info =
-      ThetaInformationBySchur(pb, mb, Eigen::MatrixXd::Zero(0, nc), &scale, threads);
+  Eigen::MatrixXd info = ThetaInformationBySchur(pb, mb, Eigen::MatrixXd::Zero(0, nc), &scale,
+                                                 threads, &probe);
+  if (E < 2) {  // no interval: nothing couples
+    probe.self = Eigen::MatrixXd::Zero(6, 6);
+    probe.cross = Eigen::MatrixXd::Zero(nc, 6);
+  }
+  out.channel_state_coupling = pp - probe.self.topLeftCorner<3, 3>();
+  Eigen::MatrixXd by_noise = probe.cross.leftCols<3>();
+  for (int i = 0; i < 3; ++i) {
+    if (k_col[i] >= 0) by_noise.row(k_col[i]) -= probe.self.block<1, 3>(3 + i, 0);
+  }
+  // The weights' part of d cost / d K_i is q_i / K_i (d var_i / d K_i =
+  // -2 var_i / K_i); by log sigma_j, the states solved for again, it moves
+  // by (2 q_i d_ij - 4 qq_ij + p_i^T P_x p_j) / K_i (the noise's Hessian's
+  // terms, NoiseHessian).
+  for (int i = 0; i < 3; ++i) {
+    if (k_col[i] < 0) continue;
+    for (int j = 0; j < 3; ++j) {
+      by_noise(k_col[i], j) += ((i == j ? 2.0 * out.channel_quadratic[i] : 0.0) -
+                                4.0 * out.channel_cross_quadratic(i, j) +
+                                out.channel_state_coupling(i, j)) /
+                               theta[kKx + i];
+    }
+  }
+  out.gradient_by_log_noise = Eigen::MatrixXd::Zero(n, 3);
+  for (int c = 0; c < nc; ++c) out.gradient_by_log_noise.row(col[c]) = by_noise.row(c);
   if (all_columns) {
     out.information = std::move(info);
     out.information_scale = std::move(scale);
@@ -291,7 +337,8 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
 }
 
 Eigen::Matrix3d NoiseHessian(const RunReduction& r, double rho) {
-  Eigen::Matrix3d H = 4.0 * r.channel_cross_quadratic - 2.0 * rho * r.channel_cross_trace;
+  Eigen::Matrix3d H = 4.0 * r.channel_cross_quadratic - 2.0 * rho * r.channel_cross_trace -
+                      r.channel_state_coupling;
   for (int i = 0; i < 3; ++i) H(i, i) += -2.0 * r.channel_quadratic[i] + 2.0 * rho * r.channel_trace[i];
   return 0.5 * (H + H.transpose());
 }

@@ -107,9 +107,24 @@ struct RunReduction {
   double log_det = 0.0;
   // sum_e (Q_i w)^T Q^-1 (Q_j w) (w = Q^-1 r) and sum_e tr(A_i A_j) (A_i =
   // Q^-1 Q_i at the weights' reference): with them the noise's Hessian,
-  // d2(-log L)/ds_i ds_j = -2 q_i d_ij + 4 qq_ij + rho (2 N_i d_ij - 2 tt_ij).
+  // d2(-log L)/ds_i ds_j = -2 q_i d_ij + 4 qq_ij + rho (2 N_i d_ij - 2 tt_ij)
+  // at fixed states, less channel_state_coupling with the states solved for
+  // (with the information: NoiseHessian).
   Eigen::Matrix3d channel_cross_quadratic = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d channel_cross_trace = Eigen::Matrix3d::Zero();
+  // With the information: the states' response to the noise, sum p_i^T P_x
+  // p_j (below), which the noise's Hessian loses when the states are solved
+  // for again at each noise (zero without: the noise's Newton steps at
+  // fixed theta, MaximiseNoise, take the Hessian at fixed states, on the
+  // real runs within 1e-5 of it).
+  Eigen::Matrix3d channel_state_coupling = Eigen::Matrix3d::Zero();
+  // With the information: d gradient / d log sigma_i (n x 3), the states
+  // solved for again at each noise: the coupling of theta and the noise in
+  // -log L's Hessian. With Q_i = dQ/ds_i = 2 var_i W_i it is
+  // J~_theta^T (I - P_x) p_i, p_i = -L Q_i Q^-1 r per interval (L the
+  // process whitening, L^T L = Q^-1; P_x the projection on the states'
+  // columns): the pseudo-residual's gradient with the states eliminated.
+  Eigen::MatrixXd gradient_by_log_noise;
   std::vector<Vec6> states;  // optimal (V, S) per epoch
   // Raw residuals at the optimal states: process (index e: the interval
   // ending at epoch e, zero at e = 0) and measurement (index e).

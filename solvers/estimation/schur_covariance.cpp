@@ -21,7 +21,8 @@ Eigen::MatrixXd SolveColumns(const Decomposition& d, const Eigen::MatrixXd& G) {
 Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process,
                                         const std::vector<MeasurementBlock>& measurement,
                                         const Eigen::MatrixXd& theta_rows,
-                                        Eigen::VectorXd* scale, int threads) {
+                                        Eigen::VectorXd* scale, int threads,
+                                        SchurProbe* probe) {
   using Mat6 = Eigen::Matrix<double, 6, 6>;
   const std::size_t E = measurement.size();
   const Eigen::Index n = measurement[0].N.cols();
@@ -40,7 +41,15 @@ Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process
   Eigen::MatrixXd data_sum = Eigen::MatrixXd::Zero(n, n);
   Eigen::MatrixXd eliminated_sum = Eigen::MatrixXd::Zero(n, n);
   Eigen::VectorXd data_scale = Eigen::VectorXd::Zero(n);
+  const Eigen::Index k = probe && !process.empty() ? probe->columns[0].cols() : 0;
+  Eigen::MatrixXd cross_data = Eigen::MatrixXd::Zero(n, k), self_data = Eigen::MatrixXd::Zero(k, k);
+  Eigen::MatrixXd cross_eliminated = Eigen::MatrixXd::Zero(n, k);
+  Eigen::MatrixXd self_eliminated = Eigen::MatrixXd::Zero(k, k);
   auto data_part = [&]() {
+    for (std::size_t e = 0; k > 0 && e + 1 < E; ++e) {
+      cross_data.noalias() += process[e].C.transpose() * probe->columns[e];
+      self_data.noalias() += probe->columns[e].transpose() * probe->columns[e];
+    }
     Eigen::MatrixXd pos(12 * kChunk, n);
     std::size_t rows = 0;  // epochs in the chunk
     for (std::size_t e = 0; e < E; ++e) {
@@ -67,11 +76,20 @@ Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process
       S += process[0].A.transpose() * process[0].A;
       G.noalias() += process[0].A.transpose() * process[0].C;
     }
+    // The probe's columns ride along: their G and W.
+    Eigen::MatrixXd G_p = Eigen::MatrixXd::Zero(6, k), W_p(6, k), Gn_p(6, k);
+    if (k > 0) G_p.noalias() = process[0].A.transpose() * probe->columns[0];
     Eigen::MatrixXd W(6, n), Gn(6, n);
     for (std::size_t e = 0; e < E; ++e) {
       const Eigen::LLT<Mat6> llt(S);
       W = G;
       llt.matrixL().solveInPlace(W);
+      if (k > 0) {
+        W_p = G_p;
+        llt.matrixL().solveInPlace(W_p);
+        cross_eliminated.noalias() += W.transpose() * W_p;
+        self_eliminated.noalias() += W_p.transpose() * W_p;
+      }
       neg.middleRows(6 * rows, 6) = W;
       if (++rows == kChunk || e + 1 == E) {
         eliminated_sum.selfadjointView<Eigen::Lower>().rankUpdate(neg.topRows(6 * rows).transpose());
@@ -93,6 +111,14 @@ Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process
       S = Sn - LiU.transpose() * LiU;
       G = Gn;
       G.noalias() -= LiU.transpose() * W;
+      if (k > 0) {
+        Gn_p.noalias() = p.B.transpose() * probe->columns[e];
+        if (e + 1 < process.size()) {
+          Gn_p.noalias() += process[e + 1].A.transpose() * probe->columns[e + 1];
+        }
+        G_p = Gn_p;
+        G_p.noalias() -= LiU.transpose() * W_p;
+      }
     }
   };
   ParallelFor(2, threads, [&](std::size_t part) {
@@ -111,6 +137,10 @@ Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process
   Htt.triangularView<Eigen::Lower>() -= eliminated_sum;
   for (Eigen::Index j = 1; j < n; ++j) {
     for (Eigen::Index i = 0; i < j; ++i) Htt(i, j) = Htt(j, i);
+  }
+  if (probe) {
+    probe->cross = cross_data - cross_eliminated;
+    probe->self = self_data - self_eliminated;
   }
   return Htt;
 }

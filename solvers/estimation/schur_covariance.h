@@ -40,10 +40,19 @@ struct MeasurementBlock {  // residual couples x_e and theta
 // subtracts from, so that a parameter's information resolves to about
 // 1e-16 of it (InformationResolution, batch_solver.h). With threads > 1 the
 // data's sum and the eliminated one are formed at once.
+// probe, when given: k more columns P on the process rows alone (zero on the
+// measurements), eliminated with theta's without entering its information:
+// probe->cross = J_theta^T (I - P_x) P (n x k) and probe->self =
+// P^T (I - P_x) P (k x k), P_x the projection on the states' columns.
+struct SchurProbe {
+  std::vector<Eigen::Matrix<double, 6, Eigen::Dynamic>> columns;  // per process block
+  Eigen::MatrixXd cross, self;
+};
 Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process,
                                         const std::vector<MeasurementBlock>& measurement,
                                         const Eigen::MatrixXd& theta_rows,
-                                        Eigen::VectorXd* scale = nullptr, int threads = 1);
+                                        Eigen::VectorXd* scale = nullptr, int threads = 1,
+                                        SchurProbe* probe = nullptr);
 
 // The problem at one theta with the states solved for (variable projection).
 // The residuals are affine in the states for a given theta (r = r0 + J_x x),
