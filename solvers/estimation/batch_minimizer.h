@@ -116,6 +116,9 @@ class BatchMinimizer {
   // Gauss-Newton's H), the damping raised until it is positive definite and
   // predicts a decrease; false (termination said) when none does.
   bool DampedModelStep(const Eigen::VectorXd& g, const Eigen::MatrixXd& H);
+  // The Gauss-Newton decrement up to which a step takes the coupled model
+  // (the noise's third-order error within the tolerance).
+  double CoupledModelReach() const;
   // Profiling a run's estimated noise couples it to theta: with G = d
   // gradient / d log sigma (RunReduction::gradient_by_log_noise, in the free
   // unknowns) and H_ss its noise's Hessian (NoiseHessian), -log L's Hessian
@@ -128,8 +131,6 @@ class BatchMinimizer {
   void FormCoupling(const BatchObjective::Point& pt);
   // sum over coupling_ of G H_ss^-1 G^T (zero without an estimated noise).
   Eigen::MatrixXd Coupling() const;
-  // The largest change of log sigma the step d predicts.
-  double NoiseStepOf(const Eigen::VectorXd& d) const;
   // The current point's gradient in the free unknowns at the trial's noise
   // (the current point reweighted: a reduction, no pass; none when the noise
   // did not move), before the trial's theta part is formed (one point's
