@@ -295,14 +295,15 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
   Eigen::VectorXd scale;
   Eigen::MatrixXd info = ThetaInformationBySchur(pb, mb, Eigen::MatrixXd::Zero(0, nc), &scale,
                                                  threads, &probe);
-  if (E < 2) {  // no interval: nothing couples
-    probe.self = Eigen::MatrixXd::Zero(6, 6);
-    probe.cross = Eigen::MatrixXd::Zero(nc, 6);
-  }
-  out.channel_state_coupling = pp - probe.self.topLeftCorner<3, 3>();
-  Eigen::MatrixXd by_noise = probe.cross.leftCols<3>();
-  for (int i = 0; i < 3; ++i) {
-    if (k_col[i] >= 0) by_noise.row(k_col[i]) -= probe.self.block<1, 3>(3 + i, 0);
+  // Without an interval or a column the elimination formed nothing.
+  const bool probed = probe.self.rows() == 6 && probe.cross.rows() == nc && nc > 0;
+  Eigen::MatrixXd by_noise = Eigen::MatrixXd::Zero(nc, 3);
+  if (probed) {
+    out.channel_state_coupling = pp - probe.self.topLeftCorner<3, 3>();
+    by_noise = probe.cross.leftCols<3>();
+    for (int i = 0; i < 3; ++i) {
+      if (k_col[i] >= 0) by_noise.row(k_col[i]) -= probe.self.block<1, 3>(3 + i, 0);
+    }
   }
   // The weights' part of d cost / d K_i is q_i / K_i (d var_i / d K_i =
   // -2 var_i / K_i); by log sigma_j, the states solved for again, it moves
