@@ -264,34 +264,45 @@ TEST(RunReduction, BySomeColumnsIsTheWholeOnesPart) {
   }
 }
 
+// A paper run at the nominal values with the true scale factors (the
+// residual far from white, where the noise's coupling to theta is large):
+// its pass with the Jacobian, its weights and a noise per channel.
+struct OffTheMinimum {
+  Scenario s = PaperScenario(50.0, 30.0, 2.0, 15.0, 6);
+  RunData data = Simulate(s);
+  RunProblem p = BuildRunProblem(s.run, data, ParameterLayout(), 0.5, {});
+  RunPass pass, weights;
+  Eigen::Vector3d noise{1.3, 0.8, 1.1};
+  OffTheMinimum() {
+    Eigen::VectorXd at = p.prior.mean;
+    at.head<3>() = s.truth.head<3>();
+    pass = EvaluatePass(p, at, true, 1);
+    weights = WeightsPass(p, p.prior.mean, 1);
+  }
+  // The reduction at the noise scaled by exp(h) in channel i.
+  RunReduction At(int i, double h, ThetaPart part) const {
+    Eigen::Vector3d n = noise;
+    n[i] *= std::exp(h);
+    return Reduce(p, pass, weights, n, 1, part);
+  }
+};
+
 // The coupling of theta and the noise: d gradient / d log sigma_i, the
 // states solved for again at each noise, against central differences of the
-// gradient at noises exp(+-h) times the point's, at a point off the minimum
-// (the nominal values, the residual far from white) where it is large.
+// gradient at noises exp(+-h) times the point's.
 TEST(RunReduction, GradientByLogNoiseIsTheGradientsDerivative) {
-  const Scenario s = PaperScenario(50.0, 30.0, 2.0, 15.0, 6);
-  const RunData data = Simulate(s);
-  const RunProblem p = BuildRunProblem(s.run, data, ParameterLayout(), 0.5, {});
-  Eigen::VectorXd at = p.prior.mean;
-  at.head<3>() = s.truth.head<3>();
-  const RunPass pass = EvaluatePass(p, at, true, 1);
-  const RunPass weights = WeightsPass(p, p.prior.mean, 1);
-  const Eigen::Vector3d noise(1.3, 0.8, 1.1);
-  const RunReduction red = Reduce(p, pass, weights, noise, 1);
-  ASSERT_EQ(red.gradient_by_log_noise.rows(), p.n);
+  const OffTheMinimum o;
+  const RunReduction red = Reduce(o.p, o.pass, o.weights, o.noise, 1);
+  ASSERT_EQ(red.gradient_by_log_noise.rows(), o.p.n);
   ASSERT_EQ(red.gradient_by_log_noise.cols(), 3);
   const double h = 1e-4;
   for (int i = 0; i < 3; ++i) {
-    Eigen::Vector3d up = noise, down = noise;
-    up[i] *= std::exp(h);
-    down[i] *= std::exp(-h);
-    const Eigen::VectorXd numeric =
-        (Reduce(p, pass, weights, up, 1, ThetaPart::kGradient).gradient -
-         Reduce(p, pass, weights, down, 1, ThetaPart::kGradient).gradient) /
-        (2.0 * h);
+    const Eigen::VectorXd numeric = (o.At(i, h, ThetaPart::kGradient).gradient -
+                                     o.At(i, -h, ThetaPart::kGradient).gradient) /
+                                    (2.0 * h);
     const double big = numeric.cwiseAbs().maxCoeff();
     ASSERT_GT(big, 0.0);
-    for (int j = 0; j < p.n; ++j) {
+    for (int j = 0; j < o.p.n; ++j) {
       EXPECT_NEAR(red.gradient_by_log_noise(j, i), numeric[j], 1e-5 * big) << i << " " << j;
     }
   }
@@ -301,26 +312,16 @@ TEST(RunReduction, GradientByLogNoiseIsTheGradientsDerivative) {
 // is that of -log L with the states solved for at each noise: central
 // differences of its gradient rho N - q, each side reduced afresh.
 TEST(RunReduction, NoiseHessianIsTheNoiseGradientsDerivative) {
-  const Scenario s = PaperScenario(50.0, 30.0, 2.0, 15.0, 6);
-  const RunData data = Simulate(s);
-  const RunProblem p = BuildRunProblem(s.run, data, ParameterLayout(), 0.5, {});
-  Eigen::VectorXd at = p.prior.mean;
-  at.head<3>() = s.truth.head<3>();
-  const RunPass pass = EvaluatePass(p, at, true, 1);
-  const RunPass weights = WeightsPass(p, p.prior.mean, 1);
-  const Eigen::Vector3d noise(1.3, 0.8, 1.1);
+  const OffTheMinimum o;
   const double rho = 0.9;
-  const Eigen::Matrix3d H = NoiseHessian(Reduce(p, pass, weights, noise, 1), rho);
-  auto gradient = [&](const Eigen::Vector3d& n) {
-    const RunReduction r = Reduce(p, pass, weights, n, 1, ThetaPart::kNone);
+  const Eigen::Matrix3d H = NoiseHessian(Reduce(o.p, o.pass, o.weights, o.noise, 1), rho);
+  auto gradient = [&](int j, double h) {
+    const RunReduction r = o.At(j, h, ThetaPart::kNone);
     return Eigen::Vector3d(rho * r.channel_trace - r.channel_quadratic);
   };
   const double h = 1e-4;
   for (int j = 0; j < 3; ++j) {
-    Eigen::Vector3d up = noise, down = noise;
-    up[j] *= std::exp(h);
-    down[j] *= std::exp(-h);
-    const Eigen::Vector3d numeric = (gradient(up) - gradient(down)) / (2.0 * h);
+    const Eigen::Vector3d numeric = (gradient(j, h) - gradient(j, -h)) / (2.0 * h);
     for (int i = 0; i < 3; ++i) {
       EXPECT_NEAR(H(i, j), numeric[i], 1e-5 * H.diagonal().cwiseAbs().maxCoeff()) << i << " " << j;
     }
