@@ -26,7 +26,10 @@ import time
 def run_once(binary, command, run, out, extra):
     cmd = [binary, command, run, "-o", out, "--force", "-q"] + extra
     start = time.monotonic()
-    done = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        done = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    except OSError as e:
+        sys.exit(f"ab.py: cannot run {binary}: {e.strerror}")
     wall = time.monotonic() - start
     if done.returncode not in (0, 4):  # 4: fit did not converge (said in OUT)
         sys.exit(f"ab.py: {' '.join(cmd)} exited {done.returncode}: "
@@ -71,7 +74,8 @@ def main():
                     times[binary].append(wall)
                     steps[binary] = s
             ta, tb = statistics.median(times[a.a]), statistics.median(times[a.b])
-            print(f"| {run} | {ta:.3f} | {tb:.3f} | {tb / ta:.2f} | {steps[a.a]} | {steps[a.b]} |")
+            shown = {b: "–" if steps[b] is None else steps[b] for b in steps}
+            print(f"| {run} | {ta:.3f} | {tb:.3f} | {tb / ta:.2f} | {shown[a.a]} | {shown[a.b]} |")
 
 
 if __name__ == "__main__":
