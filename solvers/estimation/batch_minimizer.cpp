@@ -208,12 +208,16 @@ bool BatchMinimizer::ComputeStep() {
   // The decrement of -log L profiled over the noise (Gauss-Newton's
   // Hessian less the noise's coupling), or Gauss-Newton's where that is not
   // positive definite (far from the minimum).
-  Eigen::LDLT<Eigen::MatrixXd> newton(H - Coupling());
-  if (newton.info() != Eigen::Success || !newton.isPositive() ||
-      !(newton.vectorD().minCoeff() > 0.0)) {
-    newton.compute(H);
+  const Eigen::LDLT<Eigen::MatrixXd> gauss_newton(H);
+  const double gauss_newton_decrement = 0.5 * g.dot(gauss_newton.solve(g));
+  summary_.newton_decrement = gauss_newton_decrement;
+  if (coupling_.size() > 0) {
+    const Eigen::LDLT<Eigen::MatrixXd> profiled(H - coupling_);
+    if (profiled.info() == Eigen::Success && profiled.isPositive() &&
+        profiled.vectorD().minCoeff() > 0.0) {
+      summary_.newton_decrement = 0.5 * g.dot(profiled.solve(g));
+    }
   }
-  summary_.newton_decrement = 0.5 * g.dot(newton.solve(g));
   if (!std::isfinite(summary_.newton_decrement)) {
     summary_.termination = "the information matrix is singular";
     return false;
@@ -234,14 +238,13 @@ bool BatchMinimizer::ComputeStep() {
   // coupling, damped until positive definite; beyond CoupledModelReach (far
   // from the minimum) the model at fixed noise.
   const double mu = mu_, nu = nu_;
-  const double gauss_newton = 0.5 * g.dot(H.ldlt().solve(g));
-  couple_ = !coupling_.empty() && gauss_newton <= CoupledModelReach();
+  couple_ = coupling_.size() > 0 && gauss_newton_decrement <= CoupledModelReach();
   if (couple_ && DampedModelStep(g, H)) return true;
   couple_ = false;
   mu_ = mu;
   nu_ = nu;
   summary_.termination.clear();
-  summary_.newton_decrement = gauss_newton;
+  summary_.newton_decrement = gauss_newton_decrement;
   return DampedModelStep(g, H);
 }
 
@@ -284,13 +287,13 @@ void BatchMinimizer::DampingModel(const Eigen::MatrixXd& H, Eigen::MatrixXd* B,
                                   Eigen::VectorXd* scale) const {
   *B = H;
   if (secant_.rows() == H.rows()) *B += secant_;
-  if (couple_) *B -= Coupling();
+  if (couple_) *B -= coupling_;
   *scale = H.diagonal().cwiseAbs().cwiseMax(1e-300);
 }
 
 void BatchMinimizer::FormCoupling(const BatchObjective::Point& pt) {
   const int nf = static_cast<int>(free_.size());
-  coupling_.clear();
+  coupling_.resize(0, 0);
   for (std::size_t k = 0; k < noisy_.size(); ++k) {
     const int r = noisy_[k];
     if (r >= static_cast<int>(pt.reductions.size())) continue;
@@ -298,26 +301,17 @@ void BatchMinimizer::FormCoupling(const BatchObjective::Point& pt) {
     if (red.gradient_by_log_noise.rows() != objective_.run(r).problem->n) continue;
     // At the noise's maximum H_ss is positive definite; elsewhere (a noise
     // held at its floor) the coupling is left out.
-    const Eigen::Matrix3d H_ss = NoiseHessian(red, rho_[k]);
-    const Eigen::LDLT<Eigen::Matrix3d> ldlt(H_ss);
-    if (ldlt.info() != Eigen::Success || !ldlt.isPositive() ||
-        !(ldlt.vectorD().minCoeff() > 0.0)) {
+    const Eigen::LDLT<Eigen::Matrix3d> H_ss(NoiseHessian(red, rho_[k]));
+    if (H_ss.info() != Eigen::Success || !H_ss.isPositive() ||
+        !(H_ss.vectorD().minCoeff() > 0.0)) {
       continue;
     }
     const Eigen::MatrixXd G_phi = objective_.MapOf(r).transpose() * red.gradient_by_log_noise;
-    NoiseCoupling c;
-    c.G.resize(nf, 3);
-    for (int a = 0; a < nf; ++a) c.G.row(a) = G_phi.row(free_[a]);
-    c.H_ss = H_ss;
-    coupling_.push_back(std::move(c));
+    Eigen::MatrixXd G(nf, 3);
+    for (int a = 0; a < nf; ++a) G.row(a) = G_phi.row(free_[a]);
+    if (coupling_.size() == 0) coupling_ = Eigen::MatrixXd::Zero(nf, nf);
+    coupling_.noalias() += G * H_ss.solve(G.transpose());
   }
-}
-
-Eigen::MatrixXd BatchMinimizer::Coupling() const {
-  const int nf = static_cast<int>(free_.size());
-  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(nf, nf);
-  for (const NoiseCoupling& c : coupling_) out.noalias() += c.G * c.H_ss.ldlt().solve(c.G.transpose());
-  return out;
 }
 
 Eigen::VectorXd BatchMinimizer::DampedStep(const Eigen::MatrixXd& B, const Eigen::VectorXd& g,

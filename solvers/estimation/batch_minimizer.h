@@ -109,7 +109,7 @@ class BatchMinimizer {
   // matrix is not positive definite.
   Eigen::VectorXd DampedStep(const Eigen::MatrixXd& B, const Eigen::VectorXd& g,
                              const Eigen::VectorXd& scale, double mu, bool* ok) const;
-  // The model's matrix B = H + S (less Coupling() with couple_) and the
+  // The model's matrix B = H + S (less coupling_ with couple_) and the
   // damping's scale |diag H| at the current point.
   void DampingModel(const Eigen::MatrixXd& H, Eigen::MatrixXd* B, Eigen::VectorXd* scale) const;
   // step_ and predicted_ from the model at the current point (gradient g,
@@ -122,15 +122,9 @@ class BatchMinimizer {
   // Profiling a run's estimated noise couples it to theta: with G = d
   // gradient / d log sigma (RunReduction::gradient_by_log_noise, in the free
   // unknowns) and H_ss its noise's Hessian (NoiseHessian), -log L's Hessian
-  // loses G H_ss^-1 G^T and a step d moves log sigma by -H_ss^-1 G^T d.
-  struct NoiseCoupling {
-    Eigen::MatrixXd G;  // free unknowns x 3
-    Eigen::Matrix3d H_ss;
-  };
-  // coupling_ at pt: the runs whose noise is estimated and at a maximum.
+  // loses G H_ss^-1 G^T. coupling_ at pt: that sum over the runs whose noise
+  // is estimated and at a maximum (empty with none).
   void FormCoupling(const BatchObjective::Point& pt);
-  // sum over coupling_ of G H_ss^-1 G^T (zero without an estimated noise).
-  Eigen::MatrixXd Coupling() const;
   // The current point's gradient in the free unknowns at the trial's noise
   // (the current point reweighted: a reduction, no pass; none when the noise
   // did not move), before the trial's theta part is formed (one point's
@@ -158,7 +152,7 @@ class BatchMinimizer {
   std::vector<int> noisy_;      // the runs whose noise is estimated
   std::vector<double> rho_;     // their restricted-likelihood share (run_evaluation.h)
   MinimizerSummary summary_;
-  std::vector<NoiseCoupling> coupling_;  // at the current point
+  Eigen::MatrixXd coupling_;             // at the current point (FormCoupling)
   bool couple_ = false;                  // the step's model is profiled over the noise
   std::vector<Eigen::Vector3d> noise_;
   BatchObjective::Point current_;
