@@ -14,14 +14,17 @@
 // The step's model is Gauss-Newton's information plus a correction S that
 // the steps taken measure (MeasureCurvature, a structured BFGS update as in
 // NL2SOL): a misfit's residuals curve the cost beyond Gauss-Newton's model.
-// The observed coupling of theta and the noise (-2 g_i, channel i's share of
-// the gradient) is left out of the model (Fisher scoring: its expectation is
-// zero); far from the minimum a misfit makes it large and the coupled model
-// promise what the cost does not give: the paper's 90-s 1-kHz run from the
-// RTS start rejected five steps (predicted decrease 4772, actual -2585) and
-// took 9 steps in 15 passes with it, 2 in 3 without it and with S; the real
-// fast roll run 12 in 16 with the rank-one secant of before, 7 in 8 with S
-// (bench/solver_speed.py prints them).
+// Near the minimum it is also profiled over the noise: with G = d gradient /
+// d log sigma and H_ss the noise's Hessian, -log L's Hessian in theta loses
+// G H_ss^-1 G^T (FormCoupling; the real fast roll run converged linearly
+// without it, 8 steps, superlinearly with it, 6). The noise's exponential
+// makes that model err at third order far from the minimum, where a misfit
+// makes G large and the coupled model promise what the cost does not give
+// (an earlier form of the coupling, taken at every step of the paper's
+// 90-s 1-kHz run from the RTS start: five steps rejected, 9 steps in 15
+// passes; 2 in 3 at fixed noise). So it
+// is taken only while the Gauss-Newton decrement is within
+// CoupledModelReach, the model at fixed noise beyond.
 //
 // The steps, in the order Minimize takes them (after Ceres's
 // TrustRegionMinimizer: the state lives in members, each step is named):
@@ -29,9 +32,11 @@
 //   IterationZero     evaluate at the start (one pass over the samples) and
 //                     put each estimated noise at its maximum there
 //                     (variance components; reductions only)
-//   ComputeStep       converged when the Newton decrement 0.5 g^T H^-1 g
-//                     (~0.5 |step|^2 in sigma units) is below the tolerance;
-//                     else the damped step (B + mu diag H) d = -g, B = H + S
+//   ComputeStep       converged when the Newton decrement of the profile
+//                     0.5 g^T (H - C)^-1 g (~0.5 |step|^2 in sigma units; C
+//                     the coupling) is below the tolerance; else the damped
+//                     step (B + mu diag H) d = -g, B = H + S (- C near the
+//                     minimum)
 //   TryStep           evaluate the trial (one pass); accept it when -log L
 //                     fell (damping by Nielsen's rule on the gain ratio),
 //                     else raise the damping (RaiseDamping: to the step's

@@ -183,4 +183,20 @@ void BatchObjective::Assemble(Point* pt) const {
                                      : Eigen::MatrixXd();
 }
 
+void PriorAndConstraintRows(const RunProblem& p, Eigen::MatrixXd* A, Eigen::VectorXd* b) {
+  const int n = p.n;
+  const int k = static_cast<int>(p.constraints.size());
+  A->setZero(n + k, n);
+  b->resize(n + k);
+  for (int i = 0; i < n; ++i) {
+    (*A)(i, i) = 1.0 / p.prior.sigma[i];
+    (*b)[i] = p.prior.mean[i] / p.prior.sigma[i];
+  }
+  for (int j = 0; j < k; ++j) {
+    const ConstraintRow& c = p.constraints[j];
+    A->row(n + j) = c.c.transpose() / c.sigma;
+    (*b)[n + j] = c.value / c.sigma;
+  }
+}
+
 }  // namespace triadcal

@@ -132,4 +132,9 @@ class BatchObjective {
   int threads_ = 1;
 };
 
+// The whitened rows of run p's priors (all n parameters) and of its
+// constraints over the full theta, A theta - b: the rows of a one-run
+// objective whose unknowns are its parameters.
+void PriorAndConstraintRows(const RunProblem& p, Eigen::MatrixXd* A, Eigen::VectorXd* b);
+
 }  // namespace triadcal

@@ -56,24 +56,6 @@ Eigen::MatrixXd Expand(const Eigen::MatrixXd& M, const std::vector<int>& idx, in
   return out;
 }
 
-// The whitened rows of the priors (all n parameters) and of the constraints
-// over the full theta: A theta - b.
-void PriorAndConstraintRows(const RunProblem& p, Eigen::MatrixXd* A, Eigen::VectorXd* b) {
-  const int n = p.n;
-  const int k = static_cast<int>(p.constraints.size());
-  A->setZero(n + k, n);
-  b->resize(n + k);
-  for (int i = 0; i < n; ++i) {
-    (*A)(i, i) = 1.0 / p.prior.sigma[i];
-    (*b)[i] = p.prior.mean[i] / p.prior.sigma[i];
-  }
-  for (int j = 0; j < k; ++j) {
-    const ConstraintRow& c = p.constraints[j];
-    A->row(n + j) = c.c.transpose() / c.sigma;
-    (*b)[n + j] = c.value / c.sigma;
-  }
-}
-
 // The information of the constraints alone (n x n, SI).
 Eigen::MatrixXd ConstraintInformation(const RunProblem& p) {
   Eigen::MatrixXd I = Eigen::MatrixXd::Zero(p.n, p.n);
