@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <utility>
 
 namespace triadcal {
 namespace {
@@ -109,7 +110,7 @@ BatchObjective::Point BatchMinimizer::Minimize(const Eigen::VectorXd& phi0,
     objective_.Reweight(&current_, noise_);
   }
   *summary = summary_;
-  return current_;
+  return std::move(current_);  // not a copy: its reductions are 18 MB on the 40-min run
 }
 
 ThetaPart BatchMinimizer::FullUnlessNoisy() const {
