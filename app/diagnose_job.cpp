@@ -66,6 +66,11 @@ void AddRefitKeys(const CandidateTest& t, nlohmann::json* j) {
   (*j)["wald_p_value"] = t.wald_p_value;
   (*j)["wald_dof"] =
       std::isfinite(t.wald_dof) && t.wald_dof > 0.0 ? nlohmann::json(t.wald_dof) : nlohmann::json();
+  if (!t.not_separable_from.empty()) {
+    (*j)["not_separable_from"] = t.not_separable_from;
+    (*j)["not_separable_share"] = t.not_separable_share;
+    (*j)["wald_p_given_consider"] = t.wald_p_given_consider;
+  }
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -229,6 +230,29 @@ void WaldTest(const ParameterLayout& aug, const BatchResult& r, Effect e, Candid
       t.wald_dof = 1.5 * r.epochs / std::max(1.0, r.hac_bandwidth_epochs);
     }
     t.wald_p_value = HotellingSurvival(t.wald, m, t.wald_dof);
+    // The same with the considered parameters at nominal (no consider term),
+    // and which of them carries most of the effect's variance.
+    if (r.cov_given_consider.rows() == aug.size() && !r.consider.empty()) {
+      Eigen::MatrixXd G(m, m);
+      for (int a = 0; a < m; ++a) {
+        for (int b = 0; b < m; ++b) G(a, b) = r.cov_given_consider(free_e[a], free_e[b]);
+      }
+      const double wald_given = std::max(0.0, v.dot(G.ldlt().solve(v)));
+      t.wald_p_given_consider = HotellingSurvival(wald_given, m, t.wald_dof);
+      double largest = 0.0;
+      for (std::size_t j = 0; j < r.consider.size(); ++j) {
+        double share = 0.0;
+        for (int a = 0; a < m; ++a) {
+          const double s = r.consider_sensitivity(free_e[a], static_cast<long>(j));
+          share += s * s * r.consider_cov(j, j) / (m * C(a, a));
+        }
+        if (share > largest) {
+          largest = share;
+          t.not_separable_from = r.consider[j];
+          t.not_separable_share = share;
+        }
+      }
+    }
   }
 }
 
@@ -627,8 +651,24 @@ void Loop::TestRefit(const CandidateInformation& c, const ParameterLayout& aug,
   t.p_value = ChiSquareSurvival(t.statistic, t.dof);
   WaldTest(aug, r, e, &t);
   if (t.p_value < threshold_ && !(t.wald_p_value < threshold_)) {
-    t.note = "likelihood ratio significant, but its size is not against its sigma (Wald p " +
-             FormatNumber(t.wald_p_value) + "): what it fits is the residual's correlation in time";
+    if (t.wald_p_given_consider < threshold_ && !t.not_separable_from.empty()) {
+      // Its sigma is a considered parameter's prior uncertainty (real fast
+      // roll run with its gyro: angle_latency.tau -10.3 +- 9.7 ms, nearly
+      // all of it dlambda2's +-180 arcmin).
+      t.note = "likelihood ratio significant, but not separable from " + t.not_separable_from +
+               ", which this run does not determine: that parameter's prior uncertainty is " +
+               FormatNumber(std::round(100.0 * t.not_separable_share)) +
+               " % of the effect's variance in the refit (Wald p " +
+               FormatNumber(t.wald_p_value) + "; " + FormatNumber(t.wald_p_given_consider) +
+               " with " + t.not_separable_from + " at nominal)";
+    } else {
+      t.not_separable_from.clear();
+      t.note = "likelihood ratio significant, but its size is not against its sigma (Wald p " +
+               FormatNumber(t.wald_p_value) +
+               "): what it fits is the residual's correlation in time";
+    }
+  } else {
+    t.not_separable_from.clear();
   }
   t.absorbs = Implausible(run_, aug, r, e);
   // Significant, but every component it frees is in a direction its own
@@ -840,6 +880,25 @@ std::string Loop::Verdict() const {
   for (const CandidateTest& t : res.absorbing) {
     v << "; " << GetEffectSpec(t.effect).name << " fits the residual (p " << FormatNumber(t.p_value)
       << ") only with " << t.absorbs << ": it ABSORBS SOMETHING ELSE, not reported as found";
+  }
+  // The last test of each effect not selected that a considered parameter's
+  // prior uncertainty kept from being found.
+  std::map<Effect, const CandidateTest*> confounded;
+  for (const CandidateTest& t : res.tests) {
+    if (std::find(res.selected.begin(), res.selected.end(), t.effect) != res.selected.end()) continue;
+    if (t.not_separable_from.empty()) {
+      confounded.erase(t.effect);
+    } else {
+      confounded[t.effect] = &t;
+    }
+  }
+  for (const auto& [e, t] : confounded) {
+    v << "; " << GetEffectSpec(e).name << " fits the residual (p " << FormatNumber(t->p_value)
+      << ") but is NOT SEPARABLE from " << t->not_separable_from
+      << ", which this run does not determine (its prior uncertainty is "
+      << FormatNumber(std::round(100.0 * t->not_separable_share))
+      << " % of the effect's variance): not reported as found; a prior or constraint on "
+      << t->not_separable_from << " would tell them apart";
   }
   if (res.after_residuals.structure) {
     v << "; STRUCTURE REMAINS that no candidate explains: "

@@ -110,6 +110,14 @@ struct CandidateTest {
   // plausible range (EffectSpec), so it absorbs something else and is not a
   // finding: which parameter, its value and the range.
   std::string absorbs;
+  // Refitted, its likelihood ratio significant, and its Wald test too with
+  // the considered parameters at nominal but not with their prior
+  // uncertainty carried: the considered parameter that carries most of the
+  // effect's variance in the refit (the effect is not separable from it on
+  // this run), and that share. Empty otherwise.
+  std::string not_separable_from;
+  double not_separable_share = 0.0;
+  double wald_p_given_consider = 1.0;  // the Wald test with the considered at nominal
 };
 
 // How a selected effect's parameters correlate with the base parameters in

@@ -111,8 +111,10 @@ struct CandidateInformation {
   double score = 0.0;      // S (unscaled)
   double statistic = 0.0;  // S / max(1, predicted chi2/dof)
   double p_value = 1.0;
-  // Conditional data information N over the supported params (SI), and the
-  // base-parameter coupling B = I_bb^-1 I_be (free base rows x supported).
+  // Conditional data information N over the supported params (SI), given
+  // the free base parameters and with the considered ones' prior uncertainty
+  // carried (as in the refit's covariance), and the base-parameter coupling
+  // B = I_bb^-1 I_be (free base rows x supported).
   Eigen::MatrixXd N, B;
   // The Gauss-Newton step from the current fit to the fit with the effect
   // added (base free parameters, then the supported ones; SI), a start for

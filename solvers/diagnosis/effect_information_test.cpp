@@ -11,6 +11,7 @@
 #include <limits>
 
 #include "solvers/diagnosis/effect_discovery.h"
+#include "solvers/estimation/batch_solver.h"
 #include "solvers/statistics/statistics.h"
 #include "tests/sim_fixtures.h"
 
@@ -145,6 +146,41 @@ TEST(Reliability, MinimalDetectableEffectGivesItsNoncentrality) {
       EXPECT_EQ(worst_name, h.parameter);
       EXPECT_NEAR(worst / h.max_shift_sigma, 1.0, 0.1) << GetEffectSpec(e).name;
     }
+  }
+}
+
+// A considered parameter (batch_solver.h) stays at its nominal value in a
+// refit, its prior uncertainty carried into the effect's sigma; the
+// information a minimal detectable effect is found from (N) carries it too,
+// so that the MDE is the size the refit's Wald test detects. angle_latency
+// (its prior is nothing beside the data's information) against dz2 and
+// dtheta_c made considered: N^-1 is the refit's variance to 2e-4, of which
+// the consider term is 68 % and 95 % (N given them at nominal was 3 and 18
+// times too large).
+TEST(Reliability, CandidateInformationCarriesTheConsideredParameters) {
+  const Scenario s = PaperScenario(50.0, 90.0, 2.0, 15.0, 21);
+  const RunData data = Simulate(s);
+  const HoldDecision decision =
+      ChooseHeldParameters(s.run, data, ParameterLayout(), {}, 0.5, {});
+  ASSERT_TRUE(decision.consider.empty());
+  for (const char* considered : {"dz2", "dtheta_c"}) {
+    HoldDecision with = decision;
+    with.consider = {considered};  // as if the run did not determine it
+    BatchOptions o;
+    o.decision = &with;
+    o.estimate_noise = false;
+    o.sigma = "white";
+    const BatchResult fit = SolveBatch(s.run, data, ParameterLayout(), o);
+    const Effect e = Effect::kAngleLatency;
+    const EffectInformation info = AnalyseCandidates(s.run, data, {}, fit, {e}, o);
+    const CandidateInformation& c = info.candidates[0];
+    ASSERT_EQ(c.supported.size(), 1u);
+    const ParameterLayout aug({e});
+    const BatchResult refit = SolveBatch(s.run, data, aug, o);
+    const int i = aug.offset(e);
+    const double var = refit.estimate.cov(i, i);
+    ASSERT_LT(refit.cov_given_consider(i, i), 0.5 * var) << considered;  // the term matters
+    EXPECT_NEAR(1.0 / (c.N(0, 0) * var), 1.0, 1e-3) << considered;
   }
 }
 
