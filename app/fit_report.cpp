@@ -52,27 +52,16 @@ FitReport MakeFitReport(const ParameterLayout& layout, const BatchResult& r) {
   if (m > 0 && r.consider_sensitivity.rows() == layout.size() &&
       r.consider_sensitivity.cols() == m && r.consider_cov.rows() == m &&
       r.cov_given_consider.rows() == layout.size()) {
-    const double min_information = r.min_information;
+    std::vector<int> estimated;
     for (int i = 0; i < layout.size(); ++i) {
       const std::string& name = layout.info(i).name;
-      if (rep.held.count(name) || rep.consider.count(name)) continue;
-      const double total = r.estimate.cov(i, i), given = r.cov_given_consider(i, i);
-      if (!(total > 2.0 * given) ||
-          total * min_information <= r.prior.sigma[i] * r.prior.sigma[i]) {
-        continue;
-      }
-      // The considered parameters by their share of the consider variance,
-      // those with at least a quarter of it.
-      std::vector<std::pair<double, int>> share;
-      for (int q = 0; q < m; ++q) {
-        const double s = r.consider_sensitivity(i, q);
-        share.push_back({s * s * r.consider_cov(q, q), q});
-      }
-      std::sort(share.rbegin(), share.rend());
-      std::vector<std::string>& names = rep.with_considered[name];
-      for (const auto& [v, q] : share) {
-        if (names.empty() || v >= 0.25 * (total - given)) names.push_back(r.consider[q]);
-      }
+      if (!rep.held.count(name) && !rep.consider.count(name)) estimated.push_back(i);
+    }
+    for (const auto& [i, with] : DeterminedOnlyWithConsidered(
+             r.estimate.cov, r.cov_given_consider, r.consider_sensitivity,
+             r.consider_cov.diagonal(), r.prior.sigma, r.min_information, estimated)) {
+      std::vector<std::string>& names = rep.with_considered[layout.info(i).name];
+      for (int q : with) names.push_back(r.consider[q]);
     }
   }
   rep.beyond_prior = BeyondPrior(layout, r.estimate.theta, r.prior.mean, r.prior.sigma);

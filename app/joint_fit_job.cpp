@@ -121,8 +121,38 @@ JointSpec JointSpecOf(const RunsFile& file) {
   return spec;
 }
 
-std::string JointVerdict(const JointLayout& jl, const JointResult& r) {
-  if (!r.converged) return "NOT CONVERGED: " + r.termination;
+namespace {
+
+// An estimated unknown is "determined" unless the runs determine it only
+// with the considered ones at nominal: then "determined_with_considered",
+// their names (as `fit`'s OUT has it).
+void AddWithConsidered(const JointLayout& jl, const JointResult& r, int j, Treatment t,
+                       nlohmann::json* entry) {
+  if (t != Treatment::kEstimated) return;
+  const auto w = r.with_considered.find(j);
+  (*entry)["determined"] = w == r.with_considered.end();
+  if (w == r.with_considered.end()) return;
+  nlohmann::json names = nlohmann::json::array();
+  for (int c : w->second) names.push_back(jl.param(c).name);
+  (*entry)["determined_with_considered"] = names;
+}
+
+// The verdict's clause naming them, or "".
+std::string WithConsideredClause(const JointLayout& jl, const JointResult& r) {
+  if (r.with_considered.empty()) return "";
+  std::string s =
+      "; DETERMINED ONLY WITH the considered parameters at nominal (their prior uncertainty is "
+      "most of the sigma):";
+  for (const auto& [j, with] : r.with_considered) {
+    s += " " + jl.param(j).name + " (with";
+    for (int c : with) s += " " + jl.param(c).name;
+    s += ")";
+  }
+  return s;
+}
+
+// Whether the runs agree, and where not, how.
+std::string Agreement(const JointLayout& jl, const JointResult& r) {
   std::vector<std::string> bad;
   int tested = 0;
   for (const JointRunResult& rr : r.runs) {
@@ -161,6 +191,13 @@ std::string JointVerdict(const JointLayout& jl, const JointResult& r) {
   return "converged; the runs agree within their sigma";
 }
 
+}  // namespace
+
+std::string JointVerdict(const JointLayout& jl, const JointResult& r) {
+  if (!r.converged) return "NOT CONVERGED: " + r.termination;
+  return Agreement(jl, r) + WithConsideredClause(jl, r);
+}
+
 nlohmann::json JointJson(const JointLayout& jl, const std::vector<JointRun>& runs,
                          const JointResult& r, const RunsFile& file) {
   nlohmann::json out;
@@ -174,6 +211,7 @@ nlohmann::json JointJson(const JointLayout& jl, const std::vector<JointRun>& run
     const JointParam& p = jl.param(j);
     if (p.run >= 0) continue;
     shared[p.name] = Entry(p, r.phi[j], r.cov(j, j), treat[j]);
+    AddWithConsidered(jl, r, j, treat[j], &shared[p.name]);
     nlohmann::json share = nlohmann::json::object();
     for (int q = 0; q < jl.runs(); ++q) share[jl.run_name(q)] = r.share(q, j);
     if (treat[j] == Treatment::kEstimated) shared[p.name]["information_share"] = share;
@@ -220,7 +258,9 @@ nlohmann::json JointJson(const JointLayout& jl, const std::vector<JointRun>& run
     for (int j = 0; j < jl.size(); ++j) {
       const JointParam& p = jl.param(j);
       if (p.run != q) continue;
-      own[p.name.substr(0, p.name.rfind('@'))] = Entry(p, r.phi[j], r.cov(j, j), treat[j]);
+      nlohmann::json& entry = own[p.name.substr(0, p.name.rfind('@'))];
+      entry = Entry(p, r.phi[j], r.cov(j, j), treat[j]);
+      AddWithConsidered(jl, r, j, treat[j], &entry);
     }
     e["parameters"] = own;
     const BatchResult& a = rr.alone;

@@ -86,6 +86,11 @@ int RunJointFit(const FitSettings& s, const std::vector<std::string>& inputs,
     if (treat[j] == Treatment::kEstimated) {
       for (int q = 0; q < jl.runs(); ++q) std::printf(" %8.2f", r.share(q, j));
     }
+    if (const auto w = r.with_considered.find(j); w != r.with_considered.end()) {
+      std::printf("  (only with considered");
+      for (int c : w->second) std::printf(" %s", jl.param(c).name.c_str());
+      std::printf(" at nominal)");
+    }
     std::printf("\n");
   }
   bool any_spread = false;

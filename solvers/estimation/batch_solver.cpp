@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <map>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -295,6 +296,42 @@ Eigen::VectorXd ScaleAndOffsetPoint(const RunDescription& run, const RunData& da
   return theta;
 }
 
+std::map<int, std::vector<int>> DeterminedOnlyWithConsidered(
+    const Eigen::MatrixXd& cov, const Eigen::MatrixXd& cov_given, const Eigen::MatrixXd& sensitivity,
+    const Eigen::VectorXd& consider_variance, const Eigen::VectorXd& prior_sigma,
+    double min_information, const std::vector<int>& estimated) {
+  std::map<int, std::vector<int>> out;
+  const int c = static_cast<int>(consider_variance.size());
+  if (c == 0 || sensitivity.cols() != c) return out;
+  for (int i : estimated) {
+    const double total = cov(i, i), given = cov_given(i, i);
+    if (!(total > 2.0 * given) || total * min_information <= prior_sigma[i] * prior_sigma[i]) {
+      continue;
+    }
+    std::vector<std::pair<double, int>> share;
+    for (int q = 0; q < c; ++q) {
+      const double s = sensitivity(i, q);
+      share.push_back({s * s * consider_variance[q], q});
+    }
+    std::sort(share.rbegin(), share.rend());
+    std::vector<int>& with = out[i];
+    for (const auto& [v, q] : share) {
+      if (with.empty() || v >= 0.25 * (total - given)) with.push_back(q);
+    }
+  }
+  return out;
+}
+
+std::vector<int> ZerosOfStillAxes(const RunData& data) {
+  std::vector<int> out;
+  for (int a = 0; a < 2; ++a) {
+    const std::vector<double>& l = data.lambda_rad[a];
+    const auto [lo, hi] = std::minmax_element(l.begin(), l.end());
+    if (lo != l.end() && *lo == *hi) out.push_back(a == 0 ? kDthetaC : kDlambda2);
+  }
+  return out;
+}
+
 HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data,
                                   const ParameterLayout& layout, const HoldPolicy& o,
                                   double epoch_s, const AngleDerivativeOptions& derivatives,
@@ -371,6 +408,17 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
     for (int i : kept) kind[i] = 0;
     for (int i = 0; i < n; ++i) {
       if (kind[i] == 1 && left[i] < std::max(o.null_information, resolution[i])) kind[i] = 2;
+    }
+    // An axis that does not turn: its zero is where the frame is put.
+    for (int zero : ZerosOfStillAxes(data)) {
+      if (kind[zero] == 2) continue;
+      kind[zero] = 2;
+      WeakDirection still;
+      still.weights = {{layout.info(zero).name, 1.0}};
+      still.description = std::string("the ") + (zero == kDthetaC ? "outer" : "inner") +
+                          " bench axis does not turn (its angle is a constant): its zero " +
+                          layout.info(zero).name + " is where the frame is put";
+      d.unsupported.push_back(still);
     }
   }
   for (int i : user_hold) kind[i] = 2;

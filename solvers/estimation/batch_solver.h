@@ -112,6 +112,31 @@ struct HoldDecision {
   Eigen::VectorXd theta;
 };
 
+// The estimated parameters that a fit determines only with its considered
+// parameters at nominal: their consider term is more than half their
+// variance, and with it they are known less than min_information times
+// better than their prior. Each maps to the considered parameters (indices
+// into the consider list) that carry at least a quarter of that term,
+// largest first. cov includes the consider term (sensitivity S, n x c, and
+// the considered parameters' prior variances: S diag(v) S^T); cov_given does
+// not.
+std::map<int, std::vector<int>> DeterminedOnlyWithConsidered(
+    const Eigen::MatrixXd& cov, const Eigen::MatrixXd& cov_given, const Eigen::MatrixXd& sensitivity,
+    const Eigen::VectorXd& consider_variance, const Eigen::VectorXd& prior_sigma,
+    double min_information, const std::vector<int>& estimated);
+
+// The bench zeros (kDthetaC, kDlambda2) of the axes that do not turn in
+// this run: their recorded angle is a constant (a `value:` column, a rig
+// without that axis). Such an axis has no zero error to find: its zero only
+// says where the frame is, which the triads' misalignments say as well (a
+// rotation about it is theirs; with the lever arm and the gyro's
+// g-sensitivity free, nearly exactly). The decisions hold them (single runs
+// and joint fits alike), so that the prior of a sensor that is not there
+// does not spread into the misalignments (real fast roll run with its gyro:
+// dlambda2 considered at +-180' left gamma_z at 40 +- 180', gyro.Gyx at
+// -22.7 (deg/s)/g and its 8.6-ms latency not separable from dlambda2).
+std::vector<int> ZerosOfStillAxes(const RunData& data);
+
 // At the nominal values with the scale factors and zero offsets fitted (on
 // the samples thinned to decimation_hz), at run's noise, from the
 // information of all the samples there. shared: work to share with a fit of

@@ -422,6 +422,67 @@ TEST(HoldDecision, InformationBelowItsResolutionIsNone) {
   EXPECT_EQ(std::find(d.consider.begin(), d.consider.end(), "dy2"), d.consider.end());
 }
 
+// A bench axis that does not turn (its angle a constant, as a `value:`
+// column gives for a rig without it) has no zero error to find: its zero is
+// held, not considered, and the decision says why. With the still axis's
+// angle recorded (its noise in it) the information decides, as for any
+// parameter.
+TEST(HoldDecision, TheZeroOfAnAxisThatDoesNotTurnIsHeld) {
+  Scenario s = PaperScenario(50.0, 60.0, 2.0, 15.0, 4);
+  s.profile.amplitude_rad[1] = 0.0;  // the outer axis alone
+  s.truth[kDlambda2] = 0.0;
+  const RunData recorded = Simulate(s);
+  RunData constant = recorded;
+  std::fill(constant.lambda_rad[1].begin(), constant.lambda_rad[1].end(), 0.0);
+  auto has = [](const std::vector<std::string>& v, const std::string& name) {
+    return std::find(v.begin(), v.end(), name) != v.end();
+  };
+  auto said = [](const HoldDecision& d) {
+    return std::any_of(d.unsupported.begin(), d.unsupported.end(), [](const WeakDirection& w) {
+      return w.description.find("inner bench axis does not turn") != std::string::npos;
+    });
+  };
+  const HoldDecision still = ChooseHeldParameters(s.run, constant, ParameterLayout(), {}, 0.5, {});
+  EXPECT_TRUE(has(still.held, "dlambda2"));
+  EXPECT_FALSE(has(still.consider, "dlambda2"));
+  EXPECT_TRUE(said(still));
+  const HoldDecision noisy = ChooseHeldParameters(s.run, recorded, ParameterLayout(), {}, 0.5, {});
+  EXPECT_FALSE(said(noisy));
+  EXPECT_TRUE(has(noisy.consider, "dlambda2")) << "the information's decision, not the rule's";
+  // The user's --free wins.
+  HoldPolicy freed;
+  freed.free = {"dlambda2"};
+  const HoldDecision f = ChooseHeldParameters(s.run, constant, ParameterLayout(), freed, 0.5, {});
+  EXPECT_FALSE(has(f.held, "dlambda2"));
+  EXPECT_FALSE(has(f.consider, "dlambda2"));
+}
+
+// A parameter is "determined only with the considered ones at nominal" when
+// their consider term is more than half its variance and, with it, the run
+// knows it less than min_information times better than its prior; named
+// with the considered parameters carrying a quarter of that term or more.
+TEST(HoldDecision, DeterminedOnlyWithConsideredNamesWhatCarriesTheSigma) {
+  // Three estimated parameters, two considered (prior variances 4 and 1).
+  Eigen::MatrixXd given = Eigen::MatrixXd::Zero(3, 3);
+  given.diagonal() << 0.01, 0.01, 0.5;
+  Eigen::MatrixXd S(3, 2);
+  S << 0.5, 0.0,   // 0: term 1.0 (all from the first), total 1.01
+      0.3, 0.5,    // 1: terms 0.36 and 0.25, total 0.62
+      0.1, 0.0;    // 2: term 0.04 beside 0.5: determined
+  const Eigen::Vector2d v(4.0, 1.0);
+  const Eigen::MatrixXd cov = given + S * v.asDiagonal() * S.transpose();
+  const Eigen::Vector3d prior(1.0, 1.0, 1.0);
+  const auto with = DeterminedOnlyWithConsidered(cov, given, S, v, prior, 10.0, {0, 1, 2});
+  ASSERT_EQ(with.size(), 2u);
+  EXPECT_EQ(with.at(0), std::vector<int>({0}));
+  EXPECT_EQ(with.at(1), (std::vector<int>{0, 1}));
+  // Known 100 times better than the prior with the term: determined.
+  const Eigen::Vector3d wide(10.0, 10.0, 10.0);
+  EXPECT_TRUE(DeterminedOnlyWithConsidered(cov, given, S, v, wide, 10.0, {0, 1, 2}).empty());
+  // Only the estimated ones are looked at.
+  EXPECT_EQ(DeterminedOnlyWithConsidered(cov, given, S, v, prior, 10.0, {1}).size(), 1u);
+}
+
 // Two parameters that explain the same data to |rho| >= 0.99: the one of
 // higher priority is kept, the other is not separable from it.
 TEST(HoldDecision, KeepsTheHigherPriorityOfTwoThatCannotBeSeparated) {

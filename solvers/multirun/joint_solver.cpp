@@ -579,8 +579,19 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
     const Eigen::MatrixXd info = pt.data_information + ConstraintInformationOverPhi(objective, m);
     Eigen::MatrixXd sensitivity, add;
     ConsiderTerm(info, jl.PriorSigma(), free, res.consider, &sensitivity, &add);
+    const Eigen::MatrixXd given = res.cov;
     res.cov += add;
     res.cov_white += add;
+    Eigen::VectorXd consider_variance(res.consider.size());
+    for (std::size_t q = 0; q < res.consider.size(); ++q) {
+      consider_variance[q] = std::pow(jl.PriorSigma()[res.consider[q]], 2);
+    }
+    for (const auto& [j, with] :
+         DeterminedOnlyWithConsidered(res.cov, given, sensitivity, consider_variance,
+                                      jl.PriorSigma(), opt.batch.holding.min_information, free)) {
+      std::vector<int>& w = res.with_considered[j];
+      for (int q : with) w.push_back(res.consider[q]);
+    }
   }
   for (int j : free) {
     const JointParam& p = jl.param(j);

@@ -30,6 +30,7 @@
 //    p < consistency_alpha is named, with the parameters it pulls (|z| >= 3).
 #pragma once
 
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -107,6 +108,10 @@ struct JointResult {
   Eigen::MatrixXd cov_white;  // the model's, with the consider term, before the runs' HAC and spread
   std::vector<int> held;      // structural nulls: held at nominal (indices into phi)
   std::vector<int> consider;  // not determined: nominal, prior uncertainty carried
+  // Estimated unknowns the runs determine only with the considered ones at
+  // nominal (DeterminedOnlyWithConsidered, batch_solver.h): index -> the
+  // considered unknowns that carry most of their sigma (indices into phi).
+  std::map<int, std::vector<int>> with_considered;
   std::vector<BetweenRuns> between;  // each shared unknown at least two runs determine alone
   std::vector<JointRunResult> runs;
   // share(r, j): run r's part of the data information on phi_j (diagonal).

@@ -296,6 +296,34 @@ TEST(JointFit, TwoSingleAxisRunsWithDifferentShaftsDetermineWhatNeitherDoesAlone
   EXPECT_LT(rms, 1.4);
 }
 
+// Two runs about the same shaft leave undetermined what one run does; what
+// follows a considered unknown one for one comes out at about its prior
+// sigma, and the result names it as determined only with that unknown at
+// nominal (as a single fit does), never as a value with its sigma alone.
+TEST(JointFit, WhatFollowsAConsideredUnknownIsNamedSo) {
+  const std::vector<JointRun> runs = {MakeRun("a", SingleAxis(1)), MakeRun("b", SingleAxis(2))};
+  const JointLayout jl(runs, ParameterLayout(), {}, "test");
+  const JointResult r = SolveJoint(runs, jl, Options());
+  ASSERT_TRUE(r.converged);
+  ASSERT_FALSE(r.consider.empty());
+  // Ky (its sigma 3.7 times its prior's), dpsi of both runs and dlambda2 of
+  // one follow considered unknowns.
+  EXPECT_GE(r.with_considered.size(), 2u);
+  for (int j = 0; j < jl.size(); ++j) {
+    if (r.cov(j, j) <= 0.0) continue;
+    if (std::sqrt(r.cov(j, j)) > 0.5 * jl.param(j).prior_sigma) {
+      EXPECT_TRUE(r.with_considered.count(j)) << jl.param(j).name;
+    }
+  }
+  for (const auto& [j, with] : r.with_considered) {
+    ASSERT_FALSE(with.empty()) << jl.param(j).name;
+    for (int c : with) {
+      EXPECT_NE(std::find(r.consider.begin(), r.consider.end(), c), r.consider.end())
+          << jl.param(j).name << " with " << jl.param(c).name;
+    }
+  }
+}
+
 // Four runs at -20, 0, 20, 40 degC with zero offsets and scale factors linear
 // in temperature.
 std::vector<JointRun> TemperatureRuns(std::uint64_t seed, Eigen::VectorXd* truth_coef,
