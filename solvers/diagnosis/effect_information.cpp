@@ -427,9 +427,10 @@ class CandidateAnalysis {
   // carried into the effect's variance through the effect's sensitivity to
   // it (the consider term, batch_solver.h): the inverse of N^-1 + S P S^T,
   // S = -N^-1 N_ec, N_ec the information between the effect and the
-  // considered parameters given the free base ones. Without it a minimal detectable effect is the one given
-  // those parameters exactly at nominal (real fast roll run with its gyro:
-  // angle_latency 0.28 ms, where the refit's sigma of tau is 9.7 ms, nearly
+  // considered parameters given the free base ones. Without it a minimal
+  // detectable effect is the one given those parameters exactly at nominal
+  // (real fast roll run with its gyro, dlambda2 then considered:
+  // angle_latency 0.28 ms, where the refit's sigma of tau was 9.7 ms, nearly
   // all of it dlambda2's +-180 arcmin).
   Eigen::MatrixXd WithConsidered(const Eigen::MatrixXd& N, const std::vector<int>& sc,
                                  const std::vector<int>& considered) const {

@@ -2,12 +2,12 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
-#include <map>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <map>
 #include <optional>
 #include <set>
 #include <stdexcept>

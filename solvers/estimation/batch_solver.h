@@ -130,11 +130,13 @@ std::map<int, std::vector<int>> DeterminedOnlyWithConsidered(
 // without that axis). Such an axis has no zero error to find: its zero only
 // says where the frame is, which the triads' misalignments say as well (a
 // rotation about it is theirs; with the lever arm and the gyro's
-// g-sensitivity free, nearly exactly). The decisions hold them (single runs
-// and joint fits alike), so that the prior of a sensor that is not there
-// does not spread into the misalignments (real fast roll run with its gyro:
-// dlambda2 considered at +-180' left gamma_z at 40 +- 180', gyro.Gyx at
-// -22.7 (deg/s)/g and its 8.6-ms latency not separable from dlambda2).
+// g-sensitivity free, nearly exactly). A run's decision holds them, so that
+// the prior of a sensor that is not there does not spread into the
+// misalignments (real fast roll run with its gyro: dlambda2 considered at
+// +-180' left gamma_z at 40 +- 180', gyro.Gyx at -22.7 (deg/s)/g and its
+// 8.6-ms latency not separable from dlambda2). A joint fit leaves the runs'
+// own zeros to the information: there they also carry how each run's
+// mounting differs from the others'.
 std::vector<int> ZerosOfStillAxes(const RunData& data);
 
 // At the nominal values with the scale factors and zero offsets fitted (on
