@@ -383,7 +383,7 @@ class CandidateAnalysis {
     // components not separable from the base parameters.
     std::vector<int> considered = considered_;
     for (const NotSeparable& ns : c.not_separable) considered.push_back(cols_[ns.component]);
-    c.N = WithConsidered(Rows(N_all_, c.supported, c.supported), sc, considered);
+    c.N = WithConsidered(Rows(N_all_, c.supported, c.supported), sc, c.B, considered);
     const Eigen::VectorXd ge = Entries(g_, sc);
     c.score = std::max(0.0, ge.dot(with_prior.ldlt().solve(ge)));
     // Newton step on (theta_b, theta_e): the block solve with the base
@@ -432,13 +432,14 @@ class CandidateAnalysis {
   // (real fast roll run with its gyro, dlambda2 then considered:
   // angle_latency 0.28 ms, where the refit's sigma of tau was 9.7 ms, nearly
   // all of it dlambda2's +-180 arcmin).
+  // B: the candidate's base coupling I_bb^-1 I_be (CandidateInformation::B).
   Eigen::MatrixXd WithConsidered(const Eigen::MatrixXd& N, const std::vector<int>& sc,
+                                 const Eigen::MatrixXd& B,
                                  const std::vector<int>& considered) const {
     if (considered.empty()) return N;
     const int k = static_cast<int>(sc.size());
-    const Eigen::MatrixXd Ibe = Rows(I_, base_, sc);
-    const Eigen::MatrixXd Ibc = Rows(I_, base_, considered);
-    const Eigen::MatrixXd Nec = Rows(I_, sc, considered) - Ibe.transpose() * bb_.solve(Ibc);
+    const Eigen::MatrixXd Nec =
+        Rows(I_, sc, considered) - B.transpose() * Rows(I_, base_, considered);
     const Eigen::LDLT<Eigen::MatrixXd> n(N);
     const Eigen::MatrixXd S = -n.solve(Nec);
     Eigen::VectorXd P(considered.size());
