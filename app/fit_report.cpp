@@ -313,7 +313,7 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
   if (r.gyro.present) out["gyro"] = GyroJson(layout, r);
   out["final_cost"] = r.final_cost;
   out["residual_count"] = r.residual_count;
-  out["iterations"] = {{"steps", r.iterations}, {"passes", r.passes}};
+  out["iterations"] = {{"steps", r.iterations}, {"passes", r.passes}, {"reductions", r.reductions}};
   const auto& m = r.residuals.measurement_rms;
   const auto& p = r.residuals.process_rms;
   out["residual_rms"] = {
@@ -326,7 +326,10 @@ nlohmann::json FitJson(const ParameterLayout& layout, const BatchResult& r, cons
   out["chi2_per_dof"] = r.chi2_per_dof;
   out["degrees_of_freedom"] = r.degrees_of_freedom;
   out["time_s"] = {{"init", r.init_seconds},
+                   {"decide", r.decide_seconds},
                    {"solve", r.solve_seconds},
+                   {"solve_passes", r.solve_pass_seconds},
+                   {"solve_reductions", r.solve_reduction_seconds},
                    {"covariance", r.covariance_seconds}};
   out["settings"] = {{"epochs", r.epochs}};
   return out;

@@ -28,7 +28,9 @@ measured in this invocation, so a loaded machine slows both sides.
             are not determined (shown as such, kept at nominal, within 2 % of
             the truth).
 
-Prints one Markdown table per part and a PASS/MISS line per target; writes
+Prints one Markdown table per part, where each fit's wall time went (the
+decision, the minimiser's passes over the samples and its reductions, the
+covariance, the rest: from the OUT's time_s) and a PASS/MISS line per target; writes
 DIR/solver_speed.json. Medians over --repeats (default 3) for filter and fit;
 diagnose once.
 """
@@ -86,6 +88,32 @@ def target(name, ok, text):
     print(f"{'PASS' if ok else 'MISS'}  {name}: {text}")
 
 
+def split_of(fj, fit):
+    """Where the fit's wall time went, from its OUT's time_s (the last
+    repeat's) and iterations: the decision, the minimiser's passes over the
+    samples and its reductions, the covariance, and the rest of the command
+    (reading the run, the start, the outputs) against the median wall."""
+    t, it = fj["time_s"], fj["iterations"]
+    split = {"decide_s": t["decide"], "passes": it["passes"], "passes_s": t["solve_passes"],
+             "reductions": it["reductions"], "reductions_s": t["solve_reductions"],
+             "covariance_s": t["covariance"]}
+    split["rest_s"] = fit["wall_s"] - sum(split[k] for k in ("decide_s", "passes_s",
+                                                             "reductions_s", "covariance_s"))
+    return split
+
+
+def print_splits(rows):
+    """One table of split_of's figures, a row per (name, split)."""
+    print("\nwhere the fit's time goes (wall s; the rest: reading the run, the start, "
+          "the outputs):\n")
+    print("| run | decision | passes | reductions | covariance | rest |")
+    print("|---|---|---|---|---|---|")
+    for name, sp in rows:
+        print(f"| {name} | {sp['decide_s']:.2f} | {sp['passes_s']:.2f} ({sp['passes']}) | "
+              f"{sp['reductions_s']:.2f} ({sp['reductions']}) | {sp['covariance_s']:.2f} | "
+              f"{sp['rest_s']:.2f} |")
+
+
 def filter_fit_diagnose(a, work, name, run):
     """filter and fit (medians of a.repeats) and diagnose (once, unless
     --skip-diagnose) on run: the row, and diagnose's OUT (or None)."""
@@ -95,7 +123,7 @@ def filter_fit_diagnose(a, work, name, run):
     fit = median_of([BIN, "fit", run, "-o", fit_out, "--force", "-q"], a.repeats, ok=(0, 4))
     fj = json.load(open(fit_out))
     row = {"filter": fil, "fit": fit, "fit_steps": fj["iterations"]["steps"],
-           "converged": fj["converged"]}
+           "converged": fj["converged"], "fit_split": split_of(fj, fit)}
     dj = None
     if not a.skip_diagnose:
         diag_out = os.path.join(work, name + "_diagnose.json")
@@ -130,6 +158,7 @@ def real_runs(a, work, result):
         print(f"| {name} | {fil['wall_s']:.2f} ({fil['cpu_s']:.2f}) | {fit['wall_s']:.2f} "
               f"({fit['cpu_s']:.2f}) | {fit['wall_s'] / fil['wall_s']:.2f} | {row['fit_steps']} | "
               f"{row['converged']} | {diag_txt} |")
+    print_splits([(name, row["fit_split"]) for name, row in result["real"].items()])
     for name, row in result["real"].items():
         r = row["fit"]["wall_s"] / row["filter"]["wall_s"]
         target(f"real {name}: fit <= 2x filter", r <= 2.0,
@@ -182,10 +211,12 @@ def simulated(a, work, result):
                          "-q"], repeats)
         fit = median_of([BIN, "fit", run, "-o", os.path.join(d, "fit.json"), "--force", "-q"],
                         repeats)
-        result[name] = {"filter": fil, "fit": fit}
+        result[name] = {"filter": fil, "fit": fit,
+                        "fit_split": split_of(json.load(open(os.path.join(d, "fit.json"))), fit)}
         print(f"\n{name}: filter {fil['wall_s']:.2f} s wall, {fil['cpu_s']:.2f} s CPU, "
               f"{fil['peak_MB']:.0f} MB; fit {fit['wall_s']:.2f} s wall, {fit['cpu_s']:.2f} s CPU, "
               f"{fit['peak_MB']:.0f} MB")
+        print_splits([(name, result[name]["fit_split"])])
         if check == "cpu":
             r = fit["cpu_s"] / fil["cpu_s"]
             target("paper 90 s 1 kHz: fit CPU <= 0.5x filter CPU", r <= 0.5,

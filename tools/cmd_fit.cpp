@@ -85,8 +85,10 @@ int RunFit(FitArgs a, Session& session) {
                 g["whitened_rms"].get<double>(),
                 g["intervals_left_out_clipped"].get<int>());
   }
-  std::printf("time: init %.2f s, solve %.2f s, covariance %.2f s\n", r.init_seconds,
-              r.solve_seconds, r.covariance_seconds);
+  std::printf("time: init %.2f s (the decision %.2f s), solve %.2f s (%d passes over the samples "
+              "%.2f s, %d reductions %.2f s), covariance %.2f s\n",
+              r.init_seconds, r.decide_seconds, r.solve_seconds, r.passes, r.solve_pass_seconds,
+              r.reductions, r.solve_reduction_seconds, r.covariance_seconds);
   std::printf("wrote %s\n", a.out_json.c_str());
   std::string why;
   const int status = FitExitStatus(settings, a.run_yaml, r, rep, &why);

@@ -467,6 +467,7 @@ bool BatchMinimizer::TryStep() {
     // A gradient not finite: refused after all, the current point evaluated again.
     current_ = objective_.Evaluate(phi_current, noise_, true, ThetaPart::kGradientAndInformation,
                                    &free_);
+    summary_.passes += 1;
     RaiseDamping(std::numeric_limits<double>::infinity());
     return false;
   }

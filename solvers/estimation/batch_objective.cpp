@@ -1,9 +1,18 @@
 #include "solvers/estimation/batch_objective.h"
 
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
 namespace triadcal {
+
+namespace {
+
+double SecondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
 
 bool BatchObjective::HasGyroPart(const Point& pt, int r) const {
   return has_gyro_[r] && r < static_cast<int>(pt.gyro.size()) && pt.gyro[r].degrees_of_freedom > 0;
@@ -55,17 +64,24 @@ BatchObjective::Point BatchObjective::Evaluate(const Eigen::VectorXd& phi,
   Point pt;
   pt.phi = phi;
   pt.passes.reserve(runs_.size());
+  const auto t_pass = std::chrono::steady_clock::now();
   for (int r = 0; r < runs(); ++r) {
     pt.passes.push_back(std::make_shared<const RunPass>(
         EvaluatePass(*runs_[r].problem, ThetaOf(r, phi), with_jacobian, threads_)));
   }
   pt.gyro_passes.resize(runs_.size());
+  for (int r = 0; r < runs(); ++r) {
+    if (!has_gyro_[r]) continue;
+    pt.gyro_passes[r] = std::make_shared<const GyroPass>(
+        EvaluateGyroPass(*runs_[r].problem, ThetaOf(r, phi), with_jacobian, threads_));
+  }
+  work_.passes += 1;
+  work_.pass_seconds += SecondsSince(t_pass);
+  const auto t_gyro = std::chrono::steady_clock::now();
   pt.gyro.resize(runs_.size());
   for (int r = 0; r < runs(); ++r) {
     if (!has_gyro_[r]) continue;
     const RunProblem& p = *runs_[r].problem;
-    pt.gyro_passes[r] = std::make_shared<const GyroPass>(
-        EvaluateGyroPass(p, ThetaOf(r, phi), with_jacobian, threads_));
     const int fitted = p.cfg.layout.has_gyro() ? kNumGyroParams : 0;
     if (gyro_noise_held_) {
       pt.gyro[r] = ReduceGyroAtNoise(*pt.gyro_passes[r], p.gyro_noise_rad_s,
@@ -76,6 +92,7 @@ BatchObjective::Point BatchObjective::Evaluate(const Eigen::VectorXd& phi,
         ReduceGyroAtBestNoise(*pt.gyro_passes[r], gyro_noise_hint_[r], fitted, true, threads_);
     if (pt.gyro[r].noise_rad_s.allFinite()) gyro_noise_hint_[r] = pt.gyro[r].noise_rad_s;
   }
+  work_.reduction_seconds += SecondsSince(t_gyro);
   Reweight(&pt, noise, theta_part, free);
   return pt;
 }
@@ -97,6 +114,7 @@ std::vector<int> BatchObjective::ColumnsOf(int r, const std::vector<int>& free) 
 
 void BatchObjective::Reweight(Point* pt, const std::vector<Eigen::Vector3d>& noise,
                               ThetaPart theta_part, const std::vector<int>* free) const {
+  const auto t0 = std::chrono::steady_clock::now();
   pt->reductions.clear();
   for (int r = 0; r < runs(); ++r) {
     std::vector<int> cols;
@@ -105,6 +123,8 @@ void BatchObjective::Reweight(Point* pt, const std::vector<Eigen::Vector3d>& noi
                                     threads_, theta_part, free ? &cols : nullptr));
   }
   Assemble(pt);
+  work_.reductions += 1;
+  work_.reduction_seconds += SecondsSince(t0);
 }
 
 BatchObjective::Point BatchObjective::AtNoise(const Point& pt,
@@ -121,12 +141,14 @@ BatchObjective::Point BatchObjective::AtNoise(const Point& pt,
 }
 
 void BatchObjective::ReweightGyro(Point* pt, const Point& other) const {
+  const auto t0 = std::chrono::steady_clock::now();
   for (int r = 0; r < runs(); ++r) {
     if (!HasGyroPart(*pt, r) || !HasGyroPart(other, r)) continue;
     pt->gyro[r] = ReduceGyroAtNoise(*pt->gyro_passes[r], other.gyro[r].noise_rad_s,
                                     pt->gyro[r].rho, threads_);
   }
   Assemble(pt);
+  work_.reduction_seconds += SecondsSince(t0);
 }
 
 void BatchObjective::Assemble(Point* pt) const {

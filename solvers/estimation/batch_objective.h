@@ -114,6 +114,17 @@ class BatchObjective {
   // Run r's reference pass of the noise weights (run_evaluation.h).
   const RunPass& weights(int r) const { return *weights_[r]; }
 
+  // What the evaluations have cost so far: the passes over the samples
+  // (Evaluate; the gyros' with them) and the reductions (every Reweight,
+  // the gyros' too), with their wall time. Where a fit's time goes.
+  struct Work {
+    int passes = 0;
+    double pass_seconds = 0.0;
+    int reductions = 0;
+    double reduction_seconds = 0.0;
+  };
+  const Work& work() const { return work_; }
+
  private:
   void Assemble(Point* pt) const;
   // Run r's parameters that the unknowns `free` move.
@@ -126,6 +137,7 @@ class BatchObjective {
   // starts (the objective is evaluated by one minimiser at a time).
   mutable std::vector<Eigen::Vector3d> gyro_noise_hint_;
   bool gyro_noise_held_ = false;  // HoldGyroNoise
+  mutable Work work_;             // work(): one minimiser at a time, as above
   Eigen::MatrixXd A_;
   Eigen::VectorXd b_;
   int m_ = 0;

@@ -564,6 +564,7 @@ class BatchSolve {
   // noise_mV: auto): decided before the fit, so that no misfit can move
   // what the run does not determine.
   void Decide() {
+    const auto t_decide = std::chrono::steady_clock::now();
     if (opt_.decision) {
       decision_ = *opt_.decision;
     } else {
@@ -573,6 +574,7 @@ class BatchSolve {
       o.shared = shared_;  // the decision's full pass shares the fit's weights
       decision_ = DecideHeldParameters(run_, data_, layout_, o);
     }
+    res_.decide_seconds = Seconds(t_decide);
     res_.held = decision_.held;
     res_.consider = decision_.consider;
     res_.relative_to = decision_.relative_to;
@@ -670,6 +672,10 @@ class BatchSolve {
       return false;
     }
     res_.solve_seconds = Seconds(t_solve_);
+    const BatchObjective::Work& work = objective_->work();
+    res_.solve_pass_seconds = work.pass_seconds;
+    res_.solve_reduction_seconds = work.reduction_seconds;
+    res_.reductions = work.reductions;
     return true;
   }
 

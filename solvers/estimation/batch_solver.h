@@ -309,7 +309,13 @@ struct BatchResult {
   double hac_bandwidth_epochs = 0.0;  // the Bartlett bandwidth used, epochs
   bool hac_kernel_bias_corrected = false;
   double hac_kernel_bias_factor_max = 1.0;
+  // Wall times: init is the set-up, the decision (decide_seconds of it)
+  // and the start; solve the minimiser's, of which solve_pass_seconds in its
+  // passes over the samples (`passes`) and solve_reduction_seconds in its
+  // `reductions` (BatchObjective::Work).
   double init_seconds = 0.0, solve_seconds = 0.0, covariance_seconds = 0.0;
+  double decide_seconds = 0.0, solve_pass_seconds = 0.0, solve_reduction_seconds = 0.0;
+  int reductions = 0;
   int epochs = 0;
   // The gyro triad's part (gyro_term.h), when the run has one: its noise at
   // the maximum likelihood, its residuals. final_cost and chi2_per_dof above

@@ -383,6 +383,39 @@ TEST(BatchMinimizer, OneStepNearTheMinimumOfAMisfitLandsOnIt) {
   EXPECT_LT(distance(after.phi), 0.01) << "from 0.5 sigma";
 }
 
+// The objective counts what it did: a pass per Evaluate (with the gyros'),
+// a reduction per Evaluate, Reweight or AtNoise; the minimiser's own count
+// of passes is the objective's (the fit's "passes" and its time split).
+TEST(BatchObjective, WorkCountsItsPassesAndReductions) {
+  const Scenario s = PaperScenario(50.0, 20.0, 1.0, 15.0, 2);
+  const RunData data = Simulate(s);
+  const RunProblem p = BuildRunProblem(s.run, data, ParameterLayout(), 0.5, {});
+  Eigen::MatrixXd A;
+  Eigen::VectorXd b;
+  PriorAndConstraintRows(p, &A, &b);
+  const BatchObjective objective({LinkedRun{&p, {}, {}}}, A, b, p.prior.mean, 1);
+  EXPECT_EQ(objective.work().passes, 0);
+  EXPECT_EQ(objective.work().reductions, 0);
+  BatchObjective::Point pt = objective.Evaluate(p.prior.mean, {p.noise_mV}, true);
+  EXPECT_EQ(objective.work().passes, 1);
+  EXPECT_EQ(objective.work().reductions, 1);
+  objective.Reweight(&pt, {2.0 * p.noise_mV});
+  EXPECT_TRUE(objective.AtNoise(pt, {p.noise_mV}, ThetaPart::kNone).finite());
+  EXPECT_EQ(objective.work().passes, 1);
+  EXPECT_EQ(objective.work().reductions, 3);
+  EXPECT_GT(objective.work().pass_seconds, 0.0);
+  EXPECT_GT(objective.work().reduction_seconds, 0.0);
+  std::vector<int> all(p.n);
+  for (int i = 0; i < p.n; ++i) all[i] = i;
+  MinimizerOptions o;
+  o.estimate_noise = {true};
+  MinimizerSummary summary;
+  BatchMinimizer(objective, all, o).Minimize(p.prior.mean, {p.noise_mV}, &summary);
+  EXPECT_TRUE(summary.converged) << summary.termination;
+  EXPECT_EQ(objective.work().passes, 1 + summary.passes);
+  EXPECT_GT(objective.work().reductions, 3 + summary.passes);
+}
+
 // A structural null's information is what the states' elimination leaves of
 // sums 1e13 times larger: rounding, above or below null_information by the
 // order of the sums (real slow roll run: dy2 considered or held as the
