@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <fstream>
 #include <random>
 #include <stdexcept>
@@ -333,6 +334,34 @@ TEST(RunReduction, NoiseHessianIsTheNoiseGradientsDerivative) {
   }
 }
 
+// The one-run objective of a simulated run over the declared layout, with
+// the data and the run problem it points to kept beside it.
+class OneRunObjective {
+ public:
+  explicit OneRunObjective(const Scenario& s)
+      : data_(Simulate(s)), p_(BuildRunProblem(s.run, data_, ParameterLayout(), 0.5, {})) {
+    Eigen::MatrixXd A;
+    Eigen::VectorXd b;
+    PriorAndConstraintRows(p_, &A, &b);
+    objective_.emplace(std::vector<LinkedRun>{LinkedRun{&p_, {}, {}}}, A, b, p_.prior.mean, 1);
+  }
+  OneRunObjective(const OneRunObjective&) = delete;
+  OneRunObjective& operator=(const OneRunObjective&) = delete;
+  const RunProblem& problem() const { return p_; }
+  const BatchObjective& objective() const { return *objective_; }
+  // Every parameter's index: all free.
+  std::vector<int> All() const {
+    std::vector<int> all(p_.n);
+    for (int i = 0; i < p_.n; ++i) all[i] = i;
+    return all;
+  }
+
+ private:
+  RunData data_;
+  RunProblem p_;
+  std::optional<BatchObjective> objective_;
+};
+
 // The minimiser's model is -log L profiled over the noise: Gauss-Newton's
 // information less the noise's coupling G H_ss^-1 G^T (FormCoupling). A
 // misfit (a 10-ms latency the model lacks) splits the gradient unevenly over
@@ -344,14 +373,10 @@ TEST(RunReduction, NoiseHessianIsTheNoiseGradientsDerivative) {
 TEST(BatchMinimizer, OneStepNearTheMinimumOfAMisfitLandsOnIt) {
   const Scenario s = testing_fixtures::WithEffect(3, Effect::kAngleLatency,
                                                   {{"angle_latency.tau", 10.0}});
-  const RunData data = Simulate(s);
-  const RunProblem p = BuildRunProblem(s.run, data, ParameterLayout(), 0.5, {});
-  Eigen::MatrixXd A;
-  Eigen::VectorXd b;
-  PriorAndConstraintRows(p, &A, &b);
-  const BatchObjective objective({LinkedRun{&p, {}, {}}}, A, b, p.prior.mean, 1);
-  std::vector<int> all(p.n);
-  for (int i = 0; i < p.n; ++i) all[i] = i;
+  const OneRunObjective one_run(s);
+  const RunProblem& p = one_run.problem();
+  const BatchObjective& objective = one_run.objective();
+  const std::vector<int> all = one_run.All();
   MinimizerOptions tight;
   tight.tolerance = 1e-12;
   tight.max_iterations = 60;
@@ -387,13 +412,9 @@ TEST(BatchMinimizer, OneStepNearTheMinimumOfAMisfitLandsOnIt) {
 // a reduction per Evaluate, Reweight or AtNoise; the minimiser's own count
 // of passes is the objective's (the fit's "passes" and its time split).
 TEST(BatchObjective, WorkCountsItsPassesAndReductions) {
-  const Scenario s = PaperScenario(50.0, 20.0, 1.0, 15.0, 2);
-  const RunData data = Simulate(s);
-  const RunProblem p = BuildRunProblem(s.run, data, ParameterLayout(), 0.5, {});
-  Eigen::MatrixXd A;
-  Eigen::VectorXd b;
-  PriorAndConstraintRows(p, &A, &b);
-  const BatchObjective objective({LinkedRun{&p, {}, {}}}, A, b, p.prior.mean, 1);
+  const OneRunObjective one_run(PaperScenario(50.0, 20.0, 1.0, 15.0, 2));
+  const RunProblem& p = one_run.problem();
+  const BatchObjective& objective = one_run.objective();
   EXPECT_EQ(objective.work().passes, 0);
   EXPECT_EQ(objective.work().reductions, 0);
   BatchObjective::Point pt = objective.Evaluate(p.prior.mean, {p.noise_mV}, true);
@@ -405,8 +426,7 @@ TEST(BatchObjective, WorkCountsItsPassesAndReductions) {
   EXPECT_EQ(objective.work().reductions, 3);
   EXPECT_GT(objective.work().pass_seconds, 0.0);
   EXPECT_GT(objective.work().reduction_seconds, 0.0);
-  std::vector<int> all(p.n);
-  for (int i = 0; i < p.n; ++i) all[i] = i;
+  const std::vector<int> all = one_run.All();
   MinimizerOptions o;
   o.estimate_noise = {true};
   MinimizerSummary summary;
