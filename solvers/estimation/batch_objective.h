@@ -114,9 +114,11 @@ class BatchObjective {
   // Run r's reference pass of the noise weights (run_evaluation.h).
   const RunPass& weights(int r) const { return *weights_[r]; }
 
-  // What the evaluations have cost so far: the passes over the samples
-  // (Evaluate; the gyros' with them) and the reductions (every Reweight,
-  // the gyros' too), with their wall time. Where a fit's time goes.
+  // What the evaluations have cost so far, where a fit's time goes: the
+  // passes over the samples (each Evaluate's, the gyros' with them) and the
+  // reductions (each Reweight's, every run reduced again), with their wall
+  // time; reduction_seconds holds the gyros' noise profiles and reductions
+  // too (Evaluate, ReweightGyro).
   struct Work {
     int passes = 0;
     double pass_seconds = 0.0;

@@ -579,9 +579,9 @@ GyroReduction ReduceGyroAtBestNoise(const GyroPass& pass, const Eigen::Vector3d&
   // (each a reduction without the Jacobian, O(E), independent: on
   // `threads`): the gradient's 7 points at every step, the Hessian's 12
   // more where the last step left the region where -log L is quadratic
-  // (kChordReach; within it the Hessian moves by about the step, and the
-  // chord steps converge as fast as Newton's: real slow gyro run, the same
-  // steps with 7 reductions instead of 19). The steps go on to 1e-12 in
+  // (kChordReach; within it the Hessian moves by about the step, and chord
+  // steps with the last one converge about as fast: the real gyro runs' fits
+  // the same to 3e-9 sigma, 11-18 % faster). The steps go on to 1e-12 in
   // -log L, so the profile is a smooth function of theta to rounding.
   Eigen::Vector3d s = start.array().max(1e-12).log();
   const double h = 1e-3;
