@@ -30,8 +30,8 @@ measured in this invocation, so a loaded machine slows both sides.
 
 Prints one Markdown table per part, where each fit's wall time went (the
 decision, the minimiser's passes over the samples and its reductions, the
-covariance, the rest: from the OUT's time_s) and a PASS/MISS line per target; writes
-DIR/solver_speed.json. Medians over --repeats (default 3) for filter and fit;
+covariance, the rest: from the OUT's time_s) and a PASS/MISS line per target;
+writes DIR/solver_speed.json. Medians over --repeats (default 3) for filter and fit;
 diagnose once.
 """
 import argparse
