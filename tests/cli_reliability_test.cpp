@@ -942,14 +942,17 @@ TEST_F(CliReliability, DiagnoseAndBatchSayWhereTheFitStarted) {
   EXPECT_TRUE(said) << s["results"][0]["warnings"].dump();
 }
 
-// The same misdeclared counts run from a start whose filter lost the track
-// without diverging (the paper's experiment, 20 s at 50 Hz, seed 3): the fit
-// heads for a degenerate optimum (Kz towards 0, where the priors' offsets of
-// 0 cost less) and does not converge. It says so, with what a step would
-// still gain. It said the damping had reached 1e10: the secant's update had
-// lost its positive definiteness to rounding (a gradient change of 1e13),
-// and the step it then tried was the last step's again.
-TEST_F(CliReliability, FitFromALostStartSaysHowFarItIs) {
+// The same misdeclared counts run, shorter (the paper's experiment, 20 s at
+// 50 Hz, seed 3): the smoother, its offsets of 0 far from the readings'
+// 1500 counts, estimates nonlinearities under which the readings model no
+// longer inverts. That is its divergence (the inverse is not a number there:
+// SpecificForceFromReadings_g); the fit starts from the nominal values with
+// scale and offset fitted, converges, finds the simulated sensor and says the
+// declared offsets are wrong. Before, the inverse's last iterate was taken:
+// the smoother lost the track without diverging, and the fit from its
+// estimates headed for a degenerate optimum (Kz towards 0) and did not
+// converge in 40 steps.
+TEST_F(CliReliability, FitFromALostStartRecovers) {
   std::string sc = ReadFile(std::string(TRIADCAL_SOURCE_DIR) +
                             "/examples/paper-experiment3/scenario.yaml");
   for (const auto& [from, to] : {std::pair<std::string, std::string>{"duration_s: 90 ",
@@ -963,15 +966,18 @@ TEST_F(CliReliability, FitFromALostStartSaysHowFarItIs) {
             0);
   WriteText("counts.yaml", CountsYaml("sim/run.csv"));
   const CliResult r = Run("fit " + Path("counts.yaml") + " -o " + Path("out.json"));
-  EXPECT_EQ(r.exit_code, 4) << r.err;
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("the RTS smoother diverged"), std::string::npos) << r.err;
   const nlohmann::json j = nlohmann::json::parse(ReadFile(Path("out.json")));
-  EXPECT_FALSE(j["converged"].get<bool>());
-  EXPECT_EQ(j["verdict"]["termination"].get<std::string>().rfind("not converged after 40 steps: "
-                                                                 "a Newton step would still "
-                                                                 "lower -log L by ",
-                                                                 0),
-            0u)
-      << j["verdict"]["termination"];
+  EXPECT_TRUE(j["converged"].get<bool>()) << j["verdict"]["termination"];
+  const nlohmann::json truth = nlohmann::json::parse(ReadFile(Path("sim/truth.json")));
+  for (const std::string k : {"Kx", "Ky", "Kz", "W0x", "W0y", "W0z"}) {
+    const double value = j["parameters"][k]["value"].get<double>();
+    const double sigma = j["parameters"][k]["sigma"].get<double>();
+    EXPECT_LT(std::abs(value - truth["parameters"][k].get<double>()), 4.0 * sigma) << k;
+  }
+  EXPECT_NE(j["verdict"]["beyond_prior"].dump().find("\"W0x\""), std::string::npos)
+      << j["verdict"].dump();
 }
 
 // batch names its units for each run's readings: Kx was "mV/g" for counts.

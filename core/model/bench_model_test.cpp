@@ -207,16 +207,39 @@ TEST(BenchModel, ReadingsInverseRoundTripWithNonlinearity) {
           {Effect::kThermalDrift, Effect::kThermalDriftTemp, Effect::kScaleAsymmetry});
     }
     cfg.temp_ref_C = 21.0;
-    for (int trial = 0; trial < 200; ++trial) {
-      Eigen::VectorXd th = RandomTheta(cfg.layout, rng);
-      for (int i = kKxx; i <= kKzz; ++i) th[i] *= 5.0;  // up to ~1e-2 /g
-      const Vec3<double> W(u(rng), u(rng), u(rng));
-      const SampleContext ctx{37.0, 24.5};
-      const Vec3<double> z = Readings_mV(cfg, th.data(), W, ctx);
-      const Vec3<double> W_back = SpecificForceFromReadings_g(cfg, th.data(), z, ctx);
-      EXPECT_LT((W - W_back).norm(), 1e-13) << "trial " << trial;
+    // Up to ~1e-2 /g, and up to ~0.1 /g, where the chord steps from W = u
+    // converge slowly enough to form J again (SpecificForceFromReadings_g).
+    for (const double k_scale : {5.0, 50.0}) {
+      for (int trial = 0; trial < 200; ++trial) {
+        Eigen::VectorXd th = RandomTheta(cfg.layout, rng);
+        for (int i = kKxx; i <= kKzz; ++i) th[i] *= k_scale;
+        const Vec3<double> W(u(rng), u(rng), u(rng));
+        const SampleContext ctx{37.0, 24.5};
+        const Vec3<double> z = Readings_mV(cfg, th.data(), W, ctx);
+        const Vec3<double> W_back = SpecificForceFromReadings_g(cfg, th.data(), z, ctx);
+        EXPECT_LT((W - W_back).norm(), 1e-13) << "trial " << trial << " K x" << k_scale;
+      }
     }
   }
+}
+
+// Where the readings model has no inverse (W + 0.5 W^2 = u has no real root
+// for u < -0.5), W is not a number, not the last iterate.
+TEST(BenchModel, ReadingsInverseIsNotANumberWhereTheModelDoesNotInvert) {
+  ModelConfig cfg;
+  Eigen::VectorXd th = Eigen::VectorXd::Zero(cfg.layout.size());
+  for (int i = 0; i < 3; ++i) th[kKx + i] = 1.0;
+  th[kKxx] = th[kKyy] = th[kKzz] = 0.5;
+  const SampleContext ctx{0.0, 20.0};
+  Mat3<double> J_inv;
+  const Vec3<double> bad =
+      SpecificForceFromReadings_g(cfg, th.data(), Vec3<double>(-2.0, 0.1, 0.2), ctx, &J_inv);
+  EXPECT_TRUE(std::isnan(bad.x()) && std::isnan(bad.y()) && std::isnan(bad.z()));
+  EXPECT_TRUE(J_inv.hasNaN());
+  // Within its range the same model inverts.
+  const Vec3<double> W(-0.9, 0.1, 0.2);
+  const Vec3<double> z = Readings_mV(cfg, th.data(), W, ctx);
+  EXPECT_LT((SpecificForceFromReadings_g(cfg, th.data(), z, ctx) - W).norm(), 1e-13);
 }
 
 TEST(BenchModel, ReadingsModelIsEquationOne) {

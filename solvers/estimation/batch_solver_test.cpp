@@ -408,6 +408,26 @@ TEST(BatchMinimizer, OneStepNearTheMinimumOfAMisfitLandsOnIt) {
   EXPECT_LT(distance(after.phi), 0.01) << "from 0.5 sigma";
 }
 
+// A minimiser stopped by its step limit says so, with what a Newton step
+// would still gain (the verdict of a fit that does not converge).
+TEST(BatchMinimizer, StoppedByItsStepLimitSaysHowFarItIs) {
+  const OneRunObjective one_run(PaperScenario(50.0, 20.0, 1.0, 15.0, 2));
+  const RunProblem& p = one_run.problem();
+  MinimizerOptions one;
+  one.max_iterations = 1;
+  one.estimate_noise = {true};
+  BatchMinimizer minimizer(one_run.objective(), one_run.All(), one);
+  MinimizerSummary summary;
+  minimizer.Minimize(p.prior.mean, {p.noise_mV}, &summary);
+  EXPECT_FALSE(summary.converged);
+  EXPECT_EQ(summary.iterations, 1);
+  EXPECT_EQ(summary.termination.rfind(
+                "not converged after 1 steps: a Newton step would still lower -log L by ", 0),
+            0u)
+      << summary.termination;
+  EXPECT_GT(summary.newton_decrement, one.tolerance);
+}
+
 // The objective counts what it did: a pass per Evaluate (with the gyros'),
 // a reduction per Evaluate, Reweight or AtNoise; the minimiser's own count
 // of passes is the objective's (the fit's "passes" and its time split).
