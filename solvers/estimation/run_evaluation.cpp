@@ -156,35 +156,39 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
   std::vector<std::array<Vec6, 3>> pseudo(information ? E - 1 : 0);
   ParallelFor(E - 1, threads, [&](std::size_t e) {
     const ProcessNoise& qn = *wp.process[e].noise;
-    // Q's whitening from step 1: Q^-1 v = LQ^T LQ v.
+    // Q's whitening from step 1: Q^-1 v = LQ^T LQ v (products of the whole
+    // 6 x 6, its upper triangle zero: cheaper than Eigen's triangular kernels
+    // at this size).
     const Mat6& L = LQ[e];
     auto solve_q = [&L](const Vec6& v) -> Vec6 {
-      const Vec6 Lv = L.triangularView<Eigen::Lower>() * v;
-      return L.transpose().triangularView<Eigen::Upper>() * Lv;
+      const Vec6 Lv = L * v;
+      return L.transpose() * Lv;
     };
     Mat6 Q_ref = qn.Q_iso;
     for (int i = 0; i < 3; ++i) Q_ref += var_ref[i] * qn.channel_weight[i];
-    const Eigen::LLT<Mat6> llt_ref(Q_ref);
-    const Vec6 w = solve_q(out.process_residual[e + 1]);
     Parts& c = comp[e];
-    std::array<Mat6, 3> A;
+    // With Q_ref = R R^T and L_ref = R^-1: A_i = Q_ref^-1 Q_i is similar to
+    // the symmetric B_i = L_ref Q_i L_ref^T, so tr A_i = tr B_i and
+    // tr(A_i A_j) = tr(B_i B_j) = sum B_i o B_j.
+    const Mat6 L_ref = WhiteningOf(Q_ref, &c.log_det);  // 0.5 log det
+    const Vec6 w = solve_q(out.process_residual[e + 1]);
+    std::array<Mat6, 3> B;
     std::array<Vec6, 3> QiQinv_r, QinvQiw;
     for (int i = 0; i < 3; ++i) {
-      A[i] = llt_ref.solve(var_ref[i] * qn.channel_weight[i]);
+      B[i].noalias() = L_ref * (var_ref[i] * qn.channel_weight[i]) * L_ref.transpose();
       QiQinv_r[i] = var[i] * (qn.channel_weight[i] * w);
       QinvQiw[i] = solve_q(QiQinv_r[i]);
       c.q[i] = w.dot(QiQinv_r[i]);
-      c.N[i] = A[i].trace();
+      c.N[i] = B[i].trace();
       if (information) pseudo[e][i] = -2.0 * (L * QiQinv_r[i]);
     }
-    // Both symmetric: q_ij = (Q_i w)^T Q^-1 (Q_j w), tr(A_i A_j) = sum A_i o A_j^T.
+    // Both symmetric: q_ij = (Q_i w)^T Q^-1 (Q_j w), tr(B_i B_j) = sum B_i o B_j.
     for (int i = 0; i < 3; ++i) {
       for (int j = i; j < 3; ++j) {
         c.qq(i, j) = c.qq(j, i) = QiQinv_r[i].dot(QinvQiw[j]);
-        c.tt(i, j) = c.tt(j, i) = A[i].cwiseProduct(A[j].transpose()).sum();
+        c.tt(i, j) = c.tt(j, i) = B[i].cwiseProduct(B[j]).sum();
       }
     }
-    c.log_det = llt_ref.matrixLLT().diagonal().array().log().sum();  // 0.5 log det
   });
   for (const Parts& c : comp) {
     out.channel_quadratic += c.q;
@@ -251,7 +255,8 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
       // diagonal (the Cholesky factor's derivative), and L r = r0.
       Mat6 X = LQ[e] * w.channel_weight[i] * LQ[e].transpose();
       X.diagonal() *= 0.5;
-      const Vec6 dLr = -(X.triangularView<Eigen::Lower>() * pb[e].r0);
+      const Mat6 X_lower = X.triangularView<Eigen::Lower>();
+      const Vec6 dLr = -(X_lower * pb[e].r0);
       pb[e].C.col(k_col[i]) += dLr * (-2.0 * var[i] / theta[kKx + i]);
       if (information) k_weight[e][i] = dLr * (-2.0 * var[i] / theta[kKx + i]);
     }

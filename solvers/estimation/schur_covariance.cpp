@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 
 #include "solvers/estimation/parallel.h"
+#include "solvers/estimation/state_space_model.h"
 
 namespace triadcal {
 namespace {
@@ -81,12 +82,10 @@ Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process
     if (k > 0) G_p.noalias() = process[0].A.transpose() * probe->columns[0];
     Eigen::MatrixXd W(6, n), Gn(6, n);
     for (std::size_t e = 0; e < E; ++e) {
-      const Eigen::LLT<Mat6> llt(S);
-      W = G;
-      llt.matrixL().solveInPlace(W);
+      const Mat6 Li = LowerInverse(Eigen::LLT<Mat6>(S).matrixLLT());  // chol(S)^-1
+      W.noalias() = Li * G;
       if (k > 0) {
-        W_p = G_p;
-        llt.matrixL().solveInPlace(W_p);
+        W_p.noalias() = Li * G_p;
         cross_eliminated.noalias() += W.transpose() * W_p;
         self_eliminated.noalias() += W_p.transpose() * W_p;
       }
@@ -99,8 +98,7 @@ Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process
       const ProcessBlock& p = process[e];
       // The fill-in of eliminating x_e: U^T S^-1 U and U^T S^-1 G, with
       // U = A^T B the (e, e+1) block, as (L^-1 U)^T (L^-1 U) and (L^-1 U)^T W.
-      Mat6 LiU = p.A.transpose() * p.B;
-      llt.matrixL().solveInPlace(LiU);
+      const Mat6 LiU = Li * (p.A.transpose() * p.B);
       Mat6 Sn = p.B.transpose() * p.B + measurement[e + 1].M.transpose() * measurement[e + 1].M;
       Gn.noalias() = p.B.transpose() * p.C;
       Gn.noalias() += measurement[e + 1].M.transpose() * measurement[e + 1].N;
@@ -205,11 +203,13 @@ ReducedOverStates ReduceOverStates(const std::vector<ProcessBlock>& process,
   Eigen::MatrixXd Gn;
   Vec6 hn;
   for (std::size_t e = 0; e < E; ++e) {
-    const Eigen::LLT<Mat6> llt(S);
-    const Vec6 Sih = llt.solve(h);
+    // S^-1 = Li^T Li with Li = chol(S)^-1 (LowerInverse: faster than
+    // Eigen's triangular solves at 6 x 6).
+    const Mat6 Li = LowerInverse(Eigen::LLT<Mat6>(S).matrixLLT());
+    const Vec6 Sih = Li.transpose() * (Li * h);
     Eigen::MatrixXd SiG;
     if (with_theta) {
-      SiG = llt.solve(G);
+      SiG = Li.transpose() * (Li * G);
       out.information.noalias() -= G.transpose() * SiG;
       out.gradient.noalias() -= G.transpose() * Sih;
     }
@@ -218,7 +218,7 @@ ReducedOverStates ReduceOverStates(const std::vector<ProcessBlock>& process,
     if (e + 1 == E) break;
     const ProcessBlock& p = process[e];
     const Mat6 U = p.A.transpose() * p.B;
-    const Mat6 SiU = llt.solve(U);
+    const Mat6 SiU = Li.transpose() * (Li * U);
     if (with_states) Sinv_U[e] = SiU;
     block(e + 1, &Sn, &Gn, &hn);
     S = Sn - U.transpose() * SiU;

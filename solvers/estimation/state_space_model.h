@@ -156,7 +156,13 @@ class StateSpaceModel {
   int n_acc_ = 0;
 };
 
-// Whitening L with L^T L = cov^-1 (L = chol(cov)^-1, lower-triangular inverse).
-Mat6 WhiteningOf(const Mat6& cov);
+// Whitening L with L^T L = cov^-1 (L = chol(cov)^-1, lower-triangular inverse;
+// its upper triangle is zero); *half_log_det, when given, 0.5 log det cov.
+Mat6 WhiteningOf(const Mat6& cov, double* half_log_det = nullptr);
+
+// The inverse of the lower triangle of L (its upper triangle is not read; the
+// result's is zero): with L from Eigen's LLT (matrixLLT), chol(S)^-1, so that
+// S^-1 = W^T W.
+Mat6 LowerInverse(const Mat6& L);
 
 }  // namespace triadcal
