@@ -12,10 +12,9 @@ namespace {
 
 constexpr int kMaxParams = 64;
 
-// Jets of the angle stage: its parameters (latency, encoder harmonic, angle
-// scale: 1 + 4 + 2).
+// Jets of the angle stage: at most its parameters (latency, encoder
+// harmonic, angle scale: 1 + 4 + 2).
 constexpr int kJetParams = 8;
-using SmallJet = ceres::Jet<double, kJetParams>;
 
 // Jets of the bench motion behind the size effect: the geometric parameters
 // the motion depends on (dpsi, d, eps), the bench zeros (dtheta_c,
@@ -124,23 +123,37 @@ namespace {
 
 // Angle stage: the bench angles from the recorded ones (*b), and the
 // derivatives of their six quantities (angle, rate, acceleration of each
-// axis) by the angle-stage parameters (*db, Jets over those alone).
-TRIADCAL_FLATTEN TRIADCAL_NOINLINE void AngleStage(const ModelConfig& cfg, const double* th,
-                                                   const BenchAngles<double>& rec,
-                                                   BenchAngles<double>* b,
-                                                   Eigen::Matrix<double, 6, kJetParams>* db) {
-  const ParameterLayout& layout = cfg.layout;
-  const std::vector<int>& angle_params = layout.StageParams(EffectStage::kAngle);
+// axis) by the angle-stage parameters (*db, Jets over those alone, N slots:
+// the loop after round 1 of diagnose carries angle_latency alone).
+template <int N>
+TRIADCAL_FLATTEN TRIADCAL_NOINLINE void AngleStageWith(const ModelConfig& cfg, const double* th,
+                                                       const BenchAngles<double>& rec,
+                                                       BenchAngles<double>* b,
+                                                       Eigen::Matrix<double, 6, kJetParams>* db) {
+  using AngleJet = ceres::Jet<double, N>;
+  const std::vector<int>& angle_params = cfg.layout.StageParams(EffectStage::kAngle);
   // The angle stage reads only its own parameters (BenchAnglesFromRecorded).
   const int count = static_cast<int>(angle_params.size());
-  const SparseJets<SmallJet, kMaxParams> t(th, angle_params.data(), count, count);
-  const BenchAngles<SmallJet> bj = BenchAnglesFromRecorded<SmallJet>(cfg, t.data(), rec);
+  const SparseJets<AngleJet, kMaxParams> t(th, angle_params.data(), count, count);
+  const BenchAngles<AngleJet> bj = BenchAnglesFromRecorded<AngleJet>(cfg, t.data(), rec);
   for (int i = 0; i < 2; ++i) {
-    const AxisState<SmallJet>& a = bj.axis[i];
+    const AxisState<AngleJet>& a = bj.axis[i];
     b->axis[i] = AxisState<double>{a.angle.a, a.rate.a, a.accel.a};
-    db->row(3 * i) = a.angle.v.transpose();
-    db->row(3 * i + 1) = a.rate.v.transpose();
-    db->row(3 * i + 2) = a.accel.v.transpose();
+    db->block<1, N>(3 * i, 0) = a.angle.v.transpose();
+    db->block<1, N>(3 * i + 1, 0) = a.rate.v.transpose();
+    db->block<1, N>(3 * i + 2, 0) = a.accel.v.transpose();
+  }
+}
+
+void AngleStage(const ModelConfig& cfg, const double* th, const BenchAngles<double>& rec,
+                BenchAngles<double>* b, Eigen::Matrix<double, 6, kJetParams>* db) {
+  const std::size_t count = cfg.layout.StageParams(EffectStage::kAngle).size();
+  if (count <= 1) {
+    AngleStageWith<1>(cfg, th, rec, b, db);
+  } else if (count <= 4) {
+    AngleStageWith<4>(cfg, th, rec, b, db);
+  } else {
+    AngleStageWith<kJetParams>(cfg, th, rec, b, db);
   }
 }
 
@@ -405,8 +418,10 @@ TRIADCAL_FLATTEN void AccelerationWithJacobian(const ModelConfig& cfg, const dou
   const Mat3<double> Rzp = Rz(th[kDpsi]);
   const Mat3<double> Ryp = Ry(b.axis[0].angle + th[kDthetaC]);
   const int o_eps = layout.offset(Effect::kAxisNonperpendicularity);
-  const Mat3<double> Reps = Rz(o_eps >= 0 ? th[o_eps] : 0.0);
-  const Mat3<double> C_12 = Reps * Rx(b.axis[1].angle + th[kDlambda2]) * Reps.transpose();
+  const Mat3<double> Reps = o_eps >= 0 ? Rz(th[o_eps]) : Mat3<double>::Identity();
+  const Mat3<double> C_12 =
+      o_eps >= 0 ? Mat3<double>(Reps * Rx(b.axis[1].angle + th[kDlambda2]) * Reps.transpose())
+                 : Rx(b.axis[1].angle + th[kDlambda2]);
   const Mat3<double> C_L1 = Rzp * Ryp;
   const Mat3<double> C = C_L1 * C_12;
 
