@@ -2,7 +2,8 @@
 // the acceleration with its Jacobian by every parameter (AccelerationWithJacobian)
 // and without it (AccelerationFromReadings_L), on the base layout with the
 // nonlinearity at zero (the readings model linear: a run whose K_ij are held)
-// and away from zero, and with angle_latency (diagnose after its first round).
+// and away from zero, with angle_latency (diagnose after its first round),
+// and with the size effect away from r = 0 (a refit of it in diagnose).
 //   build/bench/triadcal_b1_speed [SAMPLES]     (default 200000 a case)
 // Prints ns per sample, the median of 5 timings of one thread. Compare runs of
 // one build against another on the same quiet machine, not across machines.
@@ -74,10 +75,11 @@ int main(int argc, char** argv) {
   std::printf("| layout | parameters | with Jacobian ns/sample | values only ns/sample |\n");
   std::printf("|---|---|---|---|\n");
   double sink = 0.0;
-  for (int c = 0; c < 3; ++c) {
+  for (int c = 0; c < 4; ++c) {
     ModelConfig cfg;
     cfg.temp_ref_C = 20.0;
     if (c == 2) cfg.layout = ParameterLayout({Effect::kAngleLatency});
+    if (c == 3) cfg.layout = ParameterLayout({Effect::kAngleLatency, Effect::kSizeEffect});
     const int np = cfg.layout.size();
     Eigen::VectorXd th = Eigen::VectorXd::Zero(np);
     for (int i = 0; i < 3; ++i) th[kKx + i] = 174.0;
@@ -86,7 +88,11 @@ int main(int argc, char** argv) {
     if (c > 0) {
       for (int i = kKxx; i <= kKzz; ++i) th[i] = 1e-3;
     }
-    if (c == 2) th[cfg.layout.offset(Effect::kAngleLatency)] = -8.6e-3;
+    if (c >= 2) th[cfg.layout.offset(Effect::kAngleLatency)] = -8.6e-3;
+    if (c == 3) {  // the lever arm and the two sensing points a few mm off O
+      th[kDx2] = 0.02;
+      for (int q = 0; q < 6; ++q) th[cfg.layout.offset(Effect::kSizeEffect) + q] = 2e-3 * (q % 3 + 1);
+    }
     Eigen::MatrixXd J(3, np);
     Eigen::Vector3d a;
     const double with = NanosecondsPerSample(n, [&](std::size_t k) {
@@ -98,7 +104,8 @@ int main(int argc, char** argv) {
       sink += AccelerationFromReadings_L<double>(cfg, th.data(), s.angles[k], s.readings_mV[k],
                                                  SampleContext{0.01 * k, 20.0})[0];
     });
-    const char* name[3] = {"base, K_ij = 0", "base, K_ij = 1e-3 /g", "base + angle_latency"};
+    const char* name[4] = {"base, K_ij = 0", "base, K_ij = 1e-3 /g", "base + angle_latency",
+                           "base + angle_latency + size_effect (r != 0)"};
     std::printf("| %s | %d | %.0f | %.0f |\n", name[c], np, with, values);
   }
   if (sink == 0.123456789) std::printf("\n");  // keeps the work

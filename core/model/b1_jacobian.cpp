@@ -5,7 +5,7 @@
 
 #include <Eigen/LU>
 #include <algorithm>
-#include <array>
+#include <cmath>
 
 namespace triadcal {
 namespace {
@@ -15,11 +15,6 @@ constexpr int kMaxParams = 64;
 // Jets of the angle stage: at most its parameters (latency, encoder
 // harmonic, angle scale: 1 + 4 + 2).
 constexpr int kJetParams = 8;
-
-// Jets of the bench motion behind the size effect: the geometric parameters
-// the motion depends on (dpsi, d, eps), the bench zeros (dtheta_c,
-// dlambda2) and the angle-stage parameters: at most 3 + 2 + 7.
-constexpr int kGeometryJet = 3 + 2 + kJetParams - 1;
 
 // Rows of theta derivatives, on the stack (one sample's work allocates nothing).
 using ThetaRow = Eigen::Matrix<double, 1, Eigen::Dynamic, Eigen::RowMajor, 1, kMaxParams>;
@@ -165,94 +160,139 @@ struct SizeCorrection {
   bool r_zero = false;
 };
 
-// The size effect away from r = 0 (SizeEffect), with Jets of N slots:
-// dpsi, d, eps (those in the layout), dtheta_c, dlambda2, then the
-// angle-stage parameters, which reach the motion through the bench angles'
-// derivatives db. The points' positions (O at R, accelerometer i at R +
-// r_i) enter their accelerations linearly, so the columns of R and r are by
-// ForceGradientByPoint.
-template <int N>
+// The quantities the motion of frame 2 depends on: dpsi, the outer angle A =
+// l1 + dtheta_c with its rate and acceleration, the inner angle B = l2 +
+// dlambda2 with its rate and acceleration (the order of db's rows), eps and d.
+enum MotionVar { kVarPsi, kVarA, kVarA1, kVarA2, kVarB, kVarB1, kVarB2, kVarEps, kVarD, kMotionVars };
+using MotionRows = Eigen::Matrix<double, 3, kMotionVars>;
+using MotionRow = Eigen::Matrix<double, 1, kMotionVars>;
+
+// Frame 2's motion in its own axes and its derivatives by the MotionVars.
+// With y2 = C_12^T e_y and n_1 = Rz(eps) e_x (C_L1^T u1 = e_y, C_12^T n_1 = n_1):
+//
+//   w2  = A' y2 + B' n_1,   w2' = A'' y2 + A' B' (y2 x n_1) + B'' n_1,
+//   W_P = (C_12^T s_1 + w2' x P + w2 x (w2 x P)) / g   at the point P of frame 2,
+//   s_1 = d (A'' e_x - A'^2 e_z) + g C_L1^T e_x
+//
+// (s_1: the axis offset's acceleration and gravity's, in frame 1). And
+// d(C_L1^T e_x)/d dpsi = -C_L1^T e_y, d(C_L1^T e_x)/dA = -e_y x C_L1^T e_x,
+// d(C_12^T x)/dB = -n_1 x C_12^T x, d(C_12^T x)/d eps = e_z x C_12^T x -
+// C_12^T (e_z x x), d n_1/d eps = e_z x n_1.
+struct Frame2Motion {
+  Vec3<double> w2, dw2;
+  MotionRows d_w2, d_dw2;
+  MotionRows d_s2;  // of C_12^T s_1 [m/s^2]
+  // u . dW_P by the MotionVars, for a row u on W (1/g of it): by the
+  // triple product, u . (a x P) = a . (P x u).
+  MotionRow Along(const Eigen::RowVector3d& u, const Vec3<double>& P, double inv_g) const {
+    const Vec3<double> ut = u.transpose();
+    const Vec3<double> by_dw = P.cross(ut);
+    const Vec3<double> by_w = w2.cross(P).cross(ut) + P.cross(ut.cross(w2));
+    return (u * d_s2 + by_dw.transpose() * d_dw2 + by_w.transpose() * d_w2) * inv_g;
+  }
+};
+
+Frame2Motion Frame2MotionAt(const ModelConfig& cfg, const double* th, const BenchAngles<double>& b,
+                            const BenchMotion<double>& m) {
+  const ParameterLayout& layout = cfg.layout;
+  const double g = cfg.g_mps2;
+  const int o_e = layout.offset(Effect::kAxisNonperpendicularity);
+  const int o_d = layout.offset(Effect::kAxisNonintersection);
+  const double d = o_d >= 0 ? th[o_d] : 0.0;
+  const double A1 = b.axis[0].rate, A2 = b.axis[0].accel;
+  const double B1 = b.axis[1].rate, B2 = b.axis[1].accel;
+  const Vec3<double> e_x = Vec3<double>::UnitX(), e_y = Vec3<double>::UnitY(),
+                     e_z = Vec3<double>::UnitZ();
+  const Mat3<double> C_21 = m.C_L2.transpose() * m.C_L1;  // C_12^T
+  const Vec3<double> n_1 =
+      o_e >= 0 ? Vec3<double>(std::cos(th[o_e]), std::sin(th[o_e]), 0.0) : e_x;
+  const Vec3<double> dn_1 = e_z.cross(n_1);
+  const Vec3<double> y2 = C_21.col(1);
+  // C_12^T's derivatives on a vector x of frame 1 (x2 = C_12^T x).
+  auto by_B = [&](const Vec3<double>& x2) { return Vec3<double>(-n_1.cross(x2)); };
+  auto by_eps = [&](const Vec3<double>& x1, const Vec3<double>& x2) {
+    return Vec3<double>(e_z.cross(x2) - C_21 * e_z.cross(x1));
+  };
+  const Vec3<double> dy2_B = by_B(y2), dy2_eps = by_eps(e_y, y2);
+  const Vec3<double> yxn = y2.cross(n_1);
+
+  Frame2Motion f;
+  f.w2 = A1 * y2 + B1 * n_1;
+  f.dw2 = A2 * y2 + A1 * B1 * yxn + B2 * n_1;
+  f.d_w2.setZero();
+  f.d_dw2.setZero();
+  f.d_w2.col(kVarA1) = y2;
+  f.d_w2.col(kVarB) = A1 * dy2_B;
+  f.d_w2.col(kVarB1) = n_1;
+  f.d_w2.col(kVarEps) = A1 * dy2_eps + B1 * dn_1;
+  f.d_dw2.col(kVarA1) = B1 * yxn;
+  f.d_dw2.col(kVarA2) = y2;
+  f.d_dw2.col(kVarB) = A2 * dy2_B + A1 * B1 * dy2_B.cross(n_1);
+  f.d_dw2.col(kVarB1) = A1 * yxn;
+  f.d_dw2.col(kVarB2) = n_1;
+  f.d_dw2.col(kVarEps) =
+      A2 * dy2_eps + A1 * B1 * (dy2_eps.cross(n_1) + y2.cross(dn_1)) + B2 * dn_1;
+
+  const Vec3<double> h1 = m.C_L1.row(0).transpose();  // C_L1^T e_x
+  const Vec3<double> s_1 = d * (A2 * e_x - A1 * A1 * e_z) + g * h1;
+  MotionRows ds_1 = MotionRows::Zero();
+  ds_1.col(kVarPsi) = -g * m.C_L1.row(1).transpose();
+  ds_1.col(kVarA) = -g * e_y.cross(h1);
+  ds_1.col(kVarA1) = -2.0 * d * A1 * e_z;
+  ds_1.col(kVarA2) = d * e_x;
+  ds_1.col(kVarD) = A2 * e_x - A1 * A1 * e_z;
+  const Vec3<double> s_2 = C_21 * s_1;
+  f.d_s2.noalias() = C_21 * ds_1;
+  f.d_s2.col(kVarB) += by_B(s_2);
+  f.d_s2.col(kVarEps) += by_eps(s_1, s_2);
+  return f;
+}
+
+// The size effect away from r = 0 (SizeEffect): D_i = R_i(W_i) - R_i(W_O),
+// W_O and W_i at O (R) and at accelerometer i's point (R + r_i), by
+// Frame2MotionAt, mapped from the MotionVars onto theta: dpsi, dtheta_c (A),
+// dlambda2 (B), eps and d, and the angle-stage parameters through the bench
+// angles' derivatives db. The points' positions enter their accelerations
+// linearly: their columns are by ForceGradientByPoint.
 TRIADCAL_FLATTEN TRIADCAL_NOINLINE void SizeEffectAwayFromZero(
     const ModelConfig& cfg, const double* th, const BenchAngles<double>& b,
     const Eigen::Matrix<double, 6, kJetParams>& db, SizeCorrection* out) {
-  using GeoJet = ceres::Jet<double, N>;
   const ParameterLayout& layout = cfg.layout;
   const int n = layout.size();
-  const double g = cfg.g_mps2;
+  const double g = cfg.g_mps2, inv_g = 1.0 / g;
   const std::vector<int>& angle_params = layout.StageParams(EffectStage::kAngle);
   const int n_angle = static_cast<int>(angle_params.size());
   const int o_s = layout.offset(Effect::kSizeEffect);
-  // The motion reads dpsi, d, eps (seeded), the bench zeros and the lever
-  // arm (ComputeBenchMotion, SensingPoint_m of O).
-  std::array<int, 8> read = {kDpsi, -1, -1};
-  int n_geo = 1;
   const int o_d = layout.offset(Effect::kAxisNonintersection);
-  if (o_d >= 0) read[n_geo++] = o_d;
   const int o_e = layout.offset(Effect::kAxisNonperpendicularity);
-  if (o_e >= 0) read[n_geo++] = o_e;
-  int n_read = n_geo;
-  for (int i : {kDthetaC, kDlambda2, kDx2, kDy2, kDz2}) read[n_read++] = i;
-  const SparseJets<GeoJet, kMaxParams> t(th, read.data(), n_read, n_geo);
-  // The bench angles: angle l_i enters as l_i + dtheta_c (l_i + dlambda2),
-  // and every quantity moves with the angle-stage parameters by db.
-  const int slot_c = n_geo, slot_a = n_geo + 2;
-  BenchAngles<GeoJet> bj;
-  for (int i = 0; i < 2; ++i) {
-    AxisState<GeoJet>& a = bj.axis[i];
-    a.angle = GeoJet(b.axis[i].angle);
-    a.rate = GeoJet(b.axis[i].rate);
-    a.accel = GeoJet(b.axis[i].accel);
-    a.angle.v[slot_c + i] = 1.0;
-    for (int q = 0; q < n_angle; ++q) {
-      a.angle.v[slot_a + q] = db(3 * i, q);
-      a.rate.v[slot_a + q] = db(3 * i + 1, q);
-      a.accel.v[slot_a + q] = db(3 * i + 2, q);
-    }
-  }
-  const BenchMotion<GeoJet> m = ComputeBenchMotion(cfg, t.data(), bj);
-  auto value = [](const Vec3<GeoJet>& v) { return Vec3<double>(v[0].a, v[1].a, v[2].a); };
-  Mat3<double> C_L2;
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) C_L2(r, c) = m.C_L2(r, c).a;
-  const Mat3<double> dW_dp = ForceGradientByPoint(C_L2, value(m.w1_L) + value(m.w12_L),
-                                                  value(m.dw1_L) + value(m.dw12_L), g);
-  // W at O by the motion; at accelerometer i, W_O + (w2' x r_i + w2 x (w2 x r_i)) / g
-  // with w2, w2' the rate of frame 2 and its derivative in frame 2 (rigid
-  // body: MotionOfPoint in frame 2; r_i = p_i - p_O fixed in it).
-  const Vec3<GeoJet> Wj_O =
-      SpecificForce_g(cfg, m.C_L2, MotionOfPoint(m, SensingPoint_m(cfg, t.data(), 0)).a_L);
-  const Vec3<GeoJet> w2 = m.C_L2.transpose() * (m.w1_L + m.w12_L);
-  const Vec3<GeoJet> dw2 = m.C_L2.transpose() * (m.dw1_L + m.dw12_L);
-  auto split = [](const Vec3<GeoJet>& Wj, Vec3<double>* W_p, Eigen::Matrix<double, 3, N>* dW_p) {
-    for (int r = 0; r < 3; ++r) {
-      (*W_p)[r] = Wj[r].a;
-      dW_p->row(r) = Wj[r].v.transpose();
-    }
-  };
-  Vec3<double> W_O;
-  Eigen::Matrix<double, 3, N> dW_O;
-  split(Wj_O, &W_O, &dW_O);
+  const BenchMotion<double> m = ComputeBenchMotion(cfg, th, b);
+  const Vec3<double> R = SensingPoint_m(cfg, th, 0);
+  const Vec3<double> W_O = SpecificForce_g(cfg, m.C_L2, MotionOfPoint(m, R).a_L);
+  const Mat3<double> dW_dp =
+      ForceGradientByPoint(m.C_L2, m.w1_L + m.w12_L, m.dw1_L + m.dw12_L, g);
+  const Frame2Motion f = Frame2MotionAt(cfg, th, b, m);
   Eigen::Vector3d& z = out->z;
   ThetaRows3& dD = out->dD;
   dD = ThetaRows3::Zero(3, n);
   ThetaRow drow(n);
   for (int i = 1; i < 3; ++i) {  // x senses at O: D_0 = 0
-    const double* ri = th + o_s + 3 * (i - 1);
-    const Vec3<GeoJet> r{GeoJet(ri[0]), GeoJet(ri[1]), GeoJet(ri[2])};
-    Vec3<double> W_i;
-    Eigen::Matrix<double, 3, N> dW_i;
-    split(Wj_O + (dw2.cross(r) + w2.cross(w2.cross(r))) / GeoJet(g), &W_i, &dW_i);
+    const Vec3<double> r(th + o_s + 3 * (i - 1));
+    const Vec3<double> W_i = W_O + (f.dw2.cross(r) + f.w2.cross(f.w2.cross(r))) * inv_g;
     drow.setZero();
     Eigen::RowVector3d grad_i, grad_O;
     const double d = ReadingWithoutOffset(layout, th, i, W_i, &grad_i, 1.0, &drow) -
                      ReadingWithoutOffset(layout, th, i, W_O, &grad_O, -1.0, &drow);
     z[i] -= d;
-    // By the Jet slots: grad R_i(W_i) dW_i - grad R_i(W_O) dW_O.
-    const Eigen::Matrix<double, 1, N> dx = grad_i * dW_i - grad_O * dW_O;
-    for (int q = 0; q < n_geo; ++q) drow[read[q]] += dx[q];
-    drow[kDthetaC] += dx[slot_c];
-    drow[kDlambda2] += dx[slot_c + 1];
-    for (int q = 0; q < n_angle; ++q) drow[angle_params[q]] += dx[slot_a + q];
+    // grad R_i(W_i) dW_i - grad R_i(W_O) dW_O, W_i's point at R + r.
+    const MotionRow dx = f.Along(grad_i, R + r, inv_g) - f.Along(grad_O, R, inv_g);
+    drow[kDpsi] += dx[kVarPsi];
+    drow[kDthetaC] += dx[kVarA];
+    drow[kDlambda2] += dx[kVarB];
+    if (o_e >= 0) drow[o_e] += dx[kVarEps];
+    if (o_d >= 0) drow[o_d] += dx[kVarD];
+    for (int q = 0; q < n_angle; ++q) {
+      drow[angle_params[q]] += dx.segment<6>(kVarA).dot(db.col(q));
+    }
     // By R (moves both points) and r_i (moves accelerometer i's).
     drow.segment<3>(kDx2) += (grad_i - grad_O) * dW_dp;
     drow.segment<3>(o_s + 3 * (i - 1)) += grad_i * dW_dp;
@@ -262,8 +302,8 @@ TRIADCAL_FLATTEN TRIADCAL_NOINLINE void SizeEffectAwayFromZero(
 
 // Size effect: accelerometer i senses W_i at its own point; B1 removes
 // D_i = R_i(W_i) - R_i(W_O) from reading i first (AccelerationFromReadings_L).
-// dD/dtheta: by W through Jets of the geometry (SizeEffectAwayFromZero), and
-// by the sensor parameters written out.
+// dD/dtheta: by W through frame 2's motion, and by the sensor parameters,
+// written out (SizeEffectAwayFromZero).
 // With r = 0 (the score tests of `diagnose` linearise there) D vanishes for
 // every other parameter value, and only its columns by r remain:
 // dD_i/dr_i = grad R_i(W_O) dW/dp (ForceGradientByPoint).
@@ -273,7 +313,6 @@ TRIADCAL_FLATTEN TRIADCAL_NOINLINE void SizeEffect(const ModelConfig& cfg, const
                                                    SizeCorrection* out) {
   const ParameterLayout& layout = cfg.layout;
   const double g = cfg.g_mps2;
-  const std::vector<int>& angle_params = layout.StageParams(EffectStage::kAngle);
   Eigen::Matrix3d& dD_r = out->dD_r;
   const int o_s = layout.offset(Effect::kSizeEffect);
   bool r_zero = true;
@@ -291,18 +330,7 @@ TRIADCAL_FLATTEN TRIADCAL_NOINLINE void SizeEffect(const ModelConfig& cfg, const
       dD_r.row(i) = grad_O * dW_dr;
     }
   } else {
-    // Slots: dpsi, d, eps, the bench zeros dtheta_c and dlambda2, and the
-    // angle-stage parameters (through the bench angles' derivatives db).
-    const int slots = 3 + static_cast<int>(angle_params.size()) +
-                      (layout.offset(Effect::kAxisNonintersection) >= 0 ? 1 : 0) +
-                      (layout.offset(Effect::kAxisNonperpendicularity) >= 0 ? 1 : 0);
-    if (slots <= 4) {
-      SizeEffectAwayFromZero<4>(cfg, th, b, db, out);
-    } else if (slots <= 8) {
-      SizeEffectAwayFromZero<8>(cfg, th, b, db, out);
-    } else {
-      SizeEffectAwayFromZero<kGeometryJet>(cfg, th, b, db, out);
-    }
+    SizeEffectAwayFromZero(cfg, th, b, db, out);
   }
 }
 

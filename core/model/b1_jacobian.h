@@ -9,10 +9,9 @@
 // asymmetry through s_i, cross_quadratic through F and its Jacobian),
 // axis_nonintersection (B2 only), the axis non-perpendicularity (through C)
 // and the size effect (the correction D of the readings, with its derivatives
-// by W taken by Jets of the bench motion alone, 4, 8 or 12 wide, by the lever arm and
-// r written out (the points enter linearly), and by the sensor
-// parameters written out; with r = 0, where the score tests of `diagnose`
-// linearise, only its columns by r, written out). A layout with an effect
+// by W through frame 2's motion, by the lever arm and r (the points enter
+// linearly) and by the sensor parameters, all written out; with r = 0, where
+// the score tests of `diagnose` linearise, only its columns by r). A layout with an effect
 // that has no written-out columns, more than 64 parameters or more than 8
 // angle-stage ones takes the Jet path (B1HasAnalyticJacobian false).
 //

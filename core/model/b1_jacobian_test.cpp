@@ -56,9 +56,10 @@ TEST(B1Jacobian, AnalyticMatchesAutomaticAndNumeric) {
   // The base model; the whole catalogue at once, every effect away from zero;
   // the whole catalogue with the effects at zero, as the score tests of
   // diagnose linearise; and every effect but the size effect away from zero
-  // (the size effect's columns at r = 0 are written out apart from its Jets);
-  // then the size effect away from zero with each width of its Jets (4, 8
-  // and 12 slots: SizeEffectAwayFromZero).
+  // (the size effect's columns at r = 0 are written out apart from the rest);
+  // then the size effect away from zero with the angle stage, the axis
+  // non-intersection d and the non-perpendicularity eps, through which frame
+  // 2's motion moves (SizeEffectAwayFromZero).
   // (The gyro stage does not act on the accelerometers: left out.)
   std::vector<Effect> all;
   for (const EffectSpec& e : EffectCatalogue()) {
