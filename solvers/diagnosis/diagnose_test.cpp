@@ -405,6 +405,24 @@ TEST(Diagnose, ImplausibleSizeAbsorbsSomethingElse) {
   EXPECT_EQ(std::count(d.selected.begin(), d.selected.end(), Effect::kAxisNonintersection), 0);
   EXPECT_TRUE(d.unexplained);
   EXPECT_NE(d.verdict.find("ABSORBS SOMETHING ELSE"), std::string::npos) << d.verdict;
+  // Judged by its one-step estimate, not refitted; refitted (refit_factor
+  // infinite: every candidate), it is as implausible, within a few per cent.
+  EXPECT_FALSE(d.absorbing[0].refit);
+  EXPECT_NE(d.absorbing[0].absorbs.find("(one-step estimate, not refitted)"), std::string::npos)
+      << d.absorbing[0].absorbs;
+  opt.refit_factor = std::numeric_limits<double>::infinity();
+  const DiagnosisResult all = Diagnose(s.run, data, opt);
+  ASSERT_GE(all.absorbing.size(), 1u) << all.verdict;
+  EXPECT_EQ(all.absorbing[0].effect, Effect::kAxisNonintersection);
+  EXPECT_TRUE(all.absorbing[0].refit);
+  auto size_mm = [](const std::string& absorbs) {
+    return std::stod(absorbs.substr(absorbs.find(" = ") + 3));
+  };
+  const double one_step = size_mm(d.absorbing[0].absorbs);
+  const double refitted = size_mm(all.absorbing[0].absorbs);
+  EXPECT_GT(one_step, 20.0);  // beyond the plausible 20 mm
+  EXPECT_NEAR(one_step, refitted, 0.05 * refitted) << d.absorbing[0].absorbs << " | "
+                                                    << all.absorbing[0].absorbs;
 }
 
 // A candidate the base parameters explain is not selected, and says so: a

@@ -10,6 +10,10 @@
 // the likelihood ratio below, started at the score's Gauss-Newton step and
 // with the effect parameters the score analysis found supported; the others
 // keep their score statistic and p-value (they cannot be selected this round).
+// A candidate whose one-step estimate (that step) is beyond its plausible
+// range by more than twice its sigma is not refitted: it absorbs something
+// else on that estimate (Plausibility, below), and "close to the best" is
+// from the best of the others.
 //
 // Test of an effect E: the likelihood ratio of the fit with E added against the
 // current model,
@@ -28,7 +32,8 @@
 // candidate explained is reported with what it correlates with.
 //
 // Plausibility (issue 12): a candidate that passes only with a parameter
-// beyond its plausible range (EffectSpec) absorbs something else: it is
+// beyond its plausible range (EffectSpec; its refit's, or its one-step
+// estimate's when not refitted) absorbs something else: it is
 // reported as such (DiagnosisResult::absorbing, and the residual is called
 // unexplained), not selected, and not tested again; the next candidate of the
 // round may be selected. Components of an effect that only a base parameter's
