@@ -143,10 +143,17 @@ nlohmann::json DiagnoseJson(const std::string& run_yaml, const LoadedRun& run, d
     if (!t.absorbs.empty()) tests.back()["absorbs"] = t.absorbs;
   }
   out["tests"] = tests;
+  // chi2_per_dof_after is the refit's: null for a candidate judged on its
+  // one-step estimate (not refitted).
   auto brief = [](const CandidateTest& t) {
-    return nlohmann::json{{"round", t.round},         {"effect", GetEffectSpec(t.effect).name},
-                          {"statistic", t.statistic}, {"dof", t.dof},
-                          {"p_value", t.p_value},     {"chi2_per_dof_after", t.chi2_per_dof_after}};
+    return nlohmann::json{{"round", t.round},
+                          {"effect", GetEffectSpec(t.effect).name},
+                          {"statistic", t.statistic},
+                          {"dof", t.dof},
+                          {"p_value", t.p_value},
+                          {"refit", t.refit},
+                          {"chi2_per_dof_after", t.refit ? nlohmann::json(t.chi2_per_dof_after)
+                                                         : nlohmann::json(nullptr)}};
   };
   out["absorbing"] = nlohmann::json::array();
   for (const CandidateTest& t : d.absorbing) {

@@ -1,6 +1,7 @@
 // `triadcal diagnose` OUT: a refitted candidate carries its Wald test beside
-// the likelihood ratio (docs/file-formats.md), a score-only one does not, and
-// the printed ranking shows the Wald p-value.
+// the likelihood ratio (docs/file-formats.md), a score-only one does not, one
+// judged on its one-step estimate carries no refit's figures, and the
+// printed ranking shows the Wald p-value.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -58,6 +59,41 @@ TEST_F(DiagnoseCli, RefittedCandidateCarriesItsWaldTest) {
   EXPECT_GE(score_only, 1);
   const std::string text = ReadFile(Path("d.txt"));
   EXPECT_NE(text.find("Wald p"), std::string::npos) << text;
+}
+
+// The inner axis 35 mm from the outer one (plausible within 20 mm): judged on
+// its one-step estimate, not refitted. Its "absorbing" entry says so
+// ("refit" false) and carries no refit's chi2/dof (null, not 0); its test in
+// "tests" has no likelihood ratio.
+TEST_F(DiagnoseCli, CandidateJudgedOnItsOneStepEstimateCarriesNoRefitFigures) {
+  const std::string sc =
+      WriteText("scenario.yaml", std::string(testing_fixtures::kPaper60sScenario) +
+                                     "effects:\n  axis_nonintersection: {d_mm: 35.0}\n");
+  ASSERT_EQ(
+      RunTriadcal("simulate " + sc + " -o " + Path("sim") + " --seed 3", Path("s.err")).status, 0);
+  ASSERT_EQ(RunTriadcal("diagnose " + Path("sim/run.yaml") + " -o " + Path("d.json") +
+                            " --candidates axis_nonintersection,thermal_drift --max-effects 1",
+                        Path("d.err"))
+                .status,
+            0);
+  const nlohmann::json d = nlohmann::json::parse(ReadFile(Path("d.json")));
+  ASSERT_EQ(d["absorbing"].size(), 1u) << d["absorbing"];
+  const nlohmann::json& a = d["absorbing"][0];
+  EXPECT_EQ(a["effect"], "axis_nonintersection");
+  EXPECT_FALSE(a["refit"].get<bool>()) << a;
+  EXPECT_TRUE(a["chi2_per_dof_after"].is_null()) << a;
+  EXPECT_NE(a["absorbs"].get<std::string>().find("(one-step estimate, not refitted)"),
+            std::string::npos)
+      << a;
+  bool seen = false;
+  for (const nlohmann::json& t : d["tests"]) {
+    if (t["effect"] != "axis_nonintersection") continue;
+    seen = true;
+    EXPECT_FALSE(t["refit"].get<bool>()) << t;
+    EXPECT_TRUE(t["likelihood_ratio"].is_null()) << t;
+    EXPECT_FALSE(t.contains("wald")) << t;
+  }
+  EXPECT_TRUE(seen);
 }
 
 // diagnose takes --rate-window-s as fit does: with the loop off (--max-effects
