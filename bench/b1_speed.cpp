@@ -3,8 +3,10 @@
 // and without it (AccelerationFromReadings_L), on the base layout with the
 // nonlinearity at zero (the readings model linear: a run whose K_ij are held)
 // and away from zero, with angle_latency (diagnose after its first round),
-// and with the size effect away from r = 0 (a refit of it in diagnose).
-//   build/bench/triadcal_b1_speed [SAMPLES]     (default 200000 a case)
+// with the size effect away from r = 0 (a refit of it in diagnose), and with
+// every accelerometer candidate at zero (the pass of diagnose's score tests).
+//   build/bench/triadcal_b1_speed [SAMPLES [CASE]]
+//     (default 200000 samples a case; CASE 0-4: that case alone, for a profiler)
 // Prints ns per sample, the median of 5 timings of one thread. Compare runs of
 // one build against another on the same quiet machine, not across machines.
 #include <algorithm>
@@ -71,15 +73,28 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "triadcal_b1_speed: SAMPLES must be a positive integer\n");
     return 2;
   }
+  const int only = argc > 2 ? std::atoi(argv[2]) : -1;
+  if (argc > 2 && (std::string(argv[2]) != std::to_string(only) || only < 0 || only > 4)) {
+    std::fprintf(stderr, "triadcal_b1_speed: CASE must be 0, 1, 2, 3 or 4\n");
+    return 2;
+  }
   const Samples s = Draw(n);
   std::printf("| layout | parameters | with Jacobian ns/sample | values only ns/sample |\n");
   std::printf("|---|---|---|---|\n");
   double sink = 0.0;
-  for (int c = 0; c < 4; ++c) {
+  for (int c = 0; c < 5; ++c) {
+    if (only >= 0 && c != only) continue;
     ModelConfig cfg;
     cfg.temp_ref_C = 20.0;
     if (c == 2) cfg.layout = ParameterLayout({Effect::kAngleLatency});
     if (c == 3) cfg.layout = ParameterLayout({Effect::kAngleLatency, Effect::kSizeEffect});
+    if (c == 4) {  // diagnose's score analysis of round 1: every candidate, at zero
+      cfg.layout = ParameterLayout(
+          {Effect::kAngleLatency, Effect::kEncoderHarmonic, Effect::kAxisNonintersection,
+           Effect::kAxisNonperpendicularity, Effect::kSizeEffect, Effect::kThermalDrift,
+           Effect::kScaleAsymmetry, Effect::kAngleScale, Effect::kCrossQuadratic,
+           Effect::kThermalDriftQuadratic});
+    }
     const int np = cfg.layout.size();
     Eigen::VectorXd th = Eigen::VectorXd::Zero(np);
     for (int i = 0; i < 3; ++i) th[kKx + i] = 174.0;
@@ -88,7 +103,7 @@ int main(int argc, char** argv) {
     if (c > 0) {
       for (int i = kKxx; i <= kKzz; ++i) th[i] = 1e-3;
     }
-    if (c >= 2) th[cfg.layout.offset(Effect::kAngleLatency)] = -8.6e-3;
+    if (c >= 2 && c < 4) th[cfg.layout.offset(Effect::kAngleLatency)] = -8.6e-3;
     if (c == 3) {  // the lever arm and the two sensing points a few mm off O
       th[kDx2] = 0.02;
       for (int q = 0; q < 6; ++q) th[cfg.layout.offset(Effect::kSizeEffect) + q] = 2e-3 * (q % 3 + 1);
@@ -104,8 +119,9 @@ int main(int argc, char** argv) {
       sink += AccelerationFromReadings_L<double>(cfg, th.data(), s.angles[k], s.readings_mV[k],
                                                  SampleContext{0.01 * k, 20.0})[0];
     });
-    const char* name[4] = {"base, K_ij = 0", "base, K_ij = 1e-3 /g", "base + angle_latency",
-                           "base + angle_latency + size_effect (r != 0)"};
+    const char* name[5] = {"base, K_ij = 0", "base, K_ij = 1e-3 /g", "base + angle_latency",
+                           "base + angle_latency + size_effect (r != 0)",
+                           "base + every accelerometer candidate at zero (a score analysis)"};
     std::printf("| %s | %d | %.0f | %.0f |\n", name[c], np, with, values);
   }
   if (sink == 0.123456789) std::printf("\n");  // keeps the work

@@ -256,7 +256,8 @@ Frame2Motion Frame2MotionAt(const ModelConfig& cfg, const double* th, const Benc
 // linearly: their columns are by ForceGradientByPoint.
 TRIADCAL_FLATTEN TRIADCAL_NOINLINE void SizeEffectAwayFromZero(
     const ModelConfig& cfg, const double* th, const BenchAngles<double>& b,
-    const Eigen::Matrix<double, 6, kJetParams>& db, SizeCorrection* out) {
+    const BenchMotion<double>& m, const Eigen::Matrix<double, 6, kJetParams>& db,
+    SizeCorrection* out) {
   const ParameterLayout& layout = cfg.layout;
   const int n = layout.size();
   const double g = cfg.g_mps2, inv_g = 1.0 / g;
@@ -265,7 +266,6 @@ TRIADCAL_FLATTEN TRIADCAL_NOINLINE void SizeEffectAwayFromZero(
   const int o_s = layout.offset(Effect::kSizeEffect);
   const int o_d = layout.offset(Effect::kAxisNonintersection);
   const int o_e = layout.offset(Effect::kAxisNonperpendicularity);
-  const BenchMotion<double> m = ComputeBenchMotion(cfg, th, b);
   const Vec3<double> R = SensingPoint_m(cfg, th, 0);
   const Vec3<double> W_O = SpecificForce_g(cfg, m.C_L2, MotionOfPoint(m, R).a_L);
   const Mat3<double> dW_dp =
@@ -309,6 +309,7 @@ TRIADCAL_FLATTEN TRIADCAL_NOINLINE void SizeEffectAwayFromZero(
 // dD_i/dr_i = grad R_i(W_O) dW/dp (ForceGradientByPoint).
 TRIADCAL_FLATTEN TRIADCAL_NOINLINE void SizeEffect(const ModelConfig& cfg, const double* th,
                                                    const BenchAngles<double>& b,
+                                                   const BenchMotion<double>& m,
                                                    const Eigen::Matrix<double, 6, kJetParams>& db,
                                                    SizeCorrection* out) {
   const ParameterLayout& layout = cfg.layout;
@@ -319,7 +320,6 @@ TRIADCAL_FLATTEN TRIADCAL_NOINLINE void SizeEffect(const ModelConfig& cfg, const
   for (int q = 0; q < 6 && r_zero; ++q) r_zero = th[o_s + q] == 0.0;
   out->r_zero = r_zero;
   if (r_zero) {
-    const BenchMotion<double> m = ComputeBenchMotion(cfg, th, b);
     const Vec3<double> W_O =
         SpecificForce_g(cfg, m.C_L2, MotionOfPoint(m, SensingPoint_m(cfg, th, 0)).a_L);
     const Mat3<double> dW_dr =
@@ -330,7 +330,7 @@ TRIADCAL_FLATTEN TRIADCAL_NOINLINE void SizeEffect(const ModelConfig& cfg, const
       dD_r.row(i) = grad_O * dW_dr;
     }
   } else {
-    SizeEffectAwayFromZero(cfg, th, b, db, out);
+    SizeEffectAwayFromZero(cfg, th, b, m, db, out);
   }
 }
 
@@ -436,22 +436,21 @@ TRIADCAL_FLATTEN void AccelerationWithJacobian(const ModelConfig& cfg, const dou
   Eigen::Matrix<double, 6, kJetParams> db = Eigen::Matrix<double, 6, kJetParams>::Zero();
   if (!angle_params.empty()) AngleStage(cfg, th, rec, &b, &db);
 
+  // C = C_L1 C_12 with C_12 = Rz(eps) Rx Rz(-eps) (bench_model.h), formed
+  // once: the size effect's motion of frame 2 turns with them too.
+  const BenchRotations<double> rot = ComputeBenchRotations(cfg, th, b);
+  const Mat3<double>& Rzp = rot.Rpsi;
+  const Mat3<double>& Ryp = rot.Ry;
+  const Mat3<double>& C_12 = rot.C_12;
+  const Mat3<double>& C_L1 = rot.C_L1;
+  const Mat3<double>& C = rot.C_L2;
+  const int o_eps = layout.offset(Effect::kAxisNonperpendicularity);
+
   SizeCorrection size;
   size.z = z_in;
   const int o_s = layout.offset(Effect::kSizeEffect);
-  if (o_s >= 0) SizeEffect(cfg, th, b, db, &size);
+  if (o_s >= 0) SizeEffect(cfg, th, b, ComputeBenchMotion(cfg, th, b, rot), db, &size);
   const Eigen::Vector3d& z = size.z;
-
-  // C = C_L1 C_12 with C_12 = Rz(eps) Rx Rz(-eps) (ComputeBenchMotion).
-  const Mat3<double> Rzp = Rz(th[kDpsi]);
-  const Mat3<double> Ryp = Ry(b.axis[0].angle + th[kDthetaC]);
-  const int o_eps = layout.offset(Effect::kAxisNonperpendicularity);
-  const Mat3<double> Reps = o_eps >= 0 ? Rz(th[o_eps]) : Mat3<double>::Identity();
-  const Mat3<double> C_12 =
-      o_eps >= 0 ? Mat3<double>(Reps * Rx(b.axis[1].angle + th[kDlambda2]) * Reps.transpose())
-                 : Rx(b.axis[1].angle + th[kDlambda2]);
-  const Mat3<double> C_L1 = Rzp * Ryp;
-  const Mat3<double> C = C_L1 * C_12;
 
   const SensorStage st = SensorStageAt(cfg, th, z, ctx);
   const Vec3<double>& W = st.W;
@@ -468,7 +467,7 @@ TRIADCAL_FLATTEN void AccelerationWithJacobian(const ModelConfig& cfg, const dou
   J.col(kDthetaC) = g * Rzp * Vec3<double>::UnitY().cross(Ryp * C12W);
   // d C_12 / d l2 = [n x] C_12 with n = Rz(eps) e_x (the inner axis in frame 1);
   // d C_12 / d eps = [e_z x] C_12 - C_12 [e_z x].
-  J.col(kDlambda2) = g * C_L1 * Reps.col(0).cross(C12W);
+  J.col(kDlambda2) = g * C_L1 * rot.n_1.cross(C12W);
   if (o_eps >= 0) {
     J.col(o_eps) =
         g * C_L1 * (Vec3<double>::UnitZ().cross(C12W) - C_12 * Vec3<double>::UnitZ().cross(W));

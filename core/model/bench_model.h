@@ -138,6 +138,13 @@ BenchAngles<T> EncoderReading(const ModelConfig& cfg, const T* theta, const Benc
 
 // Recorded angles (and the rates/accelerations derived from them) -> bench angles.
 // |a - b| <= tol, and for Jets (a.a, a.v) every derivative too.
+// The value of a scalar without its derivative part (double, or a Ceres Jet).
+inline double ScalarPart(double x) { return x; }
+template <typename J>
+double ScalarPart(const J& x) {
+  return x.a;
+}
+
 inline bool WithinOf(double a, double b, double tol) { return std::abs(a - b) <= tol; }
 template <typename J>
 bool WithinOf(const J& a, const J& b, double tol) {
@@ -172,11 +179,16 @@ BenchAngles<T> BenchAnglesFromRecorded(const ModelConfig& cfg, const T* theta,
       const AxisState<T> r = b.axis[i];
       // l = r - e(l) by fixed-point iteration (contraction factor |e'|, a
       // few 1e-3), until l no longer moves (below 1e-15 rad, its
-      // derivatives alike): at zero harmonics (diagnose's score tests) the
-      // second evaluation confirms the first.
+      // derivatives alike). At zero harmonics (diagnose's score tests) e
+      // is 0 wherever l is, so l = r - e(r) exactly, derivatives too (e's
+      // by l are 0 there): no second evaluation to confirm it.
       T l = r.angle, e, de, dde;
       EncoderError(cfg, theta, i, l, &e, &de, &dde);
-      for (int it = 0; it < 6; ++it) {
+      const int o = cfg.layout.offset(Effect::kEncoderHarmonic);
+      const bool zero = ScalarPart(theta[o + 2 * i]) == 0.0 &&
+                        ScalarPart(theta[o + 2 * i + 1]) == 0.0;
+      if (zero) l = r.angle - e;
+      for (int it = 0; it < 6 && !zero; ++it) {
         const T next = r.angle - e;
         if (WithinOf(next, l, 1e-15)) break;
         l = next;
@@ -222,33 +234,56 @@ struct BenchMotion {
   Vec3<T> dw12_L;         // w1 x w12 + C_L1 n l2''
 };
 
+// The bench's rotations at angles b: C_L1 = Rpsi Ry, C_12 and C_L2, and n_1 =
+// Rz(eps) e_x, the inner axis in frame 1 (the sines and cosines of a sample:
+// B1's Jacobian forms them once for the motion and its own columns).
+template <typename T>
+struct BenchRotations {
+  Mat3<T> Rpsi, Ry, C_12, C_L1, C_L2;
+  Vec3<T> n_1;
+};
+
+template <typename T>
+BenchRotations<T> ComputeBenchRotations(const ModelConfig& cfg, const T* theta,
+                                        const BenchAngles<T>& b) {
+  const int o_eps = cfg.layout.offset(Effect::kAxisNonperpendicularity);
+  BenchRotations<T> r;
+  r.Rpsi = Rz(theta[kDpsi]);
+  r.Ry = Ry<T>(b.axis[0].angle + theta[kDthetaC]);
+  r.C_L1 = r.Rpsi * r.Ry;
+  r.C_12 = Rx<T>(b.axis[1].angle + theta[kDlambda2]);
+  r.n_1 = Vec3<T>(T(1.0), T(0.0), T(0.0));
+  if (o_eps >= 0) {
+    const Mat3<T> Reps = Rz(theta[o_eps]);
+    r.C_12 = Reps * r.C_12 * Reps.transpose();
+    r.n_1 = Reps.col(0);
+  }
+  r.C_L2 = r.C_L1 * r.C_12;
+  return r;
+}
+
 template <typename T>
 BenchMotion<T> ComputeBenchMotion(const ModelConfig& cfg, const T* theta,
-                                  const BenchAngles<T>& b) {
-  const int o_eps = cfg.layout.offset(Effect::kAxisNonperpendicularity);
+                                  const BenchAngles<T>& b, const BenchRotations<T>& r) {
   const int o_d = cfg.layout.offset(Effect::kAxisNonintersection);
-  const T eps = o_eps < 0 ? T(0.0) : theta[o_eps];
   const T d = o_d < 0 ? T(0.0) : theta[o_d];
-
-  const Mat3<T> Rpsi = Rz(theta[kDpsi]);
   BenchMotion<T> m;
-  m.C_L1 = Rpsi * Ry<T>(b.axis[0].angle + theta[kDthetaC]);
-  Mat3<T> C_12 = Rx<T>(b.axis[1].angle + theta[kDlambda2]);
-  Vec3<T> n_1(T(1.0), T(0.0), T(0.0));
-  if (o_eps >= 0) {
-    const Mat3<T> Reps = Rz(eps);
-    C_12 = Reps * C_12 * Reps.transpose();
-    n_1 = Reps.col(0);
-  }
-  m.C_L2 = m.C_L1 * C_12;
+  m.C_L1 = r.C_L1;
+  m.C_L2 = r.C_L2;
   m.axis_offset_L = m.C_L1.col(2) * d;
-  const Vec3<T> u1 = Rpsi.col(1);
-  const Vec3<T> n_L = m.C_L1 * n_1;
+  const Vec3<T> u1 = r.Rpsi.col(1);
+  const Vec3<T> n_L = m.C_L1 * r.n_1;
   m.w1_L = u1 * b.axis[0].rate;
   m.w12_L = n_L * b.axis[1].rate;
   m.dw1_L = u1 * b.axis[0].accel;
   m.dw12_L = m.w1_L.cross(m.w12_L) + n_L * b.axis[1].accel;
   return m;
+}
+
+template <typename T>
+BenchMotion<T> ComputeBenchMotion(const ModelConfig& cfg, const T* theta,
+                                  const BenchAngles<T>& b) {
+  return ComputeBenchMotion(cfg, theta, b, ComputeBenchRotations(cfg, theta, b));
 }
 
 template <typename T>
@@ -423,13 +458,6 @@ Vec3<T> Readings_mV(const ModelConfig& cfg, const T* theta, const Vec3<T>& W,
   Mat3<T> W_axes;
   W_axes << W, W, W;
   return Readings_mV(cfg, theta, W_axes, ctx);
-}
-
-// The value of a scalar without its derivative part (double, or a Ceres Jet).
-inline double ScalarPart(double x) { return x; }
-template <typename J>
-double ScalarPart(const J& x) {
-  return x.a;
 }
 
 // Exact inverse of the common-point readings model: readings [mV] -> W [g].
