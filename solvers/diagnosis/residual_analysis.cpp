@@ -146,8 +146,11 @@ ChannelReport AnalyseChannel(const std::string& name, const std::string& unit,
       ch.peaks.push_back(p);
     }
     for (const auto& [sname, sv] : signals) ch.correlations.push_back({sname, Correlation(x, sv)});
-    std::sort(ch.correlations.begin(), ch.correlations.end(),
-              [](const auto& a, const auto& b) { return std::abs(a.second) > std::abs(b.second); });
+    // Strongest first; signals that are one on this motion (Wx and cos
+    // lambda1 of a roll about y) tie to rounding and keep their order.
+    auto strength = [](double r) { return std::round(std::abs(r) * 1e12); };
+    std::stable_sort(ch.correlations.begin(), ch.correlations.end(),
+                     [&](const auto& a, const auto& b) { return strength(a.second) > strength(b.second); });
     ch.correlations.resize(std::min<std::size_t>(4, ch.correlations.size()));
   }
   return ch;

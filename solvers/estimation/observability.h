@@ -111,8 +111,9 @@ ObservabilityVariant MakeVariant(const ParameterLayout& layout, const Eigen::Mat
                                  const ObservabilityThresholds& t);
 
 // Directions of an information matrix (SI, no priors) in prior units:
-// unobservable (row-echelon basis of the subspace) and weakly observable
-// (eigenvectors), as defined above.
+// unobservable (row-echelon basis of the subspace, in the layout's order of
+// each direction's first parameter) and weakly observable (eigenvectors), as
+// defined above.
 void ClassifyDirections(const ParameterLayout& layout, const Eigen::MatrixXd& information,
                         const Eigen::VectorXd& prior_sigma, const ObservabilityThresholds& t,
                         std::vector<Direction>* unobservable, std::vector<Direction>* weak);

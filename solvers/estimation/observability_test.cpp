@@ -10,6 +10,7 @@
 #include <set>
 
 #include <ceres/jet.h>
+#include <Eigen/QR>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -183,6 +184,38 @@ TEST(Observability, UnsupportedDirectionsForFitAndFilter) {
   ASSERT_EQ(b.size(), 1u);
   for (const char* name : {"dlambda2", "gamma_y", "gamma_z"}) {
     EXPECT_NEAR(Weight(a[0], name), Weight(b[0], name), 1e-3) << name;
+  }
+}
+
+// Exact nulls share one eigenvalue, so the eigensolver's basis of them turns
+// with rounding; the directions come out in the layout's order of their first
+// parameter, whatever basis the null space is given in.
+TEST(Observability, NullDirectionsInTheLayoutsOrder) {
+  const ParameterLayout layout;
+  const int n = layout.size();
+  const Eigen::VectorXd sigma = Eigen::VectorXd::LinSpaced(n, 1.0, 3.0);
+  Eigen::MatrixXd N = Eigen::MatrixXd::Zero(n, 4);  // in prior units
+  N(kDy2, 0) = 1.0;
+  N(kKyy, 1) = 1.0;
+  N(kDthetaC, 2) = N(kBetaX, 2) = std::sqrt(0.5);
+  N(kKy, 3) = 1.0;
+  for (int turn = 0; turn < 3; ++turn) {
+    // The same null space, its basis turned.
+    const Eigen::MatrixXd R =
+        Eigen::HouseholderQR<Eigen::MatrixXd>(Eigen::MatrixXd::Random(4, 4)).householderQ();
+    const Eigen::MatrixXd B = turn == 0 ? N : Eigen::MatrixXd(N * R);
+    const Eigen::MatrixXd in_prior_units =
+        1e4 * (Eigen::MatrixXd::Identity(n, n) - B * B.transpose());
+    const Eigen::MatrixXd information =
+        sigma.cwiseInverse().asDiagonal() * in_prior_units * sigma.cwiseInverse().asDiagonal();
+    std::vector<Direction> nulls;
+    ClassifyDirections(layout, information, sigma, ObservabilityThresholds{}, &nulls, nullptr);
+    ASSERT_EQ(nulls.size(), 4u) << "turn " << turn;
+    EXPECT_EQ(nulls[0].named.weights[0].first, "Ky") << "turn " << turn;
+    EXPECT_GT(std::abs(Weight(nulls[1].named, "beta_x")), 0.5) << "turn " << turn;
+    EXPECT_GT(std::abs(Weight(nulls[1].named, "dtheta_c")), 0.5) << "turn " << turn;
+    EXPECT_EQ(nulls[2].named.weights[0].first, "Kyy") << "turn " << turn;
+    EXPECT_EQ(nulls[3].named.weights[0].first, "dy2") << "turn " << turn;
   }
 }
 
