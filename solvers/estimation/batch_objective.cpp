@@ -85,7 +85,7 @@ BatchObjective::Point BatchObjective::Evaluate(const Eigen::VectorXd& phi,
     const int fitted = p.cfg.layout.has_gyro() ? kNumGyroParams : 0;
     if (gyro_noise_held_) {
       pt.gyro[r] = ReduceGyroAtNoise(*pt.gyro_passes[r], p.gyro_noise_rad_s,
-                                     GyroNoiseDofShare(*pt.gyro_passes[r], fitted), threads_);
+                                     GyroNoiseDofShare(*pt.gyro_passes[r], fitted));
       continue;
     }
     pt.gyro[r] =
@@ -145,7 +145,7 @@ void BatchObjective::ReweightGyro(Point* pt, const Point& other) const {
   for (int r = 0; r < runs(); ++r) {
     if (!HasGyroPart(*pt, r) || !HasGyroPart(other, r)) continue;
     pt->gyro[r] = ReduceGyroAtNoise(*pt->gyro_passes[r], other.gyro[r].noise_rad_s,
-                                    pt->gyro[r].rho, threads_);
+                                    pt->gyro[r].rho);
   }
   Assemble(pt);
   work_.reduction_seconds += SecondsSince(t0);

@@ -100,6 +100,23 @@ Mat3d WeightOf(const std::array<double, 6>& m, const Vec3d& u) {
   return W;
 }
 
+// M(X) = sum w^2 P^T X P from the moments (P = Rx(l2)): tr(X W(u)) =
+// u^T M(X) u, and x^T W(u) y = u^T M(x y^T) u.
+Mat3d MomentForm(const std::array<double, 6>& m, const Mat3d& X) {
+  Mat3d M;
+  const double x12 = X(1, 2) + X(2, 1);
+  M(0, 0) = m[0] * X(0, 0);
+  M(0, 1) = m[1] * X(0, 1) + m[2] * X(0, 2);
+  M(0, 2) = m[1] * X(0, 2) - m[2] * X(0, 1);
+  M(1, 0) = m[1] * X(1, 0) + m[2] * X(2, 0);
+  M(2, 0) = m[1] * X(2, 0) - m[2] * X(1, 0);
+  M(1, 1) = m[3] * X(1, 1) + m[5] * x12 + m[4] * X(2, 2);
+  M(2, 2) = m[4] * X(1, 1) - m[5] * x12 + m[3] * X(2, 2);
+  M(1, 2) = -m[5] * X(1, 1) + m[3] * X(1, 2) - m[4] * X(2, 1) + m[5] * X(2, 2);
+  M(2, 1) = -m[5] * X(1, 1) - m[4] * X(1, 2) + m[3] * X(2, 1) + m[5] * X(2, 2);
+  return M;
+}
+
 // W(u_i) of each channel, u_i = Mg^-1 e_i (the columns of U).
 std::array<Mat3d, 3> ChannelWeights(const std::array<double, 6>& m, const Mat3d& U) {
   return {WeightOf(m, U.col(0)), WeightOf(m, U.col(1)), WeightOf(m, U.col(2))};
@@ -407,13 +424,28 @@ GyroSummary SummariseGyro(const RunProblem& p, const GyroPass& pass, const GyroR
 
 namespace {
 
-// ReduceGyro; without with_log_det the cost alone is wanted (the weights'
-// derivatives in ReduceGyroAtNoise): the log-determinant at the reference
-// scale factors, a second elimination, is not formed, and neg_log_l is left
-// NaN.
+// The derivatives of -log L by the noise weights, in the forms of
+// MomentForm: channel i's part of Sigma is v_i W(u_i) (v_i = (sigma_i /
+// K_i)^2, u_i = Mg^-1 e_i), so with w = Sigma^-1 r the cost's derivative is
+// d cost = -0.5 w^T dSigma w = -0.5 sum_i d(v_i u_i^T F u_i) (F = cost: the
+// sum of M(w_e w_e^T) and 2 M(w_e w_e+1^T), the shared sample's moments for
+// the second), and the log-determinant's 0.5 d log det Sigma = 0.5 tr(Sigma^-1
+// dSigma) = 0.5 sum_i d(v_i) u_i^T G u_i (G = log_det: the same of Sigma^-1's
+// blocks on its band; of the reference's Sigma, at the reference's u_i).
+struct WeightForms {
+  bool with_log_det = false;
+  Mat3d cost = Mat3d::Zero(), log_det = Mat3d::Zero();
+};
+
+// ReduceGyro; without with_log_det the cost alone is wanted: the
+// log-determinant at the reference scale factors, a second elimination, is
+// not formed, and neg_log_l is left NaN. forms (with the pass's own
+// weights): the 3 x 3 forms the derivatives by the weights come from
+// (WeightForms).
 GyroReduction ReduceGyroOrCost(const GyroPass& pass, const Eigen::Vector3d& noise_rad_s,
                                double rho, bool theta_part, bool with_scores,
-                               const Eigen::Matrix3d* mg_inv, bool with_log_det) {
+                               const Eigen::Matrix3d* mg_inv, bool with_log_det,
+                               WeightForms* forms = nullptr) {
   const Mat3d& Mi = mg_inv ? *mg_inv : pass.Mg_inv;
   const std::size_t K = pass.r.size();
   const int n = static_cast<int>(pass.theta.size());
@@ -485,6 +517,24 @@ GyroReduction ReduceGyroOrCost(const GyroPass& pass, const Eigen::Vector3d& nois
   Vec3d z_prev = Vec3d::Zero();
   bool chained = false;  // the previous interval is used and shares this one's first epoch
   int used = 0;
+  // For forms: each interval's factor, coupling to the one before and
+  // whitened innovation (Sigma^-1 r by the back substitution below), and the
+  // factors of the log-determinant's Sigma when it is another (the
+  // reference's).
+  const bool ref_chain = forms && forms->with_log_det && !same_ref;
+  std::vector<Mat3d> Li_all, T_all, Liref_all, Tref_all;
+  std::vector<Vec3d> z_all;
+  std::vector<char> chained_all;
+  if (forms) {
+    Li_all.resize(K);
+    T_all.resize(K);
+    z_all.resize(K);
+    chained_all.assign(K, 0);
+  }
+  if (ref_chain) {
+    Liref_all.resize(K);
+    Tref_all.resize(K);
+  }
   for (std::size_t k = 0; k < K; ++k) {
     if (!pass.valid[k]) {
       chained = false;
@@ -521,9 +571,11 @@ GyroReduction ReduceGyroOrCost(const GyroPass& pass, const Eigen::Vector3d& nois
       if (chained) {
         const Mat3d Tr = Liref_prev.lazyProduct(Cref_prev);
         Sr.noalias() -= Tr.transpose().lazyProduct(Tr);
+        if (ref_chain) Tref_all[k] = Tr;
       }
       double half_log_det_ref = 0.0;
       Liref_prev = InverseCholesky3(Sr, &half_log_det_ref);
+      if (ref_chain) Liref_all[k] = Liref_prev;
       log_det_ref += half_log_det_ref;
       Cref_prev = -R3 + channels_ref(k, true, var_ref);
     }
@@ -533,6 +585,12 @@ GyroReduction ReduceGyroOrCost(const GyroPass& pass, const Eigen::Vector3d& nois
     const Vec3d z = Li * nu;
     out.whitened[k] = z;
     out.cost += 0.5 * z.squaredNorm();
+    if (forms) {
+      Li_all[k] = Li;
+      z_all[k] = z;
+      chained_all[k] = chained;
+      if (chained) T_all[k] = T;
+    }
     if (jac) {
       Jz.noalias() = Li.lazyProduct(Jnu);
       sc.noalias() = Jz.transpose() * z;
@@ -559,6 +617,46 @@ GyroReduction ReduceGyroOrCost(const GyroPass& pass, const Eigen::Vector3d& nois
     z_prev = z;
     chained = true;
   }
+  if (forms) {
+    auto linked = [&](std::size_t k) {  // interval k + 1 is chained to k
+      return k + 1 < K && pass.valid[k + 1] && chained_all[k + 1];
+    };
+    // w_e = Li_e^T (z_e - T_e+1 w_e+1): the factorisation's back
+    // substitution (G_e+1^T = S_e^-1 C_e,e+1 = Li_e^T T_e+1).
+    std::vector<Vec3d> w(K, Vec3d::Zero());
+    for (std::size_t k = K; k-- > 0;) {
+      if (!pass.valid[k]) continue;
+      Vec3d x = z_all[k];
+      if (linked(k)) x.noalias() -= T_all[k + 1] * w[k + 1];
+      w[k] = Li_all[k].transpose() * x;
+    }
+    forms->cost.setZero();
+    for (std::size_t k = 0; k < K; ++k) {
+      if (!pass.valid[k]) continue;
+      forms->cost += MomentForm(pass.moments[k], w[k] * w[k].transpose());
+      if (linked(k)) forms->cost += 2.0 * MomentForm(pass.cross_moments[k], w[k] * w[k + 1].transpose());
+    }
+    if (forms->with_log_det) {
+      // Sigma^-1's blocks on the band, backwards (selected inversion):
+      // X_ee = S_e^-1 + G_e+1^T X_e+1,e+1 G_e+1, X_e,e+1 = -G_e+1^T X_e+1,e+1.
+      const std::vector<Mat3d>& Lf = ref_chain ? Liref_all : Li_all;
+      const std::vector<Mat3d>& Tf = ref_chain ? Tref_all : T_all;
+      forms->log_det.setZero();
+      Mat3d X_next = Mat3d::Zero();
+      for (std::size_t k = K; k-- > 0;) {
+        if (!pass.valid[k]) continue;
+        Mat3d X = Lf[k].transpose() * Lf[k];
+        if (linked(k)) {
+          const Mat3d Gt = Lf[k].transpose() * Tf[k + 1];  // G_e+1^T
+          const Mat3d X_cross = -Gt * X_next;
+          X.noalias() -= X_cross * Gt.transpose();
+          forms->log_det += 2.0 * MomentForm(pass.cross_moments[k], X_cross);
+        }
+        forms->log_det += MomentForm(pass.moments[k], X);
+        X_next = X;
+      }
+    }
+  }
   out.degrees_of_freedom = 3 * used;
   info.triangularView<Eigen::StrictlyUpper>() = info.transpose();
   if (!same_ref) out.log_det = with_log_det ? log_det_ref : std::numeric_limits<double>::quiet_NaN();
@@ -572,12 +670,6 @@ GyroReduction ReduceGyroOrCost(const GyroPass& pass, const Eigen::Vector3d& nois
   return out;
 }
 
-// The cost alone at noise_rad_s (ReduceGyroOrCost), with the weights'
-// Mg^-1 mg_inv or the pass's.
-double GyroCost(const GyroPass& pass, const Eigen::Vector3d& noise_rad_s,
-                const Eigen::Matrix3d* mg_inv = nullptr) {
-  return ReduceGyroOrCost(pass, noise_rad_s, 1.0, false, false, mg_inv, false).cost;
-}
 
 }  // namespace
 
@@ -593,55 +685,51 @@ double GyroNoiseDofShare(const GyroPass& pass, int fitted_parameters) {
   return std::max(0.1, 1.0 - fitted_parameters / dof);
 }
 
+GyroReduction ReduceGyroWithNoiseGradient(const GyroPass& pass, const Eigen::Vector3d& sigma,
+                                          double rho, Eigen::Vector3d* g) {
+  // Exact (WeightForms): d/ds_i = -v_i u_i^T F u_i + rho v_ref_i u_ref_i^T G
+  // u_ref_i (dv_i / ds_i = 2 v_i).
+  WeightForms forms;
+  forms.with_log_det = true;
+  GyroReduction r = ReduceGyroOrCost(pass, sigma, rho, false, false, nullptr, true, &forms);
+  const Vec3d var = sigma.cwiseQuotient(pass.K).cwiseAbs2();
+  const Vec3d var_ref = sigma.cwiseQuotient(pass.K_ref).cwiseAbs2();
+  for (int i = 0; i < 3; ++i) {
+    const Vec3d u = pass.Mg_inv.col(i), u_ref = pass.Mg_inv_ref.col(i);
+    (*g)[i] = -var[i] * u.dot(forms.cost * u) + rho * var_ref[i] * u_ref.dot(forms.log_det * u_ref);
+  }
+  return r;
+}
+
 GyroReduction ReduceGyroAtBestNoise(const GyroPass& pass, const Eigen::Vector3d& start,
                                     int fitted_parameters, bool theta_part, int threads) {
   const double rho = GyroNoiseDofShare(pass, fitted_parameters);
-  // -log L in s = log sigma, by Newton's method on its central differences
-  // (each a reduction without the Jacobian, O(E), independent: on
-  // `threads`): the gradient's 7 points at every step, the Hessian's 12
-  // more where the last step left the region where -log L is quadratic
+  // -log L in s = log sigma, by Newton's method on its exact gradient
+  // (ReduceGyroWithNoiseGradient, a reduction with its back substitutions, O(E)), the
+  // Hessian its forward differences (3 more, independent: on `threads`)
+  // where the last step left the region where -log L is quadratic
   // (kChordReach; within it the Hessian moves by about the step, and chord
-  // steps with the last one converge about as fast: the real gyro runs' fits
-  // the same to 3e-9 sigma, 11-18 % faster). The steps go on to 1e-12 in
-  // -log L, so the profile is a smooth function of theta to rounding.
+  // steps with the last one converge about as fast). The steps go on to
+  // 1e-12 in -log L, so the profile is a smooth function of theta to
+  // rounding.
   Eigen::Vector3d s = start.array().max(1e-12).log();
-  const double h = 1e-3;
+  const double h = 1e-4;
   constexpr double kChordReach = 0.1;  // in log sigma
-  // The 19 points of a step: s, s +- h e_i (i = 0..2), then the Hessian's
-  // s +- h e_i +- h e_j (i < j).
-  std::vector<Eigen::Vector3d> points(19);
-  std::vector<double> f(19);
   Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
   bool have_hessian = false;
   double last_big = std::numeric_limits<double>::infinity();
   for (int it = 0; it < 30; ++it) {
     const bool hessian = !have_hessian || last_big > kChordReach;
-    points[0] = s;
-    int k = 1;
-    for (int i = 0; i < 3; ++i) {
-      for (double d : {h, -h}) {
-        points[k] = s;
-        points[k++][i] += d;
-      }
-    }
-    for (int i = 0; i < 3 && hessian; ++i) {
-      for (int j = i + 1; j < 3; ++j) {
-        for (double di : {h, -h}) {
-          for (double dj : {h, -h}) {
-            points[k] = s;
-            points[k][i] += di;
-            points[k++][j] += dj;
-          }
-        }
-      }
-    }
+    // Point 0: s; points 1..3: s + h e_i (the Hessian's).
+    std::array<Vec3d, 4> grads;
     GyroReduction center;
-    ParallelFor(static_cast<std::size_t>(k), threads, [&](std::size_t q) {
-      GyroReduction r = ReduceGyro(pass, points[q].array().exp(), rho, false);
-      f[q] = r.neg_log_l;
+    ParallelFor(hessian ? 4 : 1, threads, [&](std::size_t q) {
+      Vec3d at = s;
+      if (q > 0) at[q - 1] += h;
+      GyroReduction r = ReduceGyroWithNoiseGradient(pass, at.array().exp(), rho, &grads[q]);
       if (q == 0) center = std::move(r);
     });
-    const double f0 = f[0];
+    const double f0 = center.neg_log_l;
     // Far out (a start several times off the residual's noise: the declared
     // figure or the readings' own against a misfit) a Newton step in log
     // sigma moves about 0.5 (the cost's exp(-2 s) dominates): 16 steps on
@@ -658,17 +746,10 @@ GyroReduction ReduceGyroAtBestNoise(const GyroPass& pass, const Eigen::Vector3d&
         }
       }
     }
-    Eigen::Vector3d g;
-    for (int i = 0; i < 3; ++i) {
-      const double fp = f[1 + 2 * i], fm = f[2 + 2 * i];
-      g[i] = (fp - fm) / (2.0 * h);
-      if (hessian) H(i, i) = (fp - 2.0 * f0 + fm) / (h * h);
-    }
-    k = 7;
-    for (int i = 0; i < 3 && hessian; ++i) {
-      for (int j = i + 1; j < 3; ++j, k += 4) {  // ++, +-, -+, --
-        H(i, j) = H(j, i) = (f[k] - f[k + 1] - f[k + 2] + f[k + 3]) / (4.0 * h * h);
-      }
+    const Vec3d g = grads[0];
+    if (hessian) {
+      for (int j = 0; j < 3; ++j) H.col(j) = (grads[1 + j] - g) / h;
+      H = (0.5 * (H + H.transpose())).eval();
     }
     have_hessian = true;
     const Eigen::LDLT<Eigen::Matrix3d> ldlt(H);
@@ -683,47 +764,40 @@ GyroReduction ReduceGyroAtBestNoise(const GyroPass& pass, const Eigen::Vector3d&
     if (big > 1.0) step /= big;
     s += step;
     last_big = big;
-    // Converged: the next step would be below 1e-10 (the central
-    // differences' Hessian is exact to ~h^2 = 1e-6 relative).
+    // Converged: the next step would be below 1e-10 (the forward
+    // differences' Hessian is exact to ~h = 1e-4 relative).
     if (-g.dot(step) < 1e-12 || big < 1e-5) break;
   }
   if (!theta_part) return ReduceGyro(pass, s.array().exp(), rho, false);
-  return ReduceGyroAtNoise(pass, s.array().exp(), rho, threads);
+  return ReduceGyroAtNoise(pass, s.array().exp(), rho);
 }
 
 GyroReduction ReduceGyroAtNoise(const GyroPass& pass, const Eigen::Vector3d& noise_rad_s,
-                                double rho, int threads) {
-  GyroReduction out = ReduceGyro(pass, noise_rad_s, rho, true);
+                                double rho) {
+  WeightForms forms;
+  GyroReduction out = ReduceGyroOrCost(pass, noise_rad_s, rho, true, true, nullptr, true, &forms);
   if (out.gradient.size() == 0) return out;
+  // The weights' derivatives at the residual held (WeightForms; the
+  // log-determinant is the reference's, not theta's): by K_i, dv_i / dK_i =
+  // -2 v_i / K_i; by an angle a of Mg (entry (r, c), sign s_a), du_i = -s_a
+  // Mg^-1 e_r (Mg^-1)_ci, and d(u^T F u) = du^T (F + F^T) u.
+  const Mat3d& F = forms.cost;
   const int go = static_cast<int>(pass.theta.size()) - kNumGyroParams;
-  const Eigen::Vector3d s = noise_rad_s.array().log();
-  const double h = 1e-3, ha = 1e-6;
-  // The weights' derivatives, each a pair of costs (18 reductions, independent:
-  // on `threads`). By K_i (q = 0..2): d cost / d K_i = q_i / K_i, q_i = -d cost /
-  // d log sigma_i. By the angles (q = 3..8): the cost with the weights' Mg^-1
-  // moved, the residual kept.
-  std::vector<double> plus(9), minus(9);
-  ParallelFor(18, threads, [&](std::size_t k) {
-    const int q = static_cast<int>(k / 2);
-    const double sign = k % 2 == 0 ? 1.0 : -1.0;
-    double cost;
-    if (q < 3) {
-      Eigen::Vector3d a = s;
-      a[q] += sign * h;
-      cost = GyroCost(pass, a.array().exp());
-    } else {
-      Eigen::VectorXd t = pass.theta;
-      t[go + kGAlphaX + q - 3] += sign * ha;
-      const Eigen::Matrix3d M = GyroMisalignmentMatrix(t.data() + go).inverse();
-      cost = GyroCost(pass, noise_rad_s, &M);
-    }
-    (sign > 0.0 ? plus : minus)[q] = cost;
-  });
+  const Mat3d& Mi = pass.Mg_inv;
+  const Vec3d var = noise_rad_s.cwiseQuotient(pass.K).cwiseAbs2();
+  const Mat3d Fs = F + F.transpose();
   for (int i = 0; i < 3; ++i) {
-    out.gradient[go + kGKx + i] += -(plus[i] - minus[i]) / (2.0 * h) / pass.K[i];
+    const Vec3d u = Mi.col(i);
+    out.gradient[go + kGKx + i] += var[i] * u.dot(F * u) / pass.K[i];
   }
   for (int a = 0; a < 6; ++a) {
-    out.gradient[go + kGAlphaX + a] += (plus[3 + a] - minus[3 + a]) / (2.0 * ha);
+    const AngleEntry& e = kAngleEntries[a];
+    double d = 0.0;
+    for (int i = 0; i < 3; ++i) {
+      const Vec3d du = -e.sign * Mi.col(e.row) * Mi(e.col, i);
+      d += var[i] * du.dot(Fs * Mi.col(i));
+    }
+    out.gradient[go + kGAlphaX + a] += -0.5 * d;
   }
   return out;
 }

@@ -40,8 +40,9 @@
 // carries 1.4 % of the shaft channel's into another). The log-determinant is
 // taken at the reference values (the readings' noise does not depend on
 // theta), as the accelerometer's (run_evaluation.h). The gradient carries the
-// weights' derivatives: by K_i, q_i / K_i (q_i = -d cost / d log sigma_i); by
-// the angles, central differences of the cost in the weights alone. The
+// weights' derivatives, -0.5 w^T dSigma w with w = Sigma^-1 r (the block
+// factorisation's back substitution): by K_i through sigma_i / K_i, by the
+// angles through P Mg^-1 e_i (ReduceGyroAtNoise). The
 // Gauss-Newton information takes K_i's and the angles' columns in the
 // readings' form, -P Mg^-1 dM (Mg w) with w the bench's rate from the angles
 // (differenced over +-0.05 s), which the weights' derivatives make of the
@@ -149,10 +150,17 @@ GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_
                          double rho, bool theta_part, bool with_scores = true,
                          const Eigen::Matrix3d* mg_inv = nullptr);
 
+// At a given noise (cost and log-determinant, no theta part), and the
+// gradient of -log L by the log of each channel's noise, exact: -0.5 w^T
+// dSigma w (w = Sigma^-1 r, the block factorisation's back substitution)
+// and rho 0.5 tr(Sigma_ref^-1 dSigma_ref) (its inverse's blocks on the band).
+GyroReduction ReduceGyroWithNoiseGradient(const GyroPass& pass, const Eigen::Vector3d& noise_rad_s,
+                                          double rho, Eigen::Vector3d* gradient_by_log_noise);
+
 // At a given noise, with the theta part and the weights' derivatives in the
 // gradient (what a change of the gradient at fixed noise is measured with).
 GyroReduction ReduceGyroAtNoise(const GyroPass& pass, const Eigen::Vector3d& noise_rad_s,
-                                double rho, int threads = 1);
+                                double rho);
 
 // The share of the gyro's degrees of freedom the noise estimate keeps with
 // fitted_parameters estimated (the restricted likelihood's weight of the
@@ -160,8 +168,8 @@ GyroReduction ReduceGyroAtNoise(const GyroPass& pass, const Eigen::Vector3d& noi
 double GyroNoiseDofShare(const GyroPass& pass, int fitted_parameters);
 
 // The noise at the maximum of the restricted likelihood (from `start`),
-// reduced there (ReduceGyroAtNoise with theta_part). Both take their
-// independent reductions (the central differences) on `threads`; the
+// reduced there (ReduceGyroAtNoise with theta_part). Its independent
+// reductions (the central differences in log sigma) run on `threads`; the
 // result does not depend on it.
 GyroReduction ReduceGyroAtBestNoise(const GyroPass& pass, const Eigen::Vector3d& start,
                                     int fitted_parameters, bool theta_part, int threads = 1);

@@ -153,6 +153,33 @@ TEST(GyroTerm, GradientAtFixedNoiseMatchesCentralDifferences) {
   }
 }
 
+// The gradient of -log L by the log of each channel's noise (the cost's
+// and the reference log-determinant's parts) against central differences,
+// away from the scale factors' and misalignment's reference values.
+TEST(GyroTerm, NoiseGradientMatchesCentralDifferences) {
+  const GyroRun g = MakeGyroRun(50.0, 20.0, 0.05, 3);
+  const RunProblem p = BuildRunProblem(g.s.run, g.data, g.layout, 0.5, {});
+  const int go = g.layout.gyro_offset();
+  Eigen::VectorXd th = g.truth;
+  th[go + kGKy] *= 0.997;
+  th[go + kGGammaZ] += 4e-4;
+  const GyroPass pass = EvaluateGyroPass(p, th, false, 1);
+  const Eigen::Vector3d noise(0.03 * kDegToRad, 0.07 * kDegToRad, 0.05 * kDegToRad);
+  const double rho = 0.95;
+  Eigen::Vector3d grad;
+  const GyroReduction at = ReduceGyroWithNoiseGradient(pass, noise, rho, &grad);
+  EXPECT_NEAR(at.neg_log_l, ReduceGyro(pass, noise, rho, false).neg_log_l, 1e-9 * std::abs(at.neg_log_l));
+  for (int i = 0; i < 3; ++i) {
+    const double h = 1e-5;
+    Eigen::Vector3d up = noise, down = noise;
+    up[i] *= std::exp(h);
+    down[i] *= std::exp(-h);
+    const double num = (ReduceGyro(pass, up, rho, false).neg_log_l -
+                        ReduceGyro(pass, down, rho, false).neg_log_l) / (2.0 * h);
+    EXPECT_NEAR(grad[i], num, 1e-6 * (std::abs(num) + pass.r.size())) << "channel " << i;
+  }
+}
+
 // The profiled noise is the maximum of the restricted likelihood: a step of
 // 1 % either way in any channel does not lower -log L; and it is within 4 sd
 // of the truth, the sd from the curvature of -log L in log sigma there (the
