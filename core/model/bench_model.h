@@ -136,8 +136,6 @@ BenchAngles<T> EncoderReading(const ModelConfig& cfg, const T* theta, const Benc
   return r;
 }
 
-// Recorded angles (and the rates/accelerations derived from them) -> bench angles.
-// |a - b| <= tol, and for Jets (a.a, a.v) every derivative too.
 // The value of a scalar without its derivative part (double, or a Ceres Jet).
 inline double ScalarPart(double x) { return x; }
 template <typename J>
@@ -145,6 +143,8 @@ double ScalarPart(const J& x) {
   return x.a;
 }
 
+// Recorded angles (and the rates/accelerations derived from them) -> bench angles.
+// |a - b| <= tol, and for Jets (a.a, a.v) every derivative too.
 inline bool WithinOf(double a, double b, double tol) { return std::abs(a - b) <= tol; }
 template <typename J>
 bool WithinOf(const J& a, const J& b, double tol) {

@@ -670,7 +670,6 @@ GyroReduction ReduceGyroOrCost(const GyroPass& pass, const Eigen::Vector3d& nois
   return out;
 }
 
-
 }  // namespace
 
 GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_s, double rho,

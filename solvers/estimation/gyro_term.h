@@ -142,8 +142,8 @@ struct GyroReduction {
 };
 
 // At a given reading noise [rad/s per channel]: cost, log-determinant, and
-// with theta_part the gradient (without the weight's derivative, which
-// ReduceGyroAtBestNoise adds) and the information.
+// with theta_part the gradient (without the weights' derivatives, which
+// ReduceGyroAtNoise adds) and the information.
 // mg_inv: the weights' Mg^-1 (default the pass's, at theta); without
 // with_scores no per-interval scores.
 GyroReduction ReduceGyro(const GyroPass& pass, const Eigen::Vector3d& noise_rad_s,

@@ -126,16 +126,34 @@ TEST(GyroTerm, ProfiledGradientMatchesCentralDifferences) {
   }
 }
 
+// A 20-s gyro run at 50 Hz and theta away from the noise weights' reference
+// values (the prior means): gyro scale factor `scale` times `factor`, gyro
+// misalignment `angle` moved by `add` rad.
+struct OffReference {
+  GyroRun g;
+  RunProblem p;
+  Eigen::VectorXd th;
+};
+
+OffReference MakeOffReference(int seed, int scale, double factor, int angle, double add) {
+  OffReference o{MakeGyroRun(50.0, 20.0, 0.05, seed), {}, {}};
+  o.p = BuildRunProblem(o.g.s.run, o.g.data, o.g.layout, 0.5, {});
+  const int go = o.g.layout.gyro_offset();
+  o.th = o.g.truth;
+  o.th[go + scale] *= factor;
+  o.th[go + angle] += add;
+  return o;
+}
+
 // At a fixed noise (what the minimiser measures its curvature with) the
 // gradient carries the weights' derivatives too: against central differences
 // of -log L at that noise.
 TEST(GyroTerm, GradientAtFixedNoiseMatchesCentralDifferences) {
-  const GyroRun g = MakeGyroRun(50.0, 20.0, 0.05, 4);
-  const RunProblem p = BuildRunProblem(g.s.run, g.data, g.layout, 0.5, {});
+  const OffReference o = MakeOffReference(4, kGKx, 1.002, kGAlphaY, 3e-4);
+  const GyroRun& g = o.g;
+  const RunProblem& p = o.p;
+  const Eigen::VectorXd& th = o.th;
   const int go = g.layout.gyro_offset();
-  Eigen::VectorXd th = g.truth;
-  th[go + kGKx] *= 1.002;
-  th[go + kGAlphaY] += 3e-4;
   const Eigen::Vector3d noise(0.04 * kDegToRad, 0.06 * kDegToRad, 0.05 * kDegToRad);
   const double rho = 0.97;
   const GyroReduction at = ReduceGyroAtNoise(EvaluateGyroPass(p, th, true, 1), noise, rho);
@@ -157,13 +175,8 @@ TEST(GyroTerm, GradientAtFixedNoiseMatchesCentralDifferences) {
 // and the reference log-determinant's parts) against central differences,
 // away from the scale factors' and misalignment's reference values.
 TEST(GyroTerm, NoiseGradientMatchesCentralDifferences) {
-  const GyroRun g = MakeGyroRun(50.0, 20.0, 0.05, 3);
-  const RunProblem p = BuildRunProblem(g.s.run, g.data, g.layout, 0.5, {});
-  const int go = g.layout.gyro_offset();
-  Eigen::VectorXd th = g.truth;
-  th[go + kGKy] *= 0.997;
-  th[go + kGGammaZ] += 4e-4;
-  const GyroPass pass = EvaluateGyroPass(p, th, false, 1);
+  const OffReference o = MakeOffReference(3, kGKy, 0.997, kGGammaZ, 4e-4);
+  const GyroPass pass = EvaluateGyroPass(o.p, o.th, false, 1);
   const Eigen::Vector3d noise(0.03 * kDegToRad, 0.07 * kDegToRad, 0.05 * kDegToRad);
   const double rho = 0.95;
   Eigen::Vector3d grad;

@@ -102,15 +102,16 @@ void ClassifyDirections(const ParameterLayout& layout, const Eigen::MatrixXd& in
     unobservable->clear();
     if (k > 0) {
       const Eigen::MatrixXd B = RowEchelon(es.eigenvectors().leftCols(k).transpose());
-      // In the layout's order of their first parameter: the null space's
-      // basis from the eigensolver turns with rounding (exact nulls share
-      // one eigenvalue), the directions it spans do not.
-      std::vector<std::pair<int, int>> order;  // first parameter, row
+      // In the layout's order of their main parameters (the first of those
+      // with at least half the largest weight): the null space's basis from
+      // the eigensolver turns with rounding (exact nulls share one
+      // eigenvalue), the directions it spans do not.
+      std::vector<std::pair<int, int>> order;  // main parameter, row
       for (int r = 0; r < k; ++r) {
         if (B.row(r).norm() < 1e-9) continue;  // cannot happen for a basis; guards normalized()
         const double big = B.row(r).cwiseAbs().maxCoeff();
         int first = 0;
-        while (std::abs(B(r, first)) < 1e-6 * big) ++first;
+        while (std::abs(B(r, first)) < 0.5 * big) ++first;
         order.push_back({first, r});
       }
       std::stable_sort(order.begin(), order.end());

@@ -112,8 +112,8 @@ ObservabilityVariant MakeVariant(const ParameterLayout& layout, const Eigen::Mat
 
 // Directions of an information matrix (SI, no priors) in prior units:
 // unobservable (row-echelon basis of the subspace, in the layout's order of
-// each direction's first parameter) and weakly observable (eigenvectors), as
-// defined above.
+// each direction's main parameter: the first with at least half its largest
+// weight) and weakly observable (eigenvectors), as defined above.
 void ClassifyDirections(const ParameterLayout& layout, const Eigen::MatrixXd& information,
                         const Eigen::VectorXd& prior_sigma, const ObservabilityThresholds& t,
                         std::vector<Direction>* unobservable, std::vector<Direction>* weak);

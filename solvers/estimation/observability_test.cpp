@@ -188,7 +188,7 @@ TEST(Observability, UnsupportedDirectionsForFitAndFilter) {
 }
 
 // Exact nulls share one eigenvalue, so the eigensolver's basis of them turns
-// with rounding; the directions come out in the layout's order of their first
+// with rounding; the directions come out in the layout's order of their main
 // parameter, whatever basis the null space is given in.
 TEST(Observability, NullDirectionsInTheLayoutsOrder) {
   const ParameterLayout layout;
@@ -196,14 +196,19 @@ TEST(Observability, NullDirectionsInTheLayoutsOrder) {
   const Eigen::VectorXd sigma = Eigen::VectorXd::LinSpaced(n, 1.0, 3.0);
   Eigen::MatrixXd N = Eigen::MatrixXd::Zero(n, 4);  // in prior units
   N(kDy2, 0) = 1.0;
-  N(kKyy, 1) = 1.0;
+  N(kKyy, 1) = 1.0;  // with a little of Ky, as on the real roll runs
+  N(kKy, 1) = 0.012;
+  N.col(1).normalize();
   N(kDthetaC, 2) = N(kBetaX, 2) = std::sqrt(0.5);
   N(kKy, 3) = 1.0;
+  // An orthonormal basis of the null space (N's columns are not orthogonal).
+  const Eigen::MatrixXd Q = Eigen::HouseholderQR<Eigen::MatrixXd>(N).householderQ() *
+                            Eigen::MatrixXd::Identity(n, 4);
   for (int turn = 0; turn < 3; ++turn) {
     // The same null space, its basis turned.
     const Eigen::MatrixXd R =
         Eigen::HouseholderQR<Eigen::MatrixXd>(Eigen::MatrixXd::Random(4, 4)).householderQ();
-    const Eigen::MatrixXd B = turn == 0 ? N : Eigen::MatrixXd(N * R);
+    const Eigen::MatrixXd B = turn == 0 ? Q : Eigen::MatrixXd(Q * R);
     const Eigen::MatrixXd in_prior_units =
         1e4 * (Eigen::MatrixXd::Identity(n, n) - B * B.transpose());
     const Eigen::MatrixXd information =
