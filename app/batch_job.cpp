@@ -37,7 +37,7 @@ nlohmann::json FitUnit(const FitSettings& settings, const ManifestEntry& e, int 
   try {
     Session session;
     session.output_guard = guard;
-    const LoadedRun run = LoadRun(e.run_path, &session);
+    const LoadedRun run = LoadRun(e.run_path, &session, 1);  // one thread a run, as its fit
     j["warnings"] = run.warnings;
     FitSettings fs = settings;
     fs.threads = 1;  // the result must not depend on the split (see above)

@@ -179,7 +179,8 @@ ObservabilityOutcome ObservabilityRun(const ObservabilitySettings& s, const Obse
   // 1 kHz; a 25-min real run at 100 Hz): loading the run 64 % / 29 %,
   // building the problem 8 % / 1 %, the Fisher information 28 % / 70 %.
   Stage(session, "building the problem", 0.35);
-  const RunProblem p = BuildRunProblem(in.run, in.data, in.layout, s.epoch_s, derivatives);
+  const RunProblem p =
+      BuildRunProblem(in.run, in.data, in.layout, s.epoch_s, derivatives, nullptr, s.threads);
   Stage(session, "Fisher information", 0.4);
   o.result = AnalyseObservability(in.run, p, theta, oo);
   if (s.could_hide) {

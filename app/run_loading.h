@@ -23,11 +23,12 @@ struct LoadedRun {
 // Loads run.yaml and its data; records both (and the sensor) in
 // session->provenance, notes both in its output guard (Session::RecordInput)
 // and says each warning through session->warning (when set). Throws
-// InputError for bad input.
-LoadedRun LoadRun(const std::string& run_yaml, Session* session);
+// InputError for bad input. threads: the job's (0: all cores); with 1 the
+// file is parsed and its checksum taken on the calling thread alone.
+LoadedRun LoadRun(const std::string& run_yaml, Session* session, int threads = 0);
 
 // The same for a description already read (Python's dict of run.yaml's keys):
 // loads its data, records the data file and the sensor.
-LoadedRun LoadRun(RunDescription description, Session* session);
+LoadedRun LoadRun(RunDescription description, Session* session, int threads = 0);
 
 }  // namespace triadcal

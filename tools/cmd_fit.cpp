@@ -39,7 +39,7 @@ int RunFit(FitArgs a, Session& session) {
   const FitSettings settings = a.fit.Settings();
   CheckOutputPath(a.out_json, session);
   if (!a.residuals_csv.empty()) CheckOutputPath(a.residuals_csv, session, "--residuals");
-  const LoadedRun run = LoadRun(a.run_yaml, &session);
+  const LoadedRun run = LoadRun(a.run_yaml, &session, settings.threads);
   CheckOverwrite(a.out_json, session);  // before the long work
   StageProgress progress("fit: ");
   const Session fitting = WithProgress(session, &progress);

@@ -297,14 +297,15 @@ constexpr std::size_t kMinSplit = 1 << 16;
 // middle: the second part's first line number is the first's plus the line
 // ends before it. An error in the first part is the one reported (the
 // earlier line). Returns the number of line ends in [begin, end).
+// threads: TextTableOptions::threads (1: no second thread).
 int ParseBlock(const DataLineFormat& f, const char* begin, const char* end, int first_line,
-               ParsedRows* first, ParsedRows* second) {
+               int threads, ParsedRows* first, ParsedRows* second) {
   const std::size_t fields = f.number.size();
   first->Clear(fields);
   second->Clear(fields);
   const char* mid = begin + (end - begin) / 2;
   const char* split = static_cast<const char*>(std::memchr(mid, '\n', end - mid));
-  if (end - begin < static_cast<std::ptrdiff_t>(kMinSplit) || !split ||
+  if (end - begin < static_cast<std::ptrdiff_t>(kMinSplit) || !split || threads == 1 ||
       std::thread::hardware_concurrency() < 2) {
     ParseDataLines(f, begin, end, first_line, first);
     return static_cast<int>(std::count(begin, end, '\n'));
@@ -453,7 +454,8 @@ DataTable ReadTextTable(const std::string& path, const std::vector<std::string>&
   const char* block_begin;
   const char* block_end;
   while (lines.NextLines(&block_begin, &block_end)) {
-    line_no += ParseBlock(format, block_begin, block_end, line_no, &parts[0], &parts[1]);
+    line_no += ParseBlock(format, block_begin, block_end, line_no, options.threads, &parts[0],
+                          &parts[1]);
     append(parts[0]);
     append(parts[1]);
   }

@@ -161,7 +161,7 @@ void AppendDouble(double x, std::string* out) {
 
 }  // namespace
 
-RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
+RunData LoadRunData(const RunDescription& run, RunWarnings* warnings, int threads) {
   const std::string where = run.yaml_path.empty() ? run.data_path : run.yaml_path + ": data";
   if (run.data_path.empty()) throw InputError(where + ": no data file given");
   const std::string problem = InputFileProblem(run.data_path);
@@ -191,6 +191,7 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings) {
   }
   TextTableOptions text_options;
   text_options.header = run.data_header;
+  text_options.threads = threads;
   if (!label_source.empty()) text_options.wanted_text.push_back(label_source);
   DataTable table = IsMatFile(run.data_path)
                               ? ReadMatTable(run.data_path, wanted)

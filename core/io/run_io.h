@@ -19,7 +19,8 @@ namespace triadcal {
 // The gyro columns gx gy gz (SPEC section 10) are read when run.gyro is set
 // (all three required; RunData::gyro_rad_s in rad/s, platform frame) and
 // otherwise left alone, with a warning when the file has them.
-RunData LoadRunData(const RunDescription& run, RunWarnings* warnings);
+// threads: 1 reads on the calling thread alone (TextTableOptions::threads).
+RunData LoadRunData(const RunDescription& run, RunWarnings* warnings, int threads = 0);
 
 // Writes the CSV contract: t, lambda1, lambda2 [deg], wx, wy, wz [mV], and
 // lambda1_rate, lambda2_rate [deg/s] / temp_C / gx, gy, gz [deg/s] when

@@ -173,6 +173,7 @@ TEST_F(RunIoTest, CsvOfSeveralReadBlocks) {
 // line end near the middle: the rows come back in order, comment and blank
 // lines in the first half move the line numbers of the second, and an error
 // names its file line in either half (the first half's when both have one).
+// With one thread (--threads 1) the same run and the same errors.
 TEST_F(RunIoTest, CsvParsedOnTwoThreads) {
   const RunData run = MakeRun(3000, false, false);
   WriteRunCsv(run, Path("run.csv"), "two halves");
@@ -197,6 +198,7 @@ TEST_F(RunIoTest, CsvParsedOnTwoThreads) {
   write("halves.csv", lines);
   RunWarnings warnings;
   ExpectSameRun(run, LoadRunData(Describe("halves.csv"), &warnings));
+  ExpectSameRun(run, LoadRunData(Describe("halves.csv"), &warnings, 1));
   // Errors: line index j is file line j + 1.
   auto spoil = [](std::string* line) {
     *line = "x" + *line;
@@ -212,6 +214,13 @@ TEST_F(RunIoTest, CsvParsedOnTwoThreads) {
   write("bad.csv", bad);
   EXPECT_EQ(ErrorOf(Describe("bad.csv")),
             Path("bad.csv") + ":151: column 't': not a number: '" + early_t + "'");
+  try {
+    LoadRunData(Describe("bad.csv"), &warnings, 1);
+    ADD_FAILURE() << "bad.csv read on one thread without an error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              Path("bad.csv") + ":151: column 't': not a number: '" + early_t + "'");
+  }
 }
 
 // One file column may feed two channels (the reader hands a column over to

@@ -79,7 +79,8 @@ ObservabilityResult AnalyseScenario(const Scenario& s, const ParameterLayout& la
                                     const DesignOptions& opt) {
   const Scenario q = NoiseFreeScenario(s);
   const RunData data = Simulate(q);
-  const RunProblem p = BuildRunProblem(q.run, data, layout, opt.epoch_s, opt.derivatives);
+  const RunProblem p = BuildRunProblem(q.run, data, layout, opt.epoch_s, opt.derivatives,
+                                       nullptr, opt.observability.threads);
   return AnalyseObservability(q.run, p, TruthInLayout(s, layout), opt.observability);
 }
 
@@ -88,7 +89,8 @@ DesignPoint EvaluateProfile(const Scenario& s, const HarmonicProfile& profile,
   Scenario q = NoiseFreeScenario(s);
   q.profile = profile;
   const RunData data = Simulate(q);
-  const RunProblem p = BuildRunProblem(q.run, data, layout, opt.epoch_s, opt.derivatives);
+  const RunProblem p = BuildRunProblem(q.run, data, layout, opt.epoch_s, opt.derivatives,
+                                       nullptr, opt.observability.threads);
   const Eigen::MatrixXd I =
       DataInformation(p, TruthInLayout(s, layout), opt.observability.threads);
   const ObservabilityVariant v = MakeVariant(layout, I, p.prior, p.constraints,

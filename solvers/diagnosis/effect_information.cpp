@@ -151,7 +151,7 @@ class CandidateAnalysis {
     all.insert(all.end(), candidates_.begin(), candidates_.end());
     full_ = ParameterLayout(all, gyro_);
     p_ = BuildRunProblem(run_, data_, full_, options_.epoch_s, options_.derivatives,
-                         options_.shared);
+                         options_.shared, threads);
     if (fit_.noise_used_mV.minCoeff() > 0.0) p_.noise_mV = fit_.noise_used_mV;
     const std::size_t E = p_.epochs.size();
     if (fit_.process_residual.size() != E || fit_.measurement_residual.size() != E) {
@@ -177,7 +177,7 @@ class CandidateAnalysis {
     RunProblem pa;
     if (split) {
       pa = BuildRunProblem(run_, data_, ParameterLayout(accel_effects), options_.epoch_s,
-                           options_.derivatives, options_.shared);
+                           options_.derivatives, options_.shared, threads);
       pa.noise_mV = p_.noise_mV;
     }
     const RunProblem& accel = split ? pa : p_;

@@ -274,7 +274,7 @@ Eigen::VectorXd ScaleAndOffsetPoint(const RunDescription& run, const RunData& da
                                     const AngleDerivativeOptions& derivatives, std::size_t m,
                                     int threads, BatchObjective::Point* at) {
   const RunData thin = Decimate(data, m);
-  const RunProblem pt = BuildRunProblem(run, thin, layout, epoch_s, derivatives);
+  const RunProblem pt = BuildRunProblem(run, thin, layout, epoch_s, derivatives, nullptr, threads);
   Eigen::MatrixXd A;
   Eigen::VectorXd b;
   PriorAndConstraintRows(pt, &A, &b);
@@ -369,7 +369,8 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
     const std::size_t m = ThinningFactor(data, decimation_hz);
     BatchObjective::Point at;
     d.theta = ScaleAndOffsetPoint(run, data, layout, epoch_s, derivatives, m, threads, &at);
-    const RunProblem pt = BuildRunProblem(run, data, layout, epoch_s, derivatives, shared);
+    const RunProblem pt =
+        BuildRunProblem(run, data, layout, epoch_s, derivatives, shared, threads);
     if (m > 1) {
       Eigen::MatrixXd A;
       Eigen::VectorXd b;
@@ -541,7 +542,7 @@ class BatchSolve {
     if (opt_.sigma != "auto" && opt_.sigma != "white" && opt_.sigma != "hac") {
       throw OptionError("sigma", "unknown '" + opt_.sigma + "' (auto, white, hac)");
     }
-    p_ = BuildRunProblem(run_, data_, layout_, opt_.epoch_s, opt_.derivatives, shared_);
+    p_ = BuildRunProblem(run_, data_, layout_, opt_.epoch_s, opt_.derivatives, shared_, threads_);
     res_.prior = p_.prior;
     res_.epochs = static_cast<int>(p_.epochs.size());
     res_.noise_declared_mV = run_.ChannelNoise_mV();

@@ -693,6 +693,27 @@ TEST(BatchSolver, SharedRunWorkGivesEachLayoutItsOwnFit) {
   }
 }
 
+// The angles' derivatives at every sample, formed in blocks on the threads a
+// fit is given (--threads): the same series on one thread as on three.
+TEST(BatchSolver, DerivativesOnOneThreadAreThoseOnSeveral) {
+  const Scenario s = PaperScenario(500.0, 30.0, 2.0, 15.0, 4);
+  const RunData data = Simulate(s);
+  ASSERT_GT(data.size(), std::size_t{3 * 4096});  // more blocks than threads
+  const ParameterLayout latency({Effect::kAngleLatency});
+  const RunProblem one = BuildRunProblem(s.run, data, latency, 0.5, {}, nullptr, 1);
+  const RunProblem three = BuildRunProblem(s.run, data, latency, 0.5, {}, nullptr, 3);
+  ASSERT_EQ(one.series.derivatives->size(), data.size());
+  ASSERT_EQ(three.series.derivatives->size(), data.size());
+  for (std::size_t k = 0; k < data.size(); ++k) {
+    for (int a = 0; a < 2; ++a) {
+      const AxisState<double>& x = (*one.series.derivatives)[k].axis[a];
+      const AxisState<double>& y = (*three.series.derivatives)[k].axis[a];
+      ASSERT_EQ(x.rate, y.rate) << k;
+      ASSERT_EQ(x.accel, y.accel) << k;
+    }
+  }
+}
+
 // Noise declared 4x too small and 3x too large: the fit estimates it with the
 // parameters, per channel, and sigma rest on the estimate.
 TEST(BatchSolver, EstimatesTheNoiseWhateverWasDeclared) {

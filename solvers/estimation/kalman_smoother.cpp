@@ -220,7 +220,8 @@ Estimate SmoothedParameters(const StateSpaceModel& model, const PassResult& pass
 
 FilterResult RunFilterSmoother(const RunDescription& run, const RunData& data,
                                const ParameterLayout& layout, const FilterOptions& options) {
-  RunProblem c = BuildRunProblem(run, data, layout, options.epoch_s, options.derivatives);
+  RunProblem c = BuildRunProblem(run, data, layout, options.epoch_s, options.derivatives, nullptr,
+                                 options.threads);
   std::vector<int> held;
   for (const std::string& name : options.held) {
     const int i = layout.IndexOf(name);

@@ -72,7 +72,7 @@ struct FilterOptions {
   // layout's gyro block and the data's columns). Off: the gyro's readings are
   // not used (its parameters must then be held, or they stay at the prior).
   bool gyro = true;
-  int threads = 0;  // the gyro's whole-run passes (0: all cores)
+  int threads = 0;  // the angles' derivatives and the gyro's whole-run passes (0: all cores)
   bool keep_series = false;
   // Called with (pass, fraction done) now and then; may be empty.
   std::function<void(int, double)> progress;

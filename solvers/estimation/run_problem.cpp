@@ -86,12 +86,13 @@ std::vector<ConstraintRow> ResolveConstraints(const RunDescription& run,
 namespace {
 
 // The angles' rates and accelerations at the samples `at` (every sample when
-// empty), each an independent local fit: in blocks on the machine's cores
-// (at every sample, a layout with angle_latency: 0.075 s of a real 25-min
-// 100-Hz run on one core). The same numbers as on one.
+// empty), each an independent local fit: in blocks on `threads` threads (0:
+// all cores; at every sample, a layout with angle_latency: 0.075 s of a real
+// 25-min 100-Hz run on one core). The same numbers as on one.
 std::vector<BenchAngles<double>> DerivativesOnCores(const RunData& data,
                                                     const AngleDerivativeOptions& options,
-                                                    const std::vector<std::size_t>& at) {
+                                                    const std::vector<std::size_t>& at,
+                                                    int threads) {
   std::vector<std::size_t> every;
   if (at.empty()) {
     every.resize(data.size());
@@ -102,7 +103,7 @@ std::vector<BenchAngles<double>> DerivativesOnCores(const RunData& data,
   const std::size_t blocks = (where.size() + kBlock - 1) / kBlock;
   std::vector<BenchAngles<double>> out(where.size());
   options.Check();
-  ParallelFor(blocks, DefaultThreads(), [&](std::size_t b) {
+  ParallelFor(blocks, threads > 0 ? threads : DefaultThreads(), [&](std::size_t b) {
     const std::size_t begin = b * kBlock, end = std::min(where.size(), begin + kBlock);
     const std::vector<std::size_t> part(where.begin() + begin, where.begin() + end);
     const std::vector<BenchAngles<double>> d = EstimateAngleDerivativesAt(data, options, part);
@@ -115,13 +116,14 @@ std::vector<BenchAngles<double>> DerivativesOnCores(const RunData& data,
 
 SharedRunWork::Series SharedRunWork::Derivatives(const RunData& data,
                                                  const AngleDerivativeOptions& options,
-                                                 const std::vector<std::size_t>& at) {
+                                                 const std::vector<std::size_t>& at,
+                                                 int threads) {
   for (const SeriesEntry& e : series_) {
     if (e.data == &data && e.half_window_s == options.half_window_s && e.at == at) return e.series;
   }
   SeriesEntry e{&data, options.half_window_s, at, nullptr};
   e.series = std::make_shared<const std::vector<BenchAngles<double>>>(
-      DerivativesOnCores(data, options, at));
+      DerivativesOnCores(data, options, at, threads));
   // One entry of each kind (every sample, at the epochs): a new one replaces its kind's.
   series_.erase(std::remove_if(series_.begin(), series_.end(),
                                [&](const SeriesEntry& o) { return o.at.empty() == at.empty(); }),
@@ -132,7 +134,8 @@ SharedRunWork::Series SharedRunWork::Derivatives(const RunData& data,
 
 RunProblem BuildRunProblem(const RunDescription& run, const RunData& data,
                            const ParameterLayout& layout, double epoch_s,
-                           const AngleDerivativeOptions& derivatives, SharedRunWork* shared) {
+                           const AngleDerivativeOptions& derivatives, SharedRunWork* shared,
+                           int threads) {
   if (!(epoch_s > 0.0)) throw OptionError("epoch_s", "must be > 0");
   RunProblem p;
   p.cfg = MakeModelConfig(run, layout, data);
@@ -144,10 +147,10 @@ RunProblem BuildRunProblem(const RunDescription& run, const RunData& data,
   }
   if (!NeedsRatesAtEverySample(layout)) p.series.at = p.epochs;
   if (shared) {
-    p.series.derivatives = shared->Derivatives(data, derivatives, p.series.at);
+    p.series.derivatives = shared->Derivatives(data, derivatives, p.series.at, threads);
   } else {
     p.series.derivatives = std::make_shared<const std::vector<BenchAngles<double>>>(
-        DerivativesOnCores(data, derivatives, p.series.at));
+        DerivativesOnCores(data, derivatives, p.series.at, threads));
   }
   p.prior = MakePrior(run, layout);
   p.n = layout.size();

@@ -80,9 +80,10 @@ struct RunPass;  // run_evaluation.h
 class SharedRunWork {
  public:
   using Series = std::shared_ptr<const std::vector<BenchAngles<double>>>;
-  // The derivatives at `at` (every sample when empty).
+  // The derivatives at `at` (every sample when empty), formed on `threads`
+  // threads (0: all cores).
   Series Derivatives(const RunData& data, const AngleDerivativeOptions& options,
-                     const std::vector<std::size_t>& at);
+                     const std::vector<std::size_t>& at, int threads = 0);
   // WeightsPass(p, p.prior.mean) (run_evaluation.cpp).
   std::shared_ptr<const RunPass> Weights(const RunProblem& p, int threads);
 
@@ -112,10 +113,11 @@ std::vector<ConstraintRow> ResolveConstraints(const RunDescription& run,
 // Throws InputError for a run too short for epoch_s, or a constraint naming a
 // parameter that is not in the layout.
 // With `shared`, the angles' derivatives come from it (formed there once).
+// threads: how many the angles' derivatives are formed on (0: all cores).
 RunProblem BuildRunProblem(const RunDescription& run, const RunData& data,
                            const ParameterLayout& layout, double epoch_s,
                            const AngleDerivativeOptions& derivatives,
-                           SharedRunWork* shared = nullptr);
+                           SharedRunWork* shared = nullptr, int threads = 0);
 
 // Sample indices of the measurement epochs: the first sample, then the first
 // sample at least epoch_s after the previous epoch, and the last sample.

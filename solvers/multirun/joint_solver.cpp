@@ -380,7 +380,7 @@ JointInformation JointInformationAtNominal(const std::vector<JointRun>& runs,
   std::vector<RunProblem> problems;
   for (const JointRun& r : runs) {
     problems.push_back(BuildRunProblem(r.run, r.data, layout, opt.batch.epoch_s,
-                                       opt.batch.derivatives));
+                                       opt.batch.derivatives, nullptr, threads));
   }
   JointInformation out;
   BatchObjective::Point pt;
@@ -470,7 +470,7 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
     if (fraction) bo.fraction = [fraction, r, R](double x) { fraction((r + x) / (R + 1.0)); };
     rr.alone = SolveBatch(runs[r].run, runs[r].data, layout, bo);
     RunProblem p = BuildRunProblem(runs[r].run, runs[r].data, layout, opt.batch.epoch_s,
-                                   opt.batch.derivatives);
+                                   opt.batch.derivatives, nullptr, threads);
     p.noise_mV = rr.alone.noise_used_mV;
     problems.push_back(std::move(p));
   }
