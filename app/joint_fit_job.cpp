@@ -69,10 +69,10 @@ RunsFile RunsOfCommandLine(const std::vector<std::string>& inputs) {
   return RunsFromCommandLine(inputs);
 }
 
-std::vector<JointRun> LoadJointRuns(const RunsFile& file, Session* session) {
+std::vector<JointRun> LoadJointRuns(const RunsFile& file, Session* session, int threads) {
   std::vector<JointRun> runs;
   for (const RunsFile::Entry& e : file.runs) {
-    LoadedRun lr = LoadRun(e.run_yaml, session);
+    LoadedRun lr = LoadRun(e.run_yaml, session, threads);
     session->RecordInput("run " + e.name, e.run_yaml);
     JointRun r;
     r.name = e.name;
@@ -96,11 +96,11 @@ std::vector<JointRun> LoadJointRuns(const RunsFile& file, Session* session) {
 }
 
 JointInput LoadJointInput(const std::vector<std::string>& inputs, const std::string& effects,
-                          Session* session) {
+                          Session* session, int threads) {
   JointInput in;
   in.file = RunsOfCommandLine(inputs);
   if (!in.file.path.empty()) session->NoteInput(in.file.path);  // the runs file
-  in.runs = LoadJointRuns(in.file, session);
+  in.runs = LoadJointRuns(in.file, session, threads);
   // The effects must suit every run's data.
   std::vector<Effect> list;
   for (const JointRun& r : in.runs) list = ParseEffectList(effects, r.data);

@@ -21,7 +21,8 @@ RunsFile RunsOfCommandLine(const std::vector<std::string>& inputs);
 
 // The runs, loaded (their warnings said through session->warning), with
 // their temperatures; each recorded in the provenance as "run NAME".
-std::vector<JointRun> LoadJointRuns(const RunsFile& runs, Session* session);
+// threads: the job's (LoadRun).
+std::vector<JointRun> LoadJointRuns(const RunsFile& runs, Session* session, int threads = 0);
 
 JointSpec JointSpecOf(const RunsFile& runs);
 
@@ -35,7 +36,7 @@ struct JointInput {
   std::unique_ptr<JointLayout> layout;
 };
 JointInput LoadJointInput(const std::vector<std::string>& inputs, const std::string& effects,
-                          Session* session);
+                          Session* session, int threads = 0);
 
 // OUT.json of a joint fit (docs/multi-run.md).
 nlohmann::json JointJson(const JointLayout& layout, const std::vector<JointRun>& runs,

@@ -110,7 +110,7 @@ bool IsScenarioFile(const std::string& path) {
 }
 
 ObservabilityInput LoadObservabilityInput(const std::string& path, const std::string& effects,
-                                          Session* session) {
+                                          Session* session, int threads) {
   ObservabilityInput in;
   in.path = path;
   in.scenario = IsScenarioFile(path);
@@ -125,7 +125,7 @@ ObservabilityInput LoadObservabilityInput(const std::string& path, const std::st
     in.theta = TruthInLayout(s, in.layout);
     return in;
   }
-  LoadedRun loaded = LoadRun(path, session);
+  LoadedRun loaded = LoadRun(path, session, threads);
   in.data = std::move(loaded.data);
   in.layout = ParameterLayout(ParseEffectList(effects),
                               loaded.description.gyro.has_value() && in.data.has_gyro(),

@@ -62,8 +62,9 @@ struct ObservabilityInput {
 bool IsScenarioFile(const std::string& path);
 
 // Loads a RUN.yaml or SCENARIO.yaml, recorded in the session's provenance.
+// threads: the job's (LoadRun).
 ObservabilityInput LoadObservabilityInput(const std::string& path, const std::string& effects,
-                                          Session* session);
+                                          Session* session, int threads = 0);
 
 struct ObservabilityOutcome {
   ObservabilityResult result;

@@ -148,8 +148,10 @@ py::dict RunDataDict(const RunData& d) {
 // is what a written OUT carries (app/provenance.h): the tool, the call, and
 // the run's and data's SHA-256, recorded as they are read. Returns the job's
 // OUT with that provenance. The GIL is released while the job runs.
+// threads: the job's (the run's loading follows it: LoadRun).
 template <typename Job>
-py::object RunJob(const py::object& run_arg, const std::string& call, const Job& job) {
+py::object RunJob(const py::object& run_arg, const std::string& call, int threads,
+                  const Job& job) {
   const RunDescription description = RunFrom(run_arg);
   const bool from_file = py::isinstance<py::str>(run_arg);  // a dict has no file
   json out;
@@ -158,7 +160,7 @@ py::object RunJob(const py::object& run_arg, const std::string& call, const Job&
     Session session;
     session.provenance = Provenance(ToolVersion(), ToolGitCommit(), "python: triadcal." + call);
     if (from_file) session.RecordInput("run", description.yaml_path);
-    const LoadedRun run = LoadRun(description, &session);
+    const LoadedRun run = LoadRun(description, &session, threads);
     out = job(description.yaml_path, run, session);
     out["provenance"] = session.provenance.Json();
   }
@@ -183,8 +185,8 @@ py::object Fit(const py::object& run_arg, const std::string& effects, double epo
   settings.hold = hold;
   settings.free = free;
   settings.Validate();
-  return RunJob(run_arg, "fit", [&](const std::string& yaml, const LoadedRun& run,
-                                    const Session& session) {
+  return RunJob(run_arg, "fit", settings.threads,
+                [&](const std::string& yaml, const LoadedRun& run, const Session& session) {
     return FitRun(settings, yaml, run, session).json;
   });
 }
@@ -204,8 +206,8 @@ py::object FilterOut(const py::object& run_arg, const std::string& effects, doub
   settings.hold = hold;
   settings.free = free;
   settings.Validate();
-  return RunJob(run_arg, "filter", [&](const std::string& yaml, const LoadedRun& run,
-                                       const Session& session) {
+  return RunJob(run_arg, "filter", 0,
+                [&](const std::string& yaml, const LoadedRun& run, const Session& session) {
     FilterOutcome f = FilterRun(settings, yaml, run, session);
     if (!f.error.empty()) throw InputError(f.error);
     return f.json;
@@ -223,8 +225,8 @@ py::object DiagnoseOut(const py::object& run_arg, const std::string& candidates,
   settings.rate_window_s = rate_window_s;
   settings.threads = threads;
   settings.Validate();
-  return RunJob(run_arg, "diagnose", [&](const std::string& yaml, const LoadedRun& run,
-                                         const Session& session) {
+  return RunJob(run_arg, "diagnose", settings.threads,
+                [&](const std::string& yaml, const LoadedRun& run, const Session& session) {
     return DiagnoseRun(settings, yaml, run, nullptr, session).json;
   });
 }

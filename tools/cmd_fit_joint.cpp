@@ -45,7 +45,7 @@ int RunJointFit(const FitSettings& s, const std::vector<std::string>& inputs,
     throw InputError("--report: not available for a joint fit of several runs yet");
   }
   CheckOutputPath(out_json, session);
-  const JointInput in = LoadJointInput(inputs, s.effects, &session);
+  const JointInput in = LoadJointInput(inputs, s.effects, &session, s.threads);
   CheckOverwrite(out_json, session);
   const std::vector<JointRun>& runs = in.runs;
   const JointLayout& jl = *in.layout;

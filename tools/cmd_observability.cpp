@@ -72,7 +72,7 @@ int RunJointObservability(const ObservabilityArgs& a, Session& session) {
   StageProgress progress("observability: ");
   progress.Stage("loading the runs");
   CheckOutputPath(a.out_json, session);
-  JointInput in = LoadJointInput(a.inputs, a.settings.effects, &session);
+  JointInput in = LoadJointInput(a.inputs, a.settings.effects, &session, a.settings.threads);
   CheckOverwrite(a.out_json, session);
   const JointObservabilityOutcome o =
       JointObservabilityRun(a.settings, &in, WithProgress(session, &progress));
@@ -103,7 +103,8 @@ int RunObservability(const ObservabilityArgs& a, Session& session) {
   // The run (recorded or simulated), its description and the point of evaluation.
   StageProgress progress("observability: ");
   progress.Stage("loading the run");
-  const ObservabilityInput in = LoadObservabilityInput(a.inputs[0], a.settings.effects, &session);
+  const ObservabilityInput in =
+      LoadObservabilityInput(a.inputs[0], a.settings.effects, &session, a.settings.threads);
   const ObservabilityOutcome o = ObservabilityRun(a.settings, in, WithProgress(session, &progress));
   EndProgress();
   WriteJson(o.json, a.out_json, session);
