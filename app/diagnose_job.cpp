@@ -58,10 +58,12 @@ nlohmann::json StateJson(const LoadedRun& run, const ParameterLayout& layout, co
   return j;
 }
 
-// What only a refit has: its chi2/dof and the Wald test of the effect
+// What a refit has: its chi2/dof and the Wald test of the effect; a
+// candidate not refitted for its one-step Wald test has that test's keys
 // (docs/file-formats.md).
 void AddRefitKeys(const CandidateTest& t, nlohmann::json* j) {
-  (*j)["chi2_per_dof_after"] = t.chi2_per_dof_after;
+  if (!t.refit && !t.one_step_wald) return;
+  if (t.refit) (*j)["chi2_per_dof_after"] = t.chi2_per_dof_after;
   (*j)["wald"] = t.wald;
   (*j)["wald_p_value"] = t.wald_p_value;
   (*j)["wald_dof"] =
@@ -120,8 +122,9 @@ nlohmann::json DiagnoseJson(const std::string& run_yaml, const LoadedRun& run, d
                        {"note", t.note},
                        {"score", t.score},
                        {"score_p_value", t.score_p_value},
-                       {"refit", t.refit}});
-    if (t.refit) AddRefitKeys(t, &ranking.back());
+                       {"refit", t.refit},
+                       {"one_step_wald", t.one_step_wald}});
+    AddRefitKeys(t, &ranking.back());
     if (!t.absorbs.empty()) ranking.back()["absorbs"] = t.absorbs;
   }
   out["ranking"] = ranking;
@@ -138,8 +141,9 @@ nlohmann::json DiagnoseJson(const std::string& run_yaml, const LoadedRun& run, d
                      {"selected", t.selected},
                      {"score", t.score},
                      {"score_p_value", t.score_p_value},
-                     {"refit", t.refit}});
-    if (t.refit) AddRefitKeys(t, &tests.back());
+                     {"refit", t.refit},
+                     {"one_step_wald", t.one_step_wald}});
+    AddRefitKeys(t, &tests.back());
     if (!t.absorbs.empty()) tests.back()["absorbs"] = t.absorbs;
   }
   out["tests"] = tests;

@@ -178,7 +178,10 @@ TEST(Diagnose, WhatTheFirstFitDoesNotDetermineStaysSoThroughTheLoop) {
 // with dtheta_c at nominal, 0.8 ms with its prior carried). The note said
 // "what it fits is the residual's correlation in time" before (real fast
 // roll run with its gyro: tau -10.3 +- 9.7 ms, nearly all of it dlambda2's
-// prior).
+// prior). Its one-step Wald test says so already (the refit's test in one
+// step, with dtheta_c's prior carried and at nominal), and it is not
+// refitted; with every screen off (refit_factor infinite) the refit says the
+// same.
 TEST(Diagnose, AnEffectNotSeparableFromAConsideredParameterIsNamedSo) {
   Scenario s = WithEffect(3, Effect::kAngleLatency, {{"angle_latency.tau", 1.5}});
   s.truth[s.truth_layout.IndexOf("dtheta_c")] = 0.0;  // at its nominal value, where it is kept
@@ -186,30 +189,34 @@ TEST(Diagnose, AnEffectNotSeparableFromAConsideredParameterIsNamedSo) {
   HoldDecision decision = ChooseHeldParameters(s.run, data, ParameterLayout(), {}, 0.5, {});
   ASSERT_TRUE(decision.consider.empty());
   decision.consider = {"dtheta_c"};
-  DiagnoseOptions opt;
-  opt.fit.decision = &decision;
-  opt.candidates = {Effect::kAngleLatency};
-  opt.max_effects = 1;
-  const DiagnosisResult d = Diagnose(s.run, data, opt);
-  EXPECT_TRUE(d.selected.empty()) << d.verdict;
-  ASSERT_EQ(d.tests.size(), 1u);
-  const CandidateTest& t = d.tests[0];
-  ASSERT_TRUE(t.refit);
-  EXPECT_LT(t.p_value, t.threshold);
-  EXPECT_LT(t.wald_p_given_consider, t.threshold);
-  EXPECT_GT(t.wald_p_value, t.threshold);
-  EXPECT_EQ(t.not_separable_from, "dtheta_c");
-  EXPECT_GT(t.not_separable_share, 0.5);
-  EXPECT_NE(t.note.find("not separable from dtheta_c"), std::string::npos) << t.note;
-  EXPECT_NE(d.verdict.find(") but is NOT SEPARABLE from dtheta_c"), std::string::npos)
-      << d.verdict;
-  // What could hide carries dtheta_c's prior too: the latency the refit's
-  // sigma (about 0.8 ms) lets through, not the 0.2-ms one's.
-  const auto hide = std::find_if(d.could_hide.begin(), d.could_hide.end(), [](const HideCase& h) {
-    return h.effect == Effect::kAngleLatency;
-  });
-  ASSERT_NE(hide, d.could_hide.end());
-  EXPECT_GT(hide->minimal_detectable, 2.0);
+  for (const bool screened : {true, false}) {
+    SCOPED_TRACE(screened ? "one-step Wald test" : "refit");
+    DiagnoseOptions opt;
+    opt.fit.decision = &decision;
+    opt.candidates = {Effect::kAngleLatency};
+    opt.max_effects = 1;
+    if (!screened) opt.refit_factor = std::numeric_limits<double>::infinity();
+    const DiagnosisResult d = Diagnose(s.run, data, opt);
+    EXPECT_TRUE(d.selected.empty()) << d.verdict;
+    ASSERT_EQ(d.tests.size(), 1u);
+    const CandidateTest& t = d.tests[0];
+    EXPECT_EQ(t.refit, !screened);
+    EXPECT_LT(t.p_value, t.threshold);
+    EXPECT_LT(t.wald_p_given_consider, t.threshold);
+    EXPECT_GT(t.wald_p_value, t.threshold);
+    EXPECT_EQ(t.not_separable_from, "dtheta_c");
+    EXPECT_GT(t.not_separable_share, 0.5);
+    EXPECT_NE(t.note.find("not separable from dtheta_c"), std::string::npos) << t.note;
+    EXPECT_NE(d.verdict.find(") but is NOT SEPARABLE from dtheta_c"), std::string::npos)
+        << d.verdict;
+    // What could hide carries dtheta_c's prior too: the latency the refit's
+    // sigma (about 0.8 ms) lets through, not the 0.2-ms one's.
+    const auto hide =
+        std::find_if(d.could_hide.begin(), d.could_hide.end(),
+                     [](const HideCase& h) { return h.effect == Effect::kAngleLatency; });
+    ASSERT_NE(hide, d.could_hide.end());
+    EXPECT_GT(hide->minimal_detectable, 2.0);
+  }
 }
 
 // On a 10-s run (20 epochs for 27 parameters) the fit takes most of each

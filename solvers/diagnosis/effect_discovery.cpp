@@ -413,7 +413,12 @@ class Loop {
   // estimate is of plausible size; whether c is refitted.
   bool Screened(const CandidateInformation& c) const;
   bool PlausibleOneStep(const CandidateInformation& c) const;
+  bool OneStepWaldPasses(const CandidateInformation& c) const;
   bool RefitIt(const CandidateInformation& c) const;
+  // A screened candidate not refitted for its one-step Wald test (*tp's note,
+  // Wald fields and, when a considered parameter's prior uncertainty is what
+  // hides it, not_separable_from).
+  void NoteOneStepWald(const CandidateInformation& c, CandidateTest* tp) const;
   // Every candidate of the round: its score test, refitted when RefitIt.
   void TestCandidates();
   // Candidate c's test from its score alone.
@@ -531,7 +536,7 @@ void Loop::ScoreCandidates() {
 void Loop::PlanRefits() {
   best_excess_ = -std::numeric_limits<double>::infinity();
   for (const CandidateInformation& c : info_.candidates) {
-    if (!c.supported.empty() && !OnlyWeak(c) && PlausibleOneStep(c)) {
+    if (!c.supported.empty() && !OnlyWeak(c) && PlausibleOneStep(c) && OneStepWaldPasses(c)) {
       best_excess_ = std::max(best_excess_, c.statistic - static_cast<double>(c.supported.size()));
     }
   }
@@ -552,7 +557,12 @@ void Loop::PlanRefits() {
 // beyond its plausible range by more than twice its sigma would absorb
 // something else (TestRefit) and is judged by that estimate
 // (ImplausibleOneStep; real roll slow run: size_effect's refit took 0.65 s
-// of diagnose's 2.5).
+// of diagnose's 2.5). Nor one whose one-step estimate fails the refit's Wald
+// test (its p-value beyond refit_factor times the threshold) with the
+// considered parameters' prior uncertainty carried: the refit's own test
+// would not pass (OneStepWaldPasses; real medium roll run: size_effect in
+// rounds 3 and 4, one-step Wald statistic 0.65 where the refits' were 0.85,
+// and cross_quadratic, 0.03 and 0.24; three refits, diagnose 2.85 -> 1.88 s).
 bool Loop::Screened(const CandidateInformation& c) const {
   return !c.supported.empty() && !OnlyWeak(c) && c.p_value < opt_.refit_factor * threshold_;
 }
@@ -561,8 +571,44 @@ bool Loop::PlausibleOneStep(const CandidateInformation& c) const {
   return std::isinf(opt_.refit_factor) || ImplausibleOneStep(run_, c).empty();
 }
 
+// The one-step Wald test is the model's (white) one without the candidate's
+// prior (CandidateInformation::wald_one_step): on a run whose residuals are
+// correlated the refit's HAC test is the harder one, so the screen keeps
+// every candidate the refit could select.
+bool Loop::OneStepWaldPasses(const CandidateInformation& c) const {
+  if (std::isinf(opt_.refit_factor)) return true;
+  const int k = static_cast<int>(c.supported.size());
+  return ChiSquareSurvival(c.wald_one_step, k) < opt_.refit_factor * threshold_;
+}
+
+void Loop::NoteOneStepWald(const CandidateInformation& c, CandidateTest* tp) const {
+  CandidateTest& t = *tp;
+  const int k = static_cast<int>(c.supported.size());
+  t.one_step_wald = true;
+  t.wald = c.wald_one_step;
+  t.wald_p_value = ChiSquareSurvival(c.wald_one_step, k);
+  t.wald_dof = std::numeric_limits<double>::infinity();
+  t.wald_p_given_consider = ChiSquareSurvival(c.wald_one_step_given, k);
+  if (t.p_value < threshold_ && t.wald_p_given_consider < threshold_ &&
+      !c.most_considered.empty()) {
+    t.not_separable_from = c.most_considered;
+    t.not_separable_share = c.most_considered_share;
+    t.note = "not refitted: its score is significant, but not separable from " +
+             c.most_considered + ", which this run does not determine: that parameter's prior " +
+             "uncertainty is " + FormatNumber(std::round(100.0 * c.most_considered_share)) +
+             " % of the effect's variance at its one-step estimate (one-step Wald p " +
+             FormatNumber(t.wald_p_value) + "; " + FormatNumber(t.wald_p_given_consider) +
+             " with " + c.most_considered + " at nominal)";
+  } else {
+    t.note = "not refitted: its one-step estimate is not significant against its sigma (one-step "
+             "Wald p " + FormatNumber(t.wald_p_value) + " with the considered parameters' prior "
+             "uncertainty carried, above " + FormatNumber(opt_.refit_factor) +
+             " x the threshold): the refit's Wald test would not pass";
+  }
+}
+
 bool Loop::RefitIt(const CandidateInformation& c) const {
-  return Screened(c) && PlausibleOneStep(c) &&
+  return Screened(c) && PlausibleOneStep(c) && OneStepWaldPasses(c) &&
          c.statistic - static_cast<double>(c.supported.size()) >=
              best_excess_ - 2.0 * std::log(opt_.refit_factor);
 }
@@ -580,6 +626,8 @@ void Loop::TestCandidates() {
         t.absorbs = ImplausibleOneStep(run_, c);
         t.note = "not refitted: its one-step estimate is beyond its plausible range by more "
                  "than twice its sigma";
+      } else if (Screened(c) && !OneStepWaldPasses(c)) {
+        NoteOneStepWald(c, &t);
       } else {
         t.note = "score test only: p above " + FormatNumber(opt_.refit_factor) +
                  " x the threshold or far behind the best candidate, not refitted";
@@ -749,7 +797,8 @@ void Loop::TestRefit(const CandidateInformation& c, const ParameterLayout& aug,
 // ahead of the real one (real fast roll run: size_effect's score 28608,
 // its refit's statistic 1806 at an implausible 57 mm, while
 // angle_latency's 3703 was never refitted). Then the significant ones not
-// yet refitted are refitted, best score first, until one is plausible.
+// yet refitted are refitted, best score first, until one is plausible; not
+// those whose one-step Wald test kept them from a refit (OneStepWaldPasses).
 void Loop::FallBackWhenNoneIsPlausible() {
   auto selectable = [&](const CandidateTest& t) {
     return t.refit && Significant(t, threshold_) && t.absorbs.empty();
@@ -759,7 +808,10 @@ void Loop::FallBackWhenNoneIsPlausible() {
     int next = -1;
     for (std::size_t i = 0; i < tests_.size(); ++i) {
       const CandidateTest& t = tests_[i];
-      if (t.refit || t.dof == 0 || !Significant(t, threshold_) || !t.absorbs.empty()) continue;
+      if (t.refit || t.dof == 0 || !Significant(t, threshold_) || !t.absorbs.empty() ||
+          !OneStepWaldPasses(info_.candidates[i])) {
+        continue;
+      }
       if (next < 0 || t.statistic > tests_[next].statistic) next = static_cast<int>(i);
     }
     if (next < 0) break;

@@ -101,6 +101,8 @@ struct CandidateTest {
   // Refitted: the Wald statistic of the effect's free components against the
   // refit's reported covariance (honest for correlated residuals), and its
   // p-value. A candidate is selected only when this and p_value both pass.
+  // Not refitted for its one-step Wald test (note): that test's, the model's
+  // covariance with the considered parameters' prior uncertainty carried.
   double wald = 0.0;
   double wald_p_value = 1.0;
   // The degrees of freedom of that covariance (infinite for the model's;
@@ -108,6 +110,9 @@ struct CandidateTest {
   // is Hotelling's (statistics.h).
   double wald_dof = 0.0;
   bool refit = false;  // lr, statistic, p_value from a refit (else from the score)
+  // Not refitted for its one-step Wald test: wald, wald_p_value (and the
+  // not_separable_ fields) are that test's.
+  bool one_step_wald = false;
   bool selected = false;
   std::string note;                 // e.g. why it could not be tested
   double chi2_per_dof_after = 0.0;  // of the refit with the effect added (refit only)
@@ -119,7 +124,8 @@ struct CandidateTest {
   // the considered parameters at nominal but not with their prior
   // uncertainty carried: the considered parameter that carries most of the
   // effect's variance in the refit (the effect is not separable from it on
-  // this run), and that share. Empty otherwise.
+  // this run), and that share; or the same of its one-step test when that
+  // kept it from a refit. Empty otherwise.
   std::string not_separable_from;
   double not_separable_share = 0.0;
   double wald_p_given_consider = 1.0;  // the Wald test with the considered at nominal

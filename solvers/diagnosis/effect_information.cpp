@@ -383,7 +383,9 @@ class CandidateAnalysis {
     // components not separable from the base parameters.
     std::vector<int> considered = considered_;
     for (const NotSeparable& ns : c.not_separable) considered.push_back(cols_[ns.component]);
-    c.N = WithConsidered(Rows(N_all_, c.supported, c.supported), sc, c.B, considered);
+    const Eigen::MatrixXd N_given = Rows(N_all_, c.supported, c.supported);
+    ConsideredShares shares;
+    c.N = WithConsidered(N_given, sc, c.B, considered, &shares);
     const Eigen::VectorXd ge = Entries(g_, sc);
     c.score = std::max(0.0, ge.dot(with_prior.ldlt().solve(ge)));
     // Newton step on (theta_b, theta_e): the block solve with the base
@@ -393,6 +395,14 @@ class CandidateAnalysis {
     const Eigen::VectorXd step = -Rows(I_, bs, bs).ldlt().solve(Entries(g_, bs));
     c.step_base = step.head(base_.size());
     c.step_effect = step.tail(k);
+    c.wald_one_step = std::max(0.0, c.step_effect.dot(c.N * c.step_effect));
+    c.wald_one_step_given = std::max(0.0, c.step_effect.dot(N_given * c.step_effect));
+    for (std::size_t j = 0; j < considered.size(); ++j) {
+      if (shares.share.size() > 0 && shares.share[j] > c.most_considered_share) {
+        c.most_considered_share = shares.share[j];
+        c.most_considered = full_.info(considered[j]).name;
+      }
+    }
     // The accelerometer's chi2/dof predicted with the effect; a gyro-stage
     // effect's score is the gyro's, whose noise is at its maximum likelihood
     // (its whitened residual unit by construction): not scaled.
@@ -433,9 +443,14 @@ class CandidateAnalysis {
   // angle_latency 0.28 ms, where the refit's sigma of tau was 9.7 ms, nearly
   // all of it dlambda2's +-180 arcmin).
   // B: the candidate's base coupling I_bb^-1 I_be (CandidateInformation::B).
+  // shares (may be null): each considered parameter's share of the effect's
+  // variance, sum_a S_aj^2 P_j / (k cov_aa) (cov the inverse returned).
+  struct ConsideredShares {
+    Eigen::VectorXd share;  // per considered parameter; empty without any
+  };
   Eigen::MatrixXd WithConsidered(const Eigen::MatrixXd& N, const std::vector<int>& sc,
-                                 const Eigen::MatrixXd& B,
-                                 const std::vector<int>& considered) const {
+                                 const Eigen::MatrixXd& B, const std::vector<int>& considered,
+                                 ConsideredShares* shares = nullptr) const {
     if (considered.empty()) return N;
     const int k = static_cast<int>(sc.size());
     const Eigen::MatrixXd Nec =
@@ -448,6 +463,14 @@ class CandidateAnalysis {
     }
     const Eigen::MatrixXd cov =
         n.solve(Eigen::MatrixXd::Identity(k, k)) + S * P.asDiagonal() * S.transpose();
+    if (shares) {
+      shares->share = Eigen::VectorXd::Zero(considered.size());
+      for (std::size_t j = 0; j < considered.size(); ++j) {
+        for (int a = 0; a < k; ++a) {
+          shares->share[j] += S(a, j) * S(a, j) * P[j] / (k * cov(a, a));
+        }
+      }
+    }
     return cov.ldlt().solve(Eigen::MatrixXd::Identity(k, k));
   }
 
