@@ -561,8 +561,8 @@ void Loop::PlanRefits() {
 // test (its p-value beyond refit_factor times the threshold) with the
 // considered parameters' prior uncertainty carried: the refit's own test
 // would not pass (OneStepWaldPasses; real medium roll run: size_effect in
-// rounds 3 and 4, one-step Wald statistic 0.65 where the refits' were 0.85,
-// and cross_quadratic, 0.03 and 0.24; three refits, diagnose 2.85 -> 1.88 s).
+// rounds 3 and 4, one-step Wald statistic 0.85 where the refits' were 0.85,
+// and cross_quadratic, 0.22 and 0.24; three refits, diagnose 2.85 -> 1.88 s).
 bool Loop::Screened(const CandidateInformation& c) const {
   return !c.supported.empty() && !OnlyWeak(c) && c.p_value < opt_.refit_factor * threshold_;
 }

@@ -384,8 +384,12 @@ class CandidateAnalysis {
     std::vector<int> considered = considered_;
     for (const NotSeparable& ns : c.not_separable) considered.push_back(cols_[ns.component]);
     const Eigen::MatrixXd N_given = Rows(N_all_, c.supported, c.supported);
+    c.N = WithConsidered(N_given, sc, c.B, considered);
+    // The refit's covariance to first order: its prior too.
+    Eigen::MatrixXd N_post = N_given;
+    for (int a = 0; a < k; ++a) N_post(a, a) += std::pow(prior_sigma_[c.supported[a]], -2);
     ConsideredShares shares;
-    c.N = WithConsidered(N_given, sc, c.B, considered, &shares);
+    const Eigen::MatrixXd N_wald = WithConsidered(N_post, sc, c.B, considered, &shares);
     const Eigen::VectorXd ge = Entries(g_, sc);
     c.score = std::max(0.0, ge.dot(with_prior.ldlt().solve(ge)));
     // Newton step on (theta_b, theta_e): the block solve with the base
@@ -395,8 +399,8 @@ class CandidateAnalysis {
     const Eigen::VectorXd step = -Rows(I_, bs, bs).ldlt().solve(Entries(g_, bs));
     c.step_base = step.head(base_.size());
     c.step_effect = step.tail(k);
-    c.wald_one_step = std::max(0.0, c.step_effect.dot(c.N * c.step_effect));
-    c.wald_one_step_given = std::max(0.0, c.step_effect.dot(N_given * c.step_effect));
+    c.wald_one_step = std::max(0.0, c.step_effect.dot(N_wald * c.step_effect));
+    c.wald_one_step_given = std::max(0.0, c.step_effect.dot(N_post * c.step_effect));
     for (std::size_t j = 0; j < considered.size(); ++j) {
       if (shares.share.size() > 0 && shares.share[j] > c.most_considered_share) {
         c.most_considered_share = shares.share[j];

@@ -120,14 +120,15 @@ struct CandidateInformation {
   // added (base free parameters, then the supported ones; SI), a start for
   // its refit.
   Eigen::VectorXd step_base, step_effect;
-  // The refit's Wald test in one step: step_effect against N (the considered
-  // parameters' prior uncertainty carried), and against the conditional
-  // data information with them at nominal (wald_one_step_given); the
-  // considered parameter that carries most of the effect's variance in N^-1
-  // and that share (as the refit's, effect_discovery.cpp; empty without
-  // considered parameters). N is the data's alone, without the candidate's
-  // prior, and the model's (not the HAC) covariance: the test is no harder
-  // than the refit's.
+  // The refit's Wald test in one step: step_effect against the refit's
+  // covariance to first order, the model's (white) one: the inverse of the
+  // conditional information with the candidate's prior, plus the consider
+  // term (wald_one_step), or without it, the considered parameters at
+  // nominal (wald_one_step_given); the considered parameter that carries most
+  // of the effect's variance there and that share (as the refit's,
+  // effect_discovery.cpp; empty without considered parameters). Where the
+  // residual is correlated the refit's sigma are the HAC ones, floored at the
+  // model's: its test is no easier than this one.
   double wald_one_step = 0.0, wald_one_step_given = 0.0;
   std::string most_considered;
   double most_considered_share = 0.0;
