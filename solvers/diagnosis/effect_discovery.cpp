@@ -571,10 +571,13 @@ bool Loop::PlausibleOneStep(const CandidateInformation& c) const {
   return std::isinf(opt_.refit_factor) || ImplausibleOneStep(run_, c).empty();
 }
 
-// The one-step Wald test is the model's (white) one without the candidate's
-// prior (CandidateInformation::wald_one_step): on a run whose residuals are
-// correlated the refit's HAC test is the harder one, so the screen keeps
-// every candidate the refit could select.
+// The one-step Wald test is the model's (white) one, the candidate's prior
+// in it (CandidateInformation::wald_one_step): on a run whose residuals are
+// correlated the refit's HAC test is the harder one, so to first order the
+// screen keeps every candidate whose refit could pass (a refit that moves
+// far from the one-step estimate can find more, as the real pitch run's
+// cross_quadratic did at an implausible -0.116 /g: its Wald statistic 21.6,
+// the one-step's without the candidate's prior 3.3).
 bool Loop::OneStepWaldPasses(const CandidateInformation& c) const {
   if (std::isinf(opt_.refit_factor)) return true;
   const int k = static_cast<int>(c.supported.size());
