@@ -146,7 +146,8 @@ std::vector<EffectCorrelation> Correlations(const ParameterLayout& layout, const
 }
 
 // A refitted candidate is significant when both its likelihood ratio and its
-// Wald test pass: the first assumes white residuals at the noise used, the
+// Wald test pass (one kept from its refit by its one-step Wald test, when
+// its score and that test do): the first assumes white residuals at the noise used, the
 // second measures the fitted size against the refit's reported sigma, which
 // hold for residuals correlated in time (the HAC sandwich, hac_covariance.h).
 // With reading noise correlated over 0.5 s (bench/scenarios/paper-coloured
@@ -156,7 +157,7 @@ std::vector<EffectCorrelation> Correlations(const ParameterLayout& layout, const
 // from the residual that still holds the effect, and it found a 5' encoder
 // harmonic in 35 % of the runs where the likelihood ratio finds it in 100 %.)
 double DecisionP(const CandidateTest& t) {
-  return t.refit ? std::max(t.p_value, t.wald_p_value) : t.p_value;
+  return t.refit || t.one_step_wald ? std::max(t.p_value, t.wald_p_value) : t.p_value;
 }
 bool Significant(const CandidateTest& t, double threshold) { return DecisionP(t) < threshold; }
 
@@ -800,8 +801,8 @@ void Loop::TestRefit(const CandidateInformation& c, const ParameterLayout& aug,
 // ahead of the real one (real fast roll run: size_effect's score 28608,
 // its refit's statistic 1806 at an implausible 57 mm, while
 // angle_latency's 3703 was never refitted). Then the significant ones not
-// yet refitted are refitted, best score first, until one is plausible; not
-// those whose one-step Wald test kept them from a refit (OneStepWaldPasses).
+// yet refitted are refitted, best score first, until one is plausible (not
+// one whose one-step Wald test failed: DecisionP takes that test in).
 void Loop::FallBackWhenNoneIsPlausible() {
   auto selectable = [&](const CandidateTest& t) {
     return t.refit && Significant(t, threshold_) && t.absorbs.empty();
@@ -811,10 +812,7 @@ void Loop::FallBackWhenNoneIsPlausible() {
     int next = -1;
     for (std::size_t i = 0; i < tests_.size(); ++i) {
       const CandidateTest& t = tests_[i];
-      if (t.refit || t.dof == 0 || !Significant(t, threshold_) || !t.absorbs.empty() ||
-          !OneStepWaldPasses(info_.candidates[i])) {
-        continue;
-      }
+      if (t.refit || t.dof == 0 || !Significant(t, threshold_) || !t.absorbs.empty()) continue;
       if (next < 0 || t.statistic > tests_[next].statistic) next = static_cast<int>(i);
     }
     if (next < 0) break;
