@@ -122,5 +122,22 @@ TEST_F(DiagnoseRateWindow, ReachesTheFits) {
               "--help`)");
 }
 
+// diagnose takes --threads as fit does (loading, passes, reductions): on one
+// thread the same diagnosis, number for number; out of range, the option's
+// one-line error.
+class DiagnoseThreads : public testing_fixtures::CliTest {};
+
+TEST_F(DiagnoseThreads, OneThreadGivesTheSameDiagnosis) {
+  const std::string run = Path("run.yaml");
+  const std::string common = " --candidates thermal_drift,angle_latency --max-effects 1 -o ";
+  ASSERT_EQ(Run("diagnose " + run + common + Path("all.json")).exit_code, 0);
+  const testing_fixtures::CliResult one =
+      Run("diagnose " + run + " --threads 1" + common + Path("one.json"));
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  EXPECT_EQ(Out("one.json"), Out("all.json"));
+  ExpectError("diagnose " + run + " --threads -1 -o " + Path("out.json"),
+              "--threads: Value -1 not in range 0 to 1024 (see `triadcal diagnose --help`)");
+}
+
 }  // namespace
 }  // namespace triadcal

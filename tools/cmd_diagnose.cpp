@@ -37,7 +37,7 @@ std::map<std::string, double> ReadTruth(const std::string& path) {
 int RunDiagnose(const DiagnoseArgs& a, Session& session) {
   if (!a.report_html.empty()) CheckOutputPath(a.report_html, session);
   CheckOutputPath(a.out_json, session);
-  const LoadedRun run = LoadRun(a.run_yaml, &session);
+  const LoadedRun run = LoadRun(a.run_yaml, &session, a.settings.threads);
   CheckOverwrite(a.out_json, session);  // before the long work
   a.settings.Validate();
   std::map<std::string, double> truth;
@@ -165,6 +165,9 @@ Command AddDiagnoseCommand(CLI::App& app) {
                     "half window of the local cubic fit giving lambda' from the angles [s]")
       ->capture_default_str()
       ->check(kRateWindowRange);
+  c.app->add_option("--threads", a->settings.threads, "threads (0: all cores)")
+      ->capture_default_str()
+      ->check(kThreadsRange);
   c.run = [a](Session& session) { return RunDiagnose(*a, session); };
   return c;
 }
