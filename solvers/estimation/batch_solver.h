@@ -125,18 +125,22 @@ std::map<int, std::vector<int>> DeterminedOnlyWithConsidered(
     const Eigen::VectorXd& consider_variance, const Eigen::VectorXd& prior_sigma,
     double min_information, const std::vector<int>& estimated);
 
-// The bench zeros (kDthetaC, kDlambda2) of the axes that do not turn in
-// this run: their recorded angle is a constant (a `value:` column, a rig
-// without that axis). Such an axis has no zero error to find: its zero only
-// says where the frame is, which the triads' misalignments say as well (a
-// rotation about it is theirs; with the lever arm and the gyro's
-// g-sensitivity free, nearly exactly). A run's decision holds them, so that
-// the prior of a sensor that is not there does not spread into the
-// misalignments (real fast roll run with its gyro: dlambda2 considered at
+// The bench zero of an axis that does not turn in this run and only says
+// where the frame is: kDlambda2 when the inner axis's recorded angle is a
+// constant (a `value:` column, a rig without that axis). A rotation about
+// the inner axis is the triads' misalignments' as well (with the lever arm
+// and the gyro's g-sensitivity free, nearly exactly). A run's decision holds
+// it, so that the prior of a sensor that is not there does not spread into
+// the misalignments (real fast roll run with its gyro: dlambda2 considered at
 // +-180' left gamma_z at 40 +- 180', gyro.Gyx at -22.7 (deg/s)/g and its
-// 8.6-ms latency not separable from dlambda2). A joint fit leaves the runs'
-// own zeros to the information: there they also carry how each run's
-// mounting differs from the others'.
+// 8.6-ms latency not separable from dlambda2). The outer axis's zero is not
+// one: the inner rotation lies between it and the triad, so a still outer
+// axis's zero is the tilt of the inner axis, which a turning inner axis
+// shows (a vertical shaft: dpsi and dtheta_c turn gravity's share across the
+// shaft with it; held at 0, a 20' tilt of a simulated shaft went into
+// gamma_y = gamma_z = 13400'). The information decides it, as any
+// parameter. A joint fit leaves the runs' own zeros to the information:
+// there they also carry how each run's mounting differs from the others'.
 std::vector<int> ZerosOfStillAxes(const RunData& data);
 
 // At the nominal values with the scale factors and zero offsets fitted (on

@@ -265,16 +265,19 @@ GyroPass EvaluateGyroPass(const RunProblem& p, const Eigen::VectorXd& theta, boo
     std::array<double, 6> mom = {0, 0, 0, 0, 0, 0};
     SampleSeries::Walk recorded(p.series, k0);
     for (std::size_t k = k0; k <= k1; ++k) {
-      const BenchAngleSample b = BenchAnglesAt(cfg, th_jet, angle_idx, recorded.Next());
+      const BenchAngles<double> rec = recorded.Next();
+      const BenchAngleSample b = BenchAnglesAt(cfg, th_jet, angle_idx, rec);
       const double w = TrapezoidWeight(d, k0, k1, k);
       const SampleContext ctx{d.t_s[k], d.has_temp() ? d.temp_C[k] : 0.0};
-      // The specific force at O from the accelerometers, at theta.
+      // The specific force at O from the accelerometers, at theta (the
+      // readings the model predicts where the series says so).
+      const Eigen::Vector3d z = p.series.Readings_mV(cfg, th, k, rec, ctx);
       Vec3d W;
       if (with_jacobian) {
-        SpecificForceWithJacobian(cfg, th, d.readings_mV(k), ctx, &W, dW_all);
+        SpecificForceWithJacobian(cfg, th, z, ctx, &W, dW_all);
         for (int q = 0; q < ns; ++q) dW.col(q) = dW_all.col(sensor_idx[q]);
       } else {
-        W = SpecificForceFromReadings_g<double>(cfg, th, d.readings_mV(k), ctx);
+        W = SpecificForceFromReadings_g<double>(cfg, th, z, ctx);
       }
       const Vec3d y = d.gyro(k) - Vec3d(g[kGW0x], g[kGW0y], g[kGW0z]) - Gs * W;
       // m = f^-1(y) per axis (gyro_model.h; m = y / K without gyro effects) and

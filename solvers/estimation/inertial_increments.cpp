@@ -21,6 +21,16 @@ BenchAngles<double> WithoutDerivatives(const RunData& run, std::size_t k) {
 
 }  // namespace
 
+Eigen::Vector3d SampleSeries::Readings_mV(const ModelConfig& cfg, const double* theta,
+                                         std::size_t k, const BenchAngles<double>& recorded,
+                                         const SampleContext& ctx) const {
+  if (!predicted_readings) return run->readings_mV(k);
+  BenchAngles<double> at_rest = recorded;
+  for (AxisState<double>& a : at_rest.axis) a.rate = a.accel = 0.0;
+  return PredictReadings_mV<double>(cfg, theta, BenchAnglesFromRecorded<double>(cfg, theta, at_rest),
+                                    ctx);
+}
+
 BenchAngles<double> SampleSeries::Recorded(std::size_t k) const {
   if (at.empty()) return (*derivatives)[k];
   const auto it = std::lower_bound(at.begin(), at.end(), k);
@@ -55,8 +65,9 @@ void AccumulateWithJacobian(const ModelConfig& cfg, const Eigen::VectorXd& theta
   SampleSeries::Walk recorded(s, k0);
   for (std::size_t k = k0; k <= k1; ++k) {
     const SampleContext ctx{run.t_s[k], run.has_temp() ? run.temp_C[k] : 0.0};
-    const Vec3<J> a = AccelerationFromReadings_L<J>(cfg, th.data(), recorded.Next(),
-                                                    run.readings_mV(k), ctx);
+    const BenchAngles<double> rec = recorded.Next();
+    const Vec3<J> a = AccelerationFromReadings_L<J>(
+        cfg, th.data(), rec, s.Readings_mV(cfg, theta.data(), k, rec, ctx), ctx);
     const double wa = alpha[k - k0], wb = beta[k - k0];
     for (int r = 0; r < 3; ++r) {
       inc->dv_mps[r] += wa * a[r].a;
@@ -125,8 +136,9 @@ IntervalIncrement IntegrateInterval(const ModelConfig& cfg, const Eigen::VectorX
   if (!with_jacobian) {
     for (std::size_t k = k0; k <= k1; ++k) {
       const SampleContext ctx{run.t_s[k], run.has_temp() ? run.temp_C[k] : 0.0};
-      const Vec3<double> a = AccelerationFromReadings_L<double>(cfg, theta.data(), recorded.Next(),
-                                                                run.readings_mV(k), ctx);
+      const BenchAngles<double> rec = recorded.Next();
+      const Vec3<double> a = AccelerationFromReadings_L<double>(
+          cfg, theta.data(), rec, s.Readings_mV(cfg, theta.data(), k, rec, ctx), ctx);
       inc.dv_mps += alpha[k - k0] * a;
       inc.ds_m += beta[k - k0] * a;
     }
@@ -139,7 +151,9 @@ IntervalIncrement IntegrateInterval(const ModelConfig& cfg, const Eigen::VectorX
     Eigen::Vector3d a;
     for (std::size_t k = k0; k <= k1; ++k) {
       const SampleContext ctx{run.t_s[k], run.has_temp() ? run.temp_C[k] : 0.0};
-      AccelerationWithJacobian(cfg, theta.data(), recorded.Next(), run.readings_mV(k), ctx, &a, Jk);
+      const BenchAngles<double> rec = recorded.Next();
+      AccelerationWithJacobian(cfg, theta.data(), rec, s.Readings_mV(cfg, theta.data(), k, rec, ctx),
+                               ctx, &a, Jk);
       inc.dv_mps += alpha[k - k0] * a;
       inc.ds_m += beta[k - k0] * a;
       inc.ddv_dtheta += alpha[k - k0] * Jk;

@@ -60,9 +60,19 @@ struct SampleSeries {
   // At each of `at` (or every sample); shared by the problems of one run's
   // layouts (SharedRunWork, run_problem.h).
   std::shared_ptr<const std::vector<BenchAngles<double>>> derivatives;
+  // The readings the model predicts at the pass's theta for each sample's
+  // recorded attitude at rest (PredictReadings_mV, rates and accelerations 0)
+  // instead of the recorded ones: the Jacobian's regressors without the
+  // reading noise, for the information of what the run determines
+  // (ChooseHeldParameters). Off in every fit.
+  bool predicted_readings = false;
 
   // Sample k's recorded angles with their rates and accelerations.
   BenchAngles<double> Recorded(std::size_t k) const;
+  // Sample k's readings [mV]: the run's, or with predicted_readings the
+  // model's at theta for its recorded attitude.
+  Eigen::Vector3d Readings_mV(const ModelConfig& cfg, const double* theta, std::size_t k,
+                              const BenchAngles<double>& recorded, const SampleContext& ctx) const;
 
   // Samples k0, k0 + 1, ... in turn (Recorded without a search per sample).
   class Walk {

@@ -198,12 +198,17 @@ std::vector<int> JointIndicesOf(const JointLayout& jl, const std::string& name,
 // The hold rule (SupportedByInformation, as a single run's fit) on the
 // combined information at the nominal values, with --hold/--free on top:
 // 0 estimated, 1 consider (not determined: nominal, prior uncertainty
-// carried), 2 held. *pt_out, when given, gets that evaluation.
+// carried), 2 held. *pt_out, when given, gets that evaluation (of the
+// readings the model predicts at `at`).
 std::vector<int> HeldByRule(const JointLayout& jl, const std::vector<RunProblem>& problems,
                             const JointOptions& opt, int threads, const Eigen::VectorXd& at,
                             BatchObjective::Point* pt_out) {
   const int m = jl.size();
-  const BatchObjective objective = MakeJointObjective(jl, problems, threads);
+  // The information of the readings the model predicts (a single run's
+  // decision reads the same: ChooseHeldParameters).
+  std::vector<RunProblem> predicted = problems;
+  for (RunProblem& p : predicted) p.series.predicted_readings = true;
+  const BatchObjective objective = MakeJointObjective(jl, predicted, threads);
   std::vector<Eigen::Vector3d> noise;
   for (const RunProblem& p : problems) noise.push_back(p.noise_mV);
   BatchObjective::Point pt = objective.Evaluate(at, noise, true);
