@@ -45,14 +45,21 @@ int RunMounting(const MountingArgs& a, Session& session) {
                     {"scale_per_g", {f.scale[0], f.scale[1], f.scale[2]}},
                     {"bias", {f.bias[0], f.bias[1], f.bias[2]}}});
   }
+  // A vertical shaft recorded as a horizontal axis: no mounting fits, and
+  // none is suggested.
+  const std::string still = StillGravityNote(run.description, run.data);
   const MountingFit& best = fits.front();
-  std::printf("\nsuggested run.yaml lines (the zeros as offsets of the recorded angles):\n");
-  std::printf("  mounting: {axes: %s}\n", best.AxesText().c_str());
-  std::printf(
-      "  columns: {lambda1: {source: ..., offset: %.2f}, lambda2: {source: ..., offset: "
-      "%.2f}}\n",
-      best.zero_rad[0] / kDegToRad, best.zero_rad[1] / kDegToRad);
-  if (fits.size() > 1 && fits[1].rms_g < 1.5 * best.rms_g) {
+  if (!still.empty()) {
+    std::printf("\nno mounting suggested: %s\n", still.c_str());
+  } else {
+    std::printf("\nsuggested run.yaml lines (the zeros as offsets of the recorded angles):\n");
+    std::printf("  mounting: {axes: %s}\n", best.AxesText().c_str());
+    std::printf(
+        "  columns: {lambda1: {source: ..., offset: %.2f}, lambda2: {source: ..., offset: "
+        "%.2f}}\n",
+        best.zero_rad[0] / kDegToRad, best.zero_rad[1] / kDegToRad);
+  }
+  if (still.empty() && fits.size() > 1 && fits[1].rms_g < 1.5 * best.rms_g) {
     std::printf("note: %s fits almost as well (%.4g g): the run does not tell them apart well\n",
                 fits[1].AxesText().c_str(), fits[1].rms_g);
   }

@@ -60,10 +60,43 @@ std::vector<Eigen::Vector3d> GravityProjection(const RunDescription& run, const 
   return W;
 }
 
+// The triad's nominal scale and zero offset of each of the IMU's own axes
+// (run.yaml's triad, declared per platform axis through its mounting).
+struct NominalTriad {
+  double scale[3] = {1.0, 1.0, 1.0}, bias[3] = {0.0, 0.0, 0.0};
+};
+
+NominalTriad NominalOfImuAxes(const RunDescription& run) {
+  NominalTriad n;
+  for (int i = 0; i < 3; ++i) {
+    n.scale[run.axis_source[i]] = run.scale_mV_per_g[i];
+    n.bias[run.axis_source[i]] = run.axis_sign[i] * run.bias_mV[i];
+  }
+  return n;
+}
+
+// Variance of gravity's share on platform axis i over the samples [g^2].
+double ShareVariance(const std::vector<Eigen::Vector3d>& W, int i) {
+  double s = 0.0, ss = 0.0;
+  for (const Eigen::Vector3d& v : W) {
+    s += v[i];
+    ss += v[i] * v[i];
+  }
+  const double n = static_cast<double>(std::max<std::size_t>(1, W.size()));
+  return ss / n - (s / n) * (s / n);
+}
+
 // Per-axis fit w = b + K W_i; returns the misfit sum of squares in g^2, or a
-// large number when K <= 0 (a flipped axis).
+// large number when K <= 0 (a flipped axis). With `at_nominal` K and b are
+// the triad's nominal ones (nominal_scale, nominal_bias): where gravity turns
+// on no platform axis (a vertical shaft) no axis gives them, and the axis
+// reading 1 g must be the one put up (with K and b free every mounting fitted
+// such a run exactly, and the search ranked them by chance). Otherwise an
+// axis that never sees gravity change (a horizontal shaft's own) cannot
+// tell: misfit 0.
 double FitAxis(const std::vector<double>& w, const std::vector<Eigen::Vector3d>& W, int i,
-               double* scale, double* bias) {
+               bool at_nominal, double nominal_scale, double nominal_bias, double* scale,
+               double* bias) {
   const double n = static_cast<double>(w.size());
   double sx = 0, sy = 0, sxx = 0, sxy = 0;
   for (std::size_t k = 0; k < w.size(); ++k) {
@@ -74,13 +107,13 @@ double FitAxis(const std::vector<double>& w, const std::vector<Eigen::Vector3d>&
     sxy += x * w[k];
   }
   const double var = sxx - sx * sx / n;
-  if (!(var > 1e-6 * n)) {  // this axis never sees gravity change: cannot tell
+  if (!at_nominal && !(var > 1e-6 * n)) {  // this axis never sees gravity change: cannot tell
     *scale = 0.0;
     *bias = sy / n;
     return 0.0;
   }
-  const double K = (sxy - sx * sy / n) / var;
-  const double b = (sy - K * sx) / n;
+  const double K = at_nominal ? nominal_scale : (sxy - sx * sy / n) / var;
+  const double b = at_nominal ? nominal_bias : (sy - K * sx) / n;
   *scale = K;
   *bias = b;
   if (!(K > 0.0)) return 1e30;
@@ -94,16 +127,21 @@ double FitAxis(const std::vector<double>& w, const std::vector<Eigen::Vector3d>&
 
 // imu: the IMU's readings at the samples idx (ImuReadings).
 MountingFit Fit(const std::vector<std::vector<double>>& imu, const std::vector<std::size_t>& idx,
-                const std::vector<Eigen::Vector3d>& W, const int (&source)[3],
-                const double (&sign)[3], double z1, double z2) {
+                const NominalTriad& nominal, const std::vector<Eigen::Vector3d>& W,
+                const int (&source)[3], const double (&sign)[3], double z1, double z2) {
   MountingFit f;
   double ss = 0.0;
   std::vector<double> w(idx.size());
+  // Gravity turns on no platform axis (by 0.1 g RMS or more): judged at the
+  // nominal scales and offsets.
+  bool at_nominal = true;
+  for (int i = 0; i < 3; ++i) at_nominal = at_nominal && ShareVariance(W, i) < 0.01;
   for (int i = 0; i < 3; ++i) {
     f.axis_source[i] = source[i];
     f.axis_sign[i] = sign[i];
     for (std::size_t j = 0; j < idx.size(); ++j) w[j] = sign[i] * imu[source[i]][j];
-    ss += FitAxis(w, W, i, &f.scale[i], &f.bias[i]);
+    ss += FitAxis(w, W, i, at_nominal, nominal.scale[source[i]],
+                  sign[i] * nominal.bias[source[i]], &f.scale[i], &f.bias[i]);
   }
   f.zero_rad[0] = z1;
   f.zero_rad[1] = z2;
@@ -139,6 +177,7 @@ namespace {
 struct SearchData {
   std::vector<std::size_t> idx;
   std::vector<std::vector<double>> imu;
+  NominalTriad nominal;
 };
 
 // Every proper mounting at its best zeros on the grid.
@@ -153,7 +192,7 @@ std::vector<MountingFit> GridFits(const RunDescription& run, const RunData& data
     for (std::size_t m = 0; m < mountings.size(); ++m) {
       const int src[3] = {mountings[m].first[0], mountings[m].first[1], mountings[m].first[2]};
       const double sg[3] = {mountings[m].second[0], mountings[m].second[1], mountings[m].second[2]};
-      const MountingFit f = Fit(s.imu, s.idx, W, src, sg, z1, z2);
+      const MountingFit f = Fit(s.imu, s.idx, s.nominal, W, src, sg, z1, z2);
       // Prefer the smaller zeros among fits equal to 0.1 %.
       const bool better =
           f.rms_g < best[m].rms_g * 0.999 ||
@@ -182,7 +221,7 @@ void Refine(const RunDescription& run, const RunData& data, const SearchData& s,
         const double z1 = c1 + a * step, z2 = c2 + b * step;
         if (std::abs(z1) > zero_range_rad || std::abs(z2) > zero_range_rad) continue;
         const MountingFit f =
-            Fit(s.imu, s.idx, GravityProjection(run, data, s.idx, z1, z2),
+            Fit(s.imu, s.idx, s.nominal, GravityProjection(run, data, s.idx, z1, z2),
                 {best->axis_source[0], best->axis_source[1], best->axis_source[2]},
                 {best->axis_sign[0], best->axis_sign[1], best->axis_sign[2]}, z1, z2);
         if (f.rms_g < best->rms_g) *best = f;
@@ -201,7 +240,7 @@ void SortByMisfit(std::vector<MountingFit>* fits) {
 std::vector<MountingFit> SearchMountings(const RunDescription& run, const RunData& data,
                                          double zero_range_rad, double zero_step_rad,
                                          std::size_t max_samples) {
-  SearchData s{Subsample(data.size(), max_samples), {}};
+  SearchData s{Subsample(data.size(), max_samples), {}, NominalOfImuAxes(run)};
   s.imu = ImuReadings(run, data, s.idx);
   std::vector<MountingFit> best = GridFits(run, data, s, zero_range_rad, zero_step_rad);
   for (MountingFit& f : best) Refine(run, data, s, zero_range_rad, zero_step_rad, &f);
@@ -209,8 +248,45 @@ std::vector<MountingFit> SearchMountings(const RunDescription& run, const RunDat
   return best;
 }
 
+std::string StillGravityNote(const RunDescription& run, const RunData& data) {
+  if (data.size() < 10) return "";
+  const std::vector<std::size_t> idx = Subsample(data.size(), 2000);
+  const std::vector<Eigen::Vector3d> W = GravityProjection(run, data, idx, 0.0, 0.0);
+  double turned = 0.0;  // the largest range of gravity's share on a platform axis [g]
+  for (int i = 0; i < 3; ++i) {
+    const auto [lo, hi] = std::minmax_element(
+        W.begin(), W.end(), [i](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+          return a[i] < b[i];
+        });
+    turned = std::max(turned, (*hi)[i] - (*lo)[i]);
+  }
+  // What the readings moved by [g]: each channel's 1st to 99th percentile
+  // (the noise's tails and a few outliers left out), at its nominal scale.
+  const NominalTriad nominal = NominalOfImuAxes(run);
+  const std::vector<std::vector<double>> imu = ImuReadings(run, data, idx);
+  double moved = 0.0;
+  for (int j = 0; j < 3; ++j) {
+    std::vector<double> v = imu[j];
+    std::sort(v.begin(), v.end());
+    const double lo = v[v.size() / 100], hi = v[v.size() - 1 - v.size() / 100];
+    moved = std::max(moved, (hi - lo) / std::abs(nominal.scale[j]));
+  }
+  if (!(turned > 0.5 && moved < 0.15)) return "";
+  char buf[512];
+  std::snprintf(buf, sizeof(buf),
+                "the readings do not follow the angles: these angles turn gravity's share on "
+                "a platform axis through %.2g g, the readings move by %.2g g at most (gravity "
+                "lies along the axis that turns: a vertical shaft). Record that angle as "
+                "lambda2, the inner axis, which is vertical at lambda1 = 0, with lambda1: "
+                "{value: 0}, and the IMU's upward axis as platform x (mounting.axes)",
+                turned, moved);
+  return buf;
+}
+
 std::string MountingWarning(const RunDescription& run, const RunData& data) {
   if (data.size() < 10) return "";
+  const std::string still = StillGravityNote(run, data);
+  if (!still.empty()) return still;
   // Only when both angles together sweep gravity through a wide range.
   for (int i = 0; i < 2; ++i) {
     const auto [lo, hi] = std::minmax_element(data.lambda_rad[i].begin(), data.lambda_rad[i].end());
@@ -220,7 +296,7 @@ std::string MountingWarning(const RunDescription& run, const RunData& data) {
   // The grid's best and the declared mounting refined (the others do not
   // matter here).
   const double range = 5.0 * kDegToRad;
-  SearchData s{Subsample(data.size(), 500), {}};
+  SearchData s{Subsample(data.size(), 500), {}, NominalOfImuAxes(run)};
   s.imu = ImuReadings(run, data, s.idx);
   std::vector<MountingFit> fits = GridFits(run, data, s, range, range / 2.0);
   SortByMisfit(&fits);

@@ -44,7 +44,13 @@ std::vector<MountingFit> SearchMountings(const RunDescription& run, const RunDat
                                          double zero_range_rad, double zero_step_rad,
                                          std::size_t max_samples = 2000);
 
-// A warning line when the declared mounting (zeros near 0, within +-5 deg) fits
+// A line when the declared angles turn gravity on the platform (by over 0.5
+// g on an axis) but the readings hardly move (below 0.15 g on every channel
+// at its nominal scale): a vertical shaft recorded as a horizontal axis.
+// Empty otherwise.
+std::string StillGravityNote(const RunDescription& run, const RunData& data);
+
+// A warning line (StillGravityNote's when it has one) when the declared mounting (zeros near 0, within +-5 deg) fits
 // clearly worse (RMS over 3 times and 0.05 g more) than another; nullopt-like
 // empty string otherwise, or when the angles do not move enough to tell.
 std::string MountingWarning(const RunDescription& run, const RunData& data);

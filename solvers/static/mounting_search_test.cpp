@@ -20,8 +20,9 @@ struct Remounted {
   RunData data;
 };
 
-Remounted RemountedRun(double zero1_deg, double zero2_deg) {
+Remounted RemountedRun(double zero1_deg, double zero2_deg, bool vertical_shaft = false) {
   Scenario s = testing_fixtures::PaperScenario(20.0, 60.0, 2.0, 15.0, 5);
+  if (vertical_shaft) s.profile.amplitude_rad[0] = 0.0;  // the inner axis turns alone, x up
   // The zeros are told apart from the triad's own misalignment only by the
   // constraint (SPEC section 4: dlambda2 moves with gamma_y, gamma_z); with the
   // six angles at 0 the search must find the zeros themselves.
@@ -84,6 +85,40 @@ TEST(MountingSearch, DeclaredMountingThatFitsWorseIsAWarning) {
     for (double& v : as_loaded.w_mV[i]) v *= sign[i];
   }
   EXPECT_EQ(MountingWarning(right, as_loaded), "");
+}
+
+// A vertical shaft (the outer axis still at 0: x up, the inner axis turns):
+// gravity's share on each platform axis never changes, so no axis gives its
+// scale and offset. Judged at the nominal ones, the mounting that puts the
+// IMU's upward axis (here +y) on platform x comes first, in the four ways
+// of putting the other two across the shaft (which only the shaft's small
+// tilt tells apart). With scale and offset free every mounting fitted such a
+// run exactly (misfit 0).
+TEST(MountingSearch, VerticalShaftPutsTheUpwardAxisOnX) {
+  const Remounted r = RemountedRun(0.0, 0.0, /*vertical_shaft=*/true);
+  const std::vector<MountingFit> fits =
+      SearchMountings(r.run, r.data, 10.0 * kDegToRad, 2.0 * kDegToRad);
+  ASSERT_EQ(fits.size(), 24u);
+  for (int k = 0; k < 4; ++k) {
+    EXPECT_EQ(fits[k].axis_source[0], 1) << fits[k].AxesText();
+    EXPECT_EQ(fits[k].axis_sign[0], 1.0) << fits[k].AxesText();
+    EXPECT_LT(fits[k].rms_g, 0.05) << fits[k].AxesText();
+  }
+  EXPECT_GT(fits[4].rms_g, 0.5) << fits[4].AxesText();
+  EXPECT_EQ(StillGravityNote(r.run, r.data), "");
+}
+
+// The same shaft with its angle recorded as the outer axis's (which is
+// horizontal): the angles would turn gravity, the readings do not. The note
+// says so (and is the loading's warning); recorded as the inner axis, none.
+TEST(MountingSearch, VerticalShaftRecordedAsTheOuterAxisIsSaid) {
+  Remounted r = RemountedRun(0.0, 0.0, /*vertical_shaft=*/true);
+  std::swap(r.data.lambda_rad[0], r.data.lambda_rad[1]);
+  std::fill(r.data.lambda_rad[1].begin(), r.data.lambda_rad[1].end(), 0.0);
+  const std::string note = StillGravityNote(r.run, r.data);
+  EXPECT_EQ(note.rfind("the readings do not follow the angles: ", 0), 0u) << note;
+  EXPECT_NE(note.find("Record that angle as lambda2"), std::string::npos) << note;
+  EXPECT_EQ(MountingWarning(r.run, r.data), note);
 }
 
 }  // namespace
