@@ -276,9 +276,10 @@ std::string StillGravityNote(const RunDescription& run, const RunData& data) {
   std::snprintf(buf, sizeof(buf),
                 "the readings do not follow the angles: these angles turn gravity's share on "
                 "a platform axis through %.2g g, the readings move by %.2g g at most (gravity "
-                "lies along the axis that turns: a vertical shaft). Record that angle as "
-                "lambda2, the inner axis, which is vertical at lambda1 = 0, with lambda1: "
-                "{value: 0}, and the IMU's upward axis as platform x (mounting.axes)",
+                "lies along the axis that turns, a vertical shaft, or the readings do not "
+                "respond). For a vertical shaft record its angle as lambda2, the inner axis, "
+                "which is vertical at lambda1 = 0, with lambda1: {value: 0}, and the IMU's "
+                "upward axis as platform x (mounting.axes)",
                 turned, moved);
   return buf;
 }

@@ -117,7 +117,7 @@ TEST(MountingSearch, VerticalShaftRecordedAsTheOuterAxisIsSaid) {
   std::fill(r.data.lambda_rad[1].begin(), r.data.lambda_rad[1].end(), 0.0);
   const std::string note = StillGravityNote(r.run, r.data);
   EXPECT_EQ(note.rfind("the readings do not follow the angles: ", 0), 0u) << note;
-  EXPECT_NE(note.find("Record that angle as lambda2"), std::string::npos) << note;
+  EXPECT_NE(note.find("record its angle as lambda2"), std::string::npos) << note;
   EXPECT_EQ(MountingWarning(r.run, r.data), note);
 }
 
