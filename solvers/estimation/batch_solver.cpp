@@ -364,8 +364,8 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
     // recorded readings: a parameter that multiplies a small component of
     // the specific force would take that component's reading noise for
     // information (a simulated vertical shaft, 6 mg of tilt under 12 mg of
-    // noise across the shaft: gamma_y and gamma_z had 410 prior units, were
-    // estimated, and the fit turned them to 13 400' to shrink the noise).
+    // noise across the shaft: gamma_y and gamma_z were estimated, and the
+    // fit turned them to 13 400'; HoldDecision.ReadingNoiseIsNoInformation).
     const std::size_t m = ThinningFactor(data, decimation_hz);
     d.theta = ScaleAndOffsetPoint(run, data, layout, epoch_s, derivatives, m, threads);
     RunProblem pt = BuildRunProblem(run, data, layout, epoch_s, derivatives, shared, threads);
