@@ -300,8 +300,12 @@ struct RunValue {
   int run = 0;
   double value = 0.0, sigma = 0.0;
 };
+// With `as_start`, a run's own unknown (dpsi@RUN, W0y@RUN) also takes the
+// run's value relative to its held ones: the joint start (a single run's
+// shaft offset relative to its held tilt started at 0 otherwise, 52 mg off:
+// the real roll runs' joint fit took 14 steps instead of 6).
 std::vector<RunValue> AloneValuesOf(const JointLayout& jl, const std::vector<JointRunResult>& runs,
-                                    int j) {
+                                    int j, bool as_start = false) {
   std::vector<RunValue> out;
   const JointParam& pj = jl.param(j);
   if (pj.degree != 0 || pj.base < 0) return out;
@@ -315,7 +319,8 @@ std::vector<RunValue> AloneValuesOf(const JointLayout& jl, const std::vector<Joi
       const std::string& name = layout.info(i).name;
       const double var = a.cov_given_consider.rows() == layout.size() ? a.cov_given_consider(i, i)
                                                                        : a.estimate.cov(i, i);
-      if (!(var > 0.0) || !IsEstimated(a, name) || a.relative_to.count(name)) continue;
+      const bool relative = a.relative_to.count(name) > 0 && !(as_start && pj.run >= 0);
+      if (!(var > 0.0) || !IsEstimated(a, name) || relative) continue;
       // theta_i moves with phi_j alone (not with a temperature coefficient
       // or another unknown too): the run's value of theta_i is one of phi_j.
       bool alone = true;
@@ -487,7 +492,7 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
   Eigen::VectorXd phi = jl.Nominal();
   for (int j = 0; j < m; ++j) {
     double num = 0.0, den = 0.0;
-    for (const RunValue& v : AloneValuesOf(jl, res.runs, j)) {
+    for (const RunValue& v : AloneValuesOf(jl, res.runs, j, /*as_start=*/true)) {
       num += v.value / (v.sigma * v.sigma);
       den += 1.0 / (v.sigma * v.sigma);
     }
