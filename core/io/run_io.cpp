@@ -274,13 +274,11 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings, int thread
   Warn(warnings, GapWarning(t.values));
 
   // Units of the readings and angles, judged against the nominal triad.
-  double scale_of_imu_axis[3], range_of_imu_axis[3], bias_of_imu_axis[3];
-  for (int i = 0; i < 3; ++i) {
-    const int j = run.axis_source[i];
-    scale_of_imu_axis[j] = run.scale_mV_per_g[i];
-    bias_of_imu_axis[j] = run.axis_sign[i] * run.bias_mV[i];
-    range_of_imu_axis[j] = run.scale_mV_per_g[i] + std::abs(run.bias_mV[i]);
-  }
+  const ImuAxesNominal nominal = NominalOfImuAxes(run);
+  const double(&scale_of_imu_axis)[3] = nominal.scale;
+  const double(&bias_of_imu_axis)[3] = nominal.bias;
+  double range_of_imu_axis[3];
+  for (int j = 0; j < 3; ++j) range_of_imu_axis[j] = scale_of_imu_axis[j] + std::abs(bias_of_imu_axis[j]);
   CheckSamplesPlausible(table, {&t, {&lambda[0], &lambda[1]}, {&w[0], &w[1], &w[2]},
                                 {&rate[0], &rate[1]}},
                         scale_of_imu_axis, bias_of_imu_axis);

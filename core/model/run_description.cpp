@@ -42,4 +42,13 @@ ModelConfig MakeModelConfig(const RunDescription& run, const ParameterLayout& la
   return cfg;
 }
 
+ImuAxesNominal NominalOfImuAxes(const RunDescription& run) {
+  ImuAxesNominal n;
+  for (int i = 0; i < 3; ++i) {
+    n.scale[run.axis_source[i]] = run.scale_mV_per_g[i];
+    n.bias[run.axis_source[i]] = run.axis_sign[i] * run.bias_mV[i];
+  }
+  return n;
+}
+
 }  // namespace triadcal

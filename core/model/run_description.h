@@ -139,6 +139,14 @@ struct RunDescription {
 // everything else 0) in the given layout.
 Eigen::VectorXd NominalTheta(const RunDescription& run, const ParameterLayout& layout);
 
+// The triad's nominal scale and zero offset of each of the IMU's own axes
+// (the readings columns, before the mounting): `triad` declares them per
+// platform axis i, which carries IMU axis axis_source[i] times axis_sign[i].
+struct ImuAxesNominal {
+  double scale[3] = {1.0, 1.0, 1.0}, bias[3] = {0.0, 0.0, 0.0};
+};
+ImuAxesNominal NominalOfImuAxes(const RunDescription& run);
+
 // The model configuration of this run (R0, g) for the given layout.
 ModelConfig MakeModelConfig(const RunDescription& run, const ParameterLayout& layout);
 // ... with the references its recorded data set: the first temp_C

@@ -21,10 +21,9 @@ BenchAngles<double> WithoutDerivatives(const RunData& run, std::size_t k) {
 
 }  // namespace
 
-Eigen::Vector3d SampleSeries::Readings_mV(const ModelConfig& cfg, const double* theta,
-                                         std::size_t k, const BenchAngles<double>& recorded,
-                                         const SampleContext& ctx) const {
-  if (!predicted_readings) return run->readings_mV(k);
+Eigen::Vector3d SampleSeries::PredictedReadings_mV(const ModelConfig& cfg, const double* theta,
+                                                  const BenchAngles<double>& recorded,
+                                                  const SampleContext& ctx) {
   BenchAngles<double> at_rest = recorded;
   for (AxisState<double>& a : at_rest.axis) a.rate = a.accel = 0.0;
   return PredictReadings_mV<double>(cfg, theta, BenchAnglesFromRecorded<double>(cfg, theta, at_rest),

@@ -72,7 +72,14 @@ struct SampleSeries {
   // Sample k's readings [mV]: the run's, or with predicted_readings the
   // model's at theta for its recorded attitude.
   Eigen::Vector3d Readings_mV(const ModelConfig& cfg, const double* theta, std::size_t k,
-                              const BenchAngles<double>& recorded, const SampleContext& ctx) const;
+                              const BenchAngles<double>& recorded, const SampleContext& ctx) const {
+    return predicted_readings ? PredictedReadings_mV(cfg, theta, recorded, ctx)
+                              : run->readings_mV(k);
+  }
+  // The model's readings at theta for the recorded attitude at rest.
+  static Eigen::Vector3d PredictedReadings_mV(const ModelConfig& cfg, const double* theta,
+                                              const BenchAngles<double>& recorded,
+                                              const SampleContext& ctx);
 
   // Samples k0, k0 + 1, ... in turn (Recorded without a search per sample).
   class Walk {

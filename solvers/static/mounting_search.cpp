@@ -60,21 +60,6 @@ std::vector<Eigen::Vector3d> GravityProjection(const RunDescription& run, const 
   return W;
 }
 
-// The triad's nominal scale and zero offset of each of the IMU's own axes
-// (run.yaml's triad, declared per platform axis through its mounting).
-struct NominalTriad {
-  double scale[3] = {1.0, 1.0, 1.0}, bias[3] = {0.0, 0.0, 0.0};
-};
-
-NominalTriad NominalOfImuAxes(const RunDescription& run) {
-  NominalTriad n;
-  for (int i = 0; i < 3; ++i) {
-    n.scale[run.axis_source[i]] = run.scale_mV_per_g[i];
-    n.bias[run.axis_source[i]] = run.axis_sign[i] * run.bias_mV[i];
-  }
-  return n;
-}
-
 // Variance of gravity's share on platform axis i over the samples [g^2].
 double ShareVariance(const std::vector<Eigen::Vector3d>& W, int i) {
   double s = 0.0, ss = 0.0;
@@ -127,7 +112,7 @@ double FitAxis(const std::vector<double>& w, const std::vector<Eigen::Vector3d>&
 
 // imu: the IMU's readings at the samples idx (ImuReadings).
 MountingFit Fit(const std::vector<std::vector<double>>& imu, const std::vector<std::size_t>& idx,
-                const NominalTriad& nominal, const std::vector<Eigen::Vector3d>& W,
+                const ImuAxesNominal& nominal, const std::vector<Eigen::Vector3d>& W,
                 const int (&source)[3], const double (&sign)[3], double z1, double z2) {
   MountingFit f;
   double ss = 0.0;
@@ -177,7 +162,7 @@ namespace {
 struct SearchData {
   std::vector<std::size_t> idx;
   std::vector<std::vector<double>> imu;
-  NominalTriad nominal;
+  ImuAxesNominal nominal;
 };
 
 // Every proper mounting at its best zeros on the grid.
@@ -262,7 +247,7 @@ std::string StillGravityNote(const RunDescription& run, const RunData& data) {
   }
   // What the readings moved by [g]: each channel's 1st to 99th percentile
   // (the noise's tails and a few outliers left out), at its nominal scale.
-  const NominalTriad nominal = NominalOfImuAxes(run);
+  const ImuAxesNominal nominal = NominalOfImuAxes(run);
   const std::vector<std::vector<double>> imu = ImuReadings(run, data, idx);
   double moved = 0.0;
   for (int j = 0; j < 3; ++j) {
