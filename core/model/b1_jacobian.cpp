@@ -20,6 +20,18 @@ constexpr int kJetParams = 8;
 using ThetaRow = Eigen::Matrix<double, 1, Eigen::Dynamic, Eigen::RowMajor, 1, kMaxParams>;
 using ThetaRows3 = Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::ColMajor, 3, kMaxParams>;
 
+// Column c, and columns c..c+2, of a Jacobian of 3 rows as fixed-size
+// objects: a Ref's rows are known only at run time, and Eigen's loop over
+// 3 entries of a dynamic column cost more than its arithmetic.
+Eigen::Map<Eigen::Vector3d> Col3(Eigen::Ref<Eigen::MatrixXd>& J, int c) {
+  return Eigen::Map<Eigen::Vector3d>(J.data() + c * J.outerStride());
+}
+Eigen::Map<Eigen::Matrix3d, 0, Eigen::OuterStride<>> Cols3(Eigen::Ref<Eigen::MatrixXd>& J,
+                                                            int c) {
+  return Eigen::Map<Eigen::Matrix3d, 0, Eigen::OuterStride<>>(J.data() + c * J.outerStride(),
+                                                              Eigen::OuterStride<>(J.outerStride()));
+}
+
 // [v x]
 Mat3<double> Cross(const Vec3<double>& v) {
   Mat3<double> m;
@@ -369,35 +381,35 @@ void SensorStageColumns(const ModelConfig& cfg, const double* th, const SensorSt
   const Vec3<double>& u = st.u;
   const Vec3<double>& s = st.s;
   for (int i = 0; i < 3; ++i) {
-    J.col(kKx + i) = A.col(i) * (u[i] / s[i]);
-    J.col(kW0x + i) = A.col(i) * (1.0 / s[i]);
+    Col3(J, kKx + i) = A.col(i) * (u[i] / s[i]);
+    Col3(J, kW0x + i) = A.col(i) * (1.0 / s[i]);
   }
-  J.col(kAlphaX) = A.col(1) * W.x();
-  J.col(kAlphaY) = -A.col(0) * W.y();
-  J.col(kBetaX) = -A.col(2) * W.x();
-  J.col(kBetaZ) = A.col(0) * W.z();
-  J.col(kGammaY) = A.col(2) * W.y();
-  J.col(kGammaZ) = -A.col(1) * W.z();
+  Col3(J, kAlphaX) = A.col(1) * W.x();
+  Col3(J, kAlphaY) = -A.col(0) * W.y();
+  Col3(J, kBetaX) = -A.col(2) * W.x();
+  Col3(J, kBetaZ) = A.col(0) * W.z();
+  Col3(J, kGammaY) = A.col(2) * W.y();
+  Col3(J, kGammaZ) = -A.col(1) * W.z();
   for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) J.col(kKxx + 3 * i + j) = A.col(i) * (W[i] * W[j]);
+    for (int j = 0; j < 3; ++j) Col3(J, kKxx + 3 * i + j) = A.col(i) * (W[i] * W[j]);
   }
   // Zero-offset effects (catalogue): dF/d theta_e,i = x_e / s_i e_i.
   for (const ParameterLayout::ZeroOffsetTerm& term : layout.zero_offset_terms()) {
     const double x = ZeroOffsetSignalValue(cfg, term.signal, ctx);
-    for (int i = 0; i < 3; ++i) J.col(term.offset + i) = A.col(i) * (x / s[i]);
+    for (int i = 0; i < 3; ++i) Col3(J, term.offset + i) = A.col(i) * (x / s[i]);
   }
   // scale_asymmetry: dF/d dK_i = sgn_i u_i / s_i e_i.
   const int o_a = layout.offset(Effect::kScaleAsymmetry);
   if (o_a >= 0) {
-    for (int i = 0; i < 3; ++i) J.col(o_a + i) = A.col(i) * (st.sgn[i] * u[i] / s[i]);
+    for (int i = 0; i < 3; ++i) Col3(J, o_a + i) = A.col(i) * (st.sgn[i] * u[i] / s[i]);
   }
   // cross_quadratic: dF/d d_i = (W_j^2 - W_k^2) e_i, dF/d p_i = W_j W_k e_i.
   const int o_q = layout.offset(Effect::kCrossQuadratic);
   if (o_q >= 0) {
     for (int i = 0; i < 3; ++i) {
       const int j = kCrossAxes[i][0], k = kCrossAxes[i][1];
-      J.col(o_q + 2 * i) = A.col(i) * (W[j] * W[j] - W[k] * W[k]);
-      J.col(o_q + 2 * i + 1) = A.col(i) * (W[j] * W[k]);
+      Col3(J, o_q + 2 * i) = A.col(i) * (W[j] * W[j] - W[k] * W[k]);
+      Col3(J, o_q + 2 * i + 1) = A.col(i) * (W[j] * W[k]);
     }
   }
 }
@@ -417,6 +429,7 @@ void FillZero(Eigen::Ref<Eigen::MatrixXd> J) {
 void SpecificForceWithJacobian(const ModelConfig& cfg, const double* theta,
                                const Eigen::Vector3d& readings_mV, const SampleContext& ctx,
                                Eigen::Vector3d* W, Eigen::Ref<Eigen::MatrixXd> dW) {
+  eigen_assert(dW.rows() == 3);  // Col3
   FillZero(dW);
   const SensorStage st = SensorStageAt(cfg, theta, readings_mV, ctx);
   *W = st.W;
@@ -429,6 +442,7 @@ TRIADCAL_FLATTEN void AccelerationWithJacobian(const ModelConfig& cfg, const dou
                               Eigen::Ref<Eigen::MatrixXd> J) {
   const ParameterLayout& layout = cfg.layout;
   const double g = cfg.g_mps2;
+  eigen_assert(J.rows() == 3);  // Col3
   FillZero(J);
 
   BenchAngles<double> b = rec;
@@ -463,20 +477,20 @@ TRIADCAL_FLATTEN void AccelerationWithJacobian(const ModelConfig& cfg, const dou
   (*a_out).x() -= g;
 
   const Vec3<double> C12W = C_12 * W;
-  J.col(kDpsi) = g * Vec3<double>::UnitZ().cross(CW);
-  J.col(kDthetaC) = g * Rzp * Vec3<double>::UnitY().cross(Ryp * C12W);
+  Col3(J, kDpsi) = g * Vec3<double>::UnitZ().cross(CW);
+  Col3(J, kDthetaC) = g * Rzp * Vec3<double>::UnitY().cross(Ryp * C12W);
   // d C_12 / d l2 = [n x] C_12 with n = Rz(eps) e_x (the inner axis in frame 1);
   // d C_12 / d eps = [e_z x] C_12 - C_12 [e_z x].
-  J.col(kDlambda2) = g * C_L1 * rot.n_1.cross(C12W);
+  Col3(J, kDlambda2) = g * C_L1 * rot.n_1.cross(C12W);
   if (o_eps >= 0) {
-    J.col(o_eps) =
+    Col3(J, o_eps) =
         g * C_L1 * (Vec3<double>::UnitZ().cross(C12W) - C_12 * Vec3<double>::UnitZ().cross(W));
   }
   SensorStageColumns(cfg, th, st, ctx, T, J);
   // Angle-stage effects move C only through the two bench angles, as
   // dtheta_c and dlambda2 do: chain rule.
   for (std::size_t q = 0; q < angle_params.size(); ++q) {
-    J.col(angle_params[q]) = J.col(kDthetaC) * db(0, q) + J.col(kDlambda2) * db(3, q);
+    Col3(J, angle_params[q]) = Col3(J, kDthetaC) * db(0, q) + Col3(J, kDlambda2) * db(3, q);
   }
   // The size effect's correction enters as u_i = (z_i - D_i - W0_i) / s_i:
   // dF/dD_i = 1 / s_i e_i, so da/dD_i = T.col(i) / s_i.
@@ -484,7 +498,7 @@ TRIADCAL_FLATTEN void AccelerationWithJacobian(const ModelConfig& cfg, const dou
     for (int i = 1; i < 3; ++i) J += (T.col(i) / s[i]) * size.dD.row(i);
   } else if (size.r_zero) {
     for (int i = 1; i < 3; ++i) {
-      J.middleCols<3>(o_s + 3 * (i - 1)) += (T.col(i) / s[i]) * size.dD_r.row(i);
+      Cols3(J, o_s + 3 * (i - 1)) += (T.col(i) / s[i]) * size.dD_r.row(i);
     }
   }
 }

@@ -505,8 +505,12 @@ Vec3<T> SpecificForceFromReadings_g(const ModelConfig& cfg, const T* theta,
     }
   }
   double q0[6] = {0, 0, 0, 0, 0, 0};
+  bool quadratic = false;  // cross_quadratic present and away from zero
   if (o_q >= 0) {
-    for (int c = 0; c < 6; ++c) q0[c] = ScalarPart(theta[o_q + c]);
+    for (int c = 0; c < 6; ++c) {
+      q0[c] = ScalarPart(theta[o_q + c]);
+      quadratic = quadratic || q0[c] != 0.0;
+    }
   }
   auto cross = [&](const Vec3<double>& W) {
     Vec3<double> q = Vec3<double>::Zero();
@@ -526,7 +530,8 @@ Vec3<T> SpecificForceFromReadings_g(const ModelConfig& cfg, const T* theta,
   };
   Mat3<double> J0_inv;
   Vec3<double> W0;
-  if (o_q < 0 && K0.isZero(0.0)) {
+  if (!quadratic && K0.isZero(0.0)) {
+    // Linear (a score analysis's cross_quadratic at zero too): exact at once.
     J0_inv = M0.inverse();
     W0 = J0_inv * u0;
   } else {

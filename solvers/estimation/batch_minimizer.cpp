@@ -32,6 +32,10 @@ constexpr const char* kNoDescent =
 BatchMinimizer::BatchMinimizer(const BatchObjective& objective, std::vector<int> free,
                                MinimizerOptions options)
     : objective_(objective), free_(std::move(free)), options_(std::move(options)) {
+  formed_ = free_;
+  formed_.insert(formed_.end(), options_.also_formed.begin(), options_.also_formed.end());
+  std::sort(formed_.begin(), formed_.end());
+  formed_.erase(std::unique(formed_.begin(), formed_.end()), formed_.end());
   options_.estimate_noise.resize(objective_.runs(), false);
   for (int r = 0; r < objective_.runs(); ++r) {
     if (options_.estimate_noise[r]) noisy_.push_back(r);
@@ -100,11 +104,11 @@ BatchObjective::Point BatchMinimizer::Minimize(const Eigen::VectorXd& phi0,
     if (options_.fraction) options_.fraction(1.0 - std::pow(0.7, summary_.iterations));
   }
   summary_.final_cost = current_.cost;
-  // The steps formed the theta part by the free unknowns alone (a reduction
-  // by every column keeps its blocks: then it is whole already).
+  // The steps formed the theta part by formed_ alone (a reduction by every
+  // column has no block_columns: then it is whole already).
   bool whole = true;
   for (const RunReduction& red : current_.reductions) {
-    whole = whole && !red.measurement_blocks.empty();
+    whole = whole && !red.measurement_blocks.empty() && red.block_columns.empty();
   }
   if (options_.full_information && !whole && current_.finite() && !current_.passes.empty()) {
     objective_.Reweight(&current_, noise_);
@@ -120,7 +124,7 @@ ThetaPart BatchMinimizer::FullUnlessNoisy() const {
 void BatchMinimizer::IterationZero(const Eigen::VectorXd& phi0) {
   // With a noise to estimate, the full reduction is formed at its maximum
   // (MaximiseNoise), not at the start noise.
-  current_ = objective_.Evaluate(phi0, noise_, true, FullUnlessNoisy(), &free_);
+  current_ = objective_.Evaluate(phi0, noise_, true, FullUnlessNoisy(), &formed_);
   summary_.passes += 1;
   summary_.initial_cost = current_.cost;
   for (int r : noisy_) {
@@ -129,7 +133,7 @@ void BatchMinimizer::IterationZero(const Eigen::VectorXd& phi0) {
   if (current_.finite()) {
     MaximiseNoise(&current_, &noise_, ThetaPart::kGradientAndInformation);
   } else {
-    objective_.Reweight(&current_, noise_, ThetaPart::kGradientAndInformation, &free_);
+    objective_.Reweight(&current_, noise_, ThetaPart::kGradientAndInformation, &formed_);
   }
 }
 
@@ -187,7 +191,7 @@ void BatchMinimizer::MaximiseNoise(BatchObjective::Point* pt, std::vector<Eigen:
   }
   // Without a theta part, pt stays reduced at the noise before the last
   // step (within kLastNoiseStep of *noise).
-  if (theta_part != ThetaPart::kNone) objective_.Reweight(pt, *noise, theta_part, &free_);
+  if (theta_part != ThetaPart::kNone) objective_.Reweight(pt, *noise, theta_part, &formed_);
 }
 
 bool BatchMinimizer::ComputeStep() {
@@ -453,7 +457,7 @@ bool BatchMinimizer::TryStep() {
     const Eigen::VectorXd g0 = GradientAtTrialNoise(trial, noise);
     const Eigen::VectorXd phi_current = current_.phi;
     current_ = BatchObjective::Point{};
-    objective_.Reweight(&trial, noise, ThetaPart::kGradientAndInformation, &free_);
+    objective_.Reweight(&trial, noise, ThetaPart::kGradientAndInformation, &formed_);
     if (trial.finite()) {
       MeasureCurvature(trial, g0);
       const double rho = actual / predicted_;
@@ -466,12 +470,12 @@ bool BatchMinimizer::TryStep() {
     }
     // A gradient not finite: refused after all, the current point evaluated again.
     current_ = objective_.Evaluate(phi_current, noise_, true, ThetaPart::kGradientAndInformation,
-                                   &free_);
+                                   &formed_);
     summary_.passes += 1;
     RaiseDamping(std::numeric_limits<double>::infinity());
     return false;
   }
-  objective_.Reweight(&current_, noise_, ThetaPart::kGradientAndInformation, &free_);
+  objective_.Reweight(&current_, noise_, ThetaPart::kGradientAndInformation, &formed_);
   RaiseDamping(trial.finite() ? -actual : std::numeric_limits<double>::infinity());
   return false;
 }

@@ -69,9 +69,13 @@ struct MinimizerOptions {
   std::vector<bool> estimate_noise;
   std::function<void(const std::string&)> progress;
   std::function<void(double)> fraction;  // 0..1 along the iterations (estimated)
+  // Unknowns whose gradient and information every step forms with the free
+  // ones' (and whose blocks it keeps): a fit's considered parameters, which
+  // its covariance's consider term reads at the minimum.
+  std::vector<int> also_formed;
   // The point returned with its gradient and information by every unknown
-  // (one reduction more: the steps form them by the free ones alone), its
-  // reductions' blocks kept; else by the free ones.
+  // (one reduction more: the steps form them by the free ones and
+  // also_formed alone), its reductions' blocks kept; else by those.
   bool full_information = true;
 };
 
@@ -153,6 +157,7 @@ class BatchMinimizer {
 
   const BatchObjective& objective_;
   std::vector<int> free_;
+  std::vector<int> formed_;  // free_ and options_.also_formed, sorted: what a step's reductions form
   MinimizerOptions options_;
   std::vector<int> noisy_;      // the runs whose noise is estimated
   std::vector<double> rho_;     // their restricted-likelihood share (run_evaluation.h)

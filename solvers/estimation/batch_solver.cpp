@@ -360,7 +360,7 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
     // pitch run at 31 Hz: Ky's 0.079 prior units left, 0.0039 at 100 Hz;
     // alpha_x's 6.2e8, 8.1e8 at 100 Hz).
     // It is the information of the readings the model predicts there for
-    // the recorded attitude (SampleSeries::predicted_readings), not of the
+    // the recorded attitude (SampleSeries::readings), not of the
     // recorded readings: a parameter that multiplies a small component of
     // the specific force would take that component's reading noise for
     // information (a simulated vertical shaft, 6 mg of tilt under 12 mg of
@@ -369,7 +369,7 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
     const std::size_t m = ThinningFactor(data, decimation_hz);
     d.theta = ScaleAndOffsetPoint(run, data, layout, epoch_s, derivatives, m, threads);
     RunProblem pt = BuildRunProblem(run, data, layout, epoch_s, derivatives, shared, threads);
-    pt.series.predicted_readings = true;
+    pt.series.readings = SampleSeries::Readings::kPredictedAtRest;
     Eigen::MatrixXd A;
     Eigen::VectorXd b;
     PriorAndConstraintRows(pt, &A, &b);
@@ -637,6 +637,10 @@ class BatchSolve {
     mo.estimate_noise = {opt_.estimate_noise};
     mo.progress = [this](const std::string& s) { Say(s); };
     if (opt_.fraction) mo.fraction = [this](double f) { opt_.fraction(0.15 + 0.75 * f); };
+    // The steps form the considered parameters' columns too: the consider
+    // term reads them at the minimum (no reduction by every column after).
+    mo.also_formed = consider_;
+    mo.full_information = false;
     BatchMinimizer minimizer(*objective_, est_, mo);
     MinimizerSummary summary;
     pt_ = minimizer.Minimize(theta0_, {noise0_}, &summary);
@@ -721,13 +725,22 @@ class BatchSolve {
     // The minimum's blocks, narrowed in place: the covariance is their last use.
     std::vector<ProcessBlock> pb = std::move(red.process_blocks);
     std::vector<MeasurementBlock> mb = std::move(red.measurement_blocks);
+    // Each estimated parameter's column in the blocks (formed by the
+    // estimated and considered ones: Reduce's block_columns).
+    std::vector<int> at(est_.size());
+    for (std::size_t k = 0; k < est_.size(); ++k) {
+      const std::vector<int>& cols = red.block_columns;
+      at[k] = cols.empty() ? est_[k]
+                           : static_cast<int>(std::lower_bound(cols.begin(), cols.end(), est_[k]) -
+                                              cols.begin());
+    }
     for (std::size_t e = 0; e < E; ++e) {
       Eigen::MatrixXd N(6, est_.size());
-      for (std::size_t k = 0; k < est_.size(); ++k) N.col(k) = mb[e].N.col(est_[k]);
+      for (std::size_t k = 0; k < est_.size(); ++k) N.col(k) = mb[e].N.col(at[k]);
       mb[e].N = N;
       if (e + 1 < E) {
         Eigen::MatrixXd Ce(6, est_.size());
-        for (std::size_t k = 0; k < est_.size(); ++k) Ce.col(k) = pb[e].C.col(est_[k]);
+        for (std::size_t k = 0; k < est_.size(); ++k) Ce.col(k) = pb[e].C.col(at[k]);
         pb[e].C = Ce;
         C[e] = Ce;
       }

@@ -307,8 +307,9 @@ struct BatchResult {
   // the consider term is S P S^T. Empty without consider parameters.
   Eigen::MatrixXd cov_given_consider, consider_sensitivity, consider_cov;
   // The Gauss-Newton information of the data and the constraints at the
-  // solution (n x n, SI, every parameter's column, no priors): what the
-  // consider term and the loop's separability test are read from.
+  // solution (n x n, SI, no priors), by the estimated and considered
+  // parameters (zero in the held ones' rows and columns): what the consider
+  // term is read from.
   Eigen::MatrixXd information;
   double hac_bandwidth_epochs = 0.0;  // the Bartlett bandwidth used, epochs
   bool hac_kernel_bias_corrected = false;

@@ -207,7 +207,7 @@ TEST(HoldDecision, EstimatesWhatTheRunDeterminesAndNamesTheRest) {
 
 // The decision reads the information of all the samples, at the point the
 // thinned scale-and-offset steps found, of the readings the model predicts
-// there (SampleSeries::predicted_readings). Thinned, the increments'
+// there (SampleSeries::readings). Thinned, the increments'
 // quadrature changes it (here by a few per cent on every parameter; on the
 // real pitch run by 20x for Ky, which then was considered instead of held).
 TEST(HoldDecision, IsTheInformationOfAllTheSamples) {
@@ -217,7 +217,7 @@ TEST(HoldDecision, IsTheInformationOfAllTheSamples) {
   const HoldDecision d =
       ChooseHeldParameters(s.run, data, ParameterLayout(), {}, 0.5, {}, 25, 1);
   RunProblem p = BuildRunProblem(s.run, data, ParameterLayout(), 0.5, {});
-  p.series.predicted_readings = true;
+  p.series.readings = SampleSeries::Readings::kPredictedAtRest;
   ASSERT_EQ(d.theta.size(), p.n);
   const RunReduction red = Reduce(p, EvaluatePass(p, d.theta, true, 1),
                                   WeightsPass(p, p.prior.mean, 1), p.noise_mV, 1);
@@ -285,12 +285,27 @@ TEST(RunReduction, BySomeColumnsIsTheWholeOnesPart) {
           << i;
       if (part != ThetaPart::kGradientAndInformation) continue;
       ASSERT_EQ(some.information.rows(), p.n);
-      EXPECT_TRUE(some.process_blocks.empty());
       for (int j = 0; j < p.n; ++j) {
         const bool both = in && std::find(cols.begin(), cols.end(), j) != cols.end();
         EXPECT_NEAR(some.information(i, j), both ? whole.information(i, j) : 0.0,
                     1e-9 * std::sqrt(whole.information(i, i) * whole.information(j, j)))
             << i << " " << j;
+      }
+    }
+    if (part != ThetaPart::kGradientAndInformation) continue;
+    // The blocks by those columns (a fit's covariance reads them at its minimum).
+    ASSERT_EQ(some.block_columns, cols);
+    ASSERT_EQ(some.measurement_blocks.size(), whole.measurement_blocks.size());
+    ASSERT_EQ(some.process_blocks.size(), whole.process_blocks.size());
+    for (std::size_t e = 0; e < whole.measurement_blocks.size(); ++e) {
+      for (std::size_t c = 0; c < cols.size(); ++c) {
+        const Eigen::VectorXd n_whole = whole.measurement_blocks[e].N.col(cols[c]);
+        EXPECT_LE((some.measurement_blocks[e].N.col(c) - n_whole).norm(), 1e-12 * n_whole.norm())
+            << e << " " << c;
+        if (e + 1 == whole.measurement_blocks.size()) continue;
+        const Eigen::VectorXd c_whole = whole.process_blocks[e].C.col(cols[c]);
+        EXPECT_LE((some.process_blocks[e].C.col(c) - c_whole).norm(), 1e-12 * c_whole.norm())
+            << e << " " << c;
       }
     }
   }

@@ -23,10 +23,12 @@ BenchAngles<double> WithoutDerivatives(const RunData& run, std::size_t k) {
 
 Eigen::Vector3d SampleSeries::PredictedReadings_mV(const ModelConfig& cfg, const double* theta,
                                                   const BenchAngles<double>& recorded,
-                                                  const SampleContext& ctx) {
-  BenchAngles<double> at_rest = recorded;
-  for (AxisState<double>& a : at_rest.axis) a.rate = a.accel = 0.0;
-  return PredictReadings_mV<double>(cfg, theta, BenchAnglesFromRecorded<double>(cfg, theta, at_rest),
+                                                  const SampleContext& ctx, bool at_rest) {
+  BenchAngles<double> b = recorded;
+  if (at_rest) {
+    for (AxisState<double>& a : b.axis) a.rate = a.accel = 0.0;
+  }
+  return PredictReadings_mV<double>(cfg, theta, BenchAnglesFromRecorded<double>(cfg, theta, b),
                                     ctx);
 }
 

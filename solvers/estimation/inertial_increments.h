@@ -60,26 +60,32 @@ struct SampleSeries {
   // At each of `at` (or every sample); shared by the problems of one run's
   // layouts (SharedRunWork, run_problem.h).
   std::shared_ptr<const std::vector<BenchAngles<double>>> derivatives;
-  // The readings the model predicts at the pass's theta for each sample's
-  // recorded attitude at rest (PredictReadings_mV, rates and accelerations 0)
-  // instead of the recorded ones: the Jacobian's regressors without the
-  // reading noise, for the information of what the run determines
-  // (ChooseHeldParameters). Off in every fit.
-  bool predicted_readings = false;
+  // Which readings a pass reads: the run's (every fit), or the ones the
+  // model predicts at the pass's theta (PredictReadings_mV) -- the
+  // Jacobian's regressors without the reading noise, for the information of
+  // what a run determines -- for each sample's recorded attitude at rest
+  // (rates and accelerations 0: the fit's decision, ChooseHeldParameters,
+  // whose samples carry no rates between epochs), or for its recorded motion
+  // (the angles' derivatives at every sample, `at` empty: observability's
+  // Fisher information, the lever arm's accelerations in the readings too).
+  enum class Readings { kRecorded, kPredictedAtRest, kPredicted };
+  Readings readings = Readings::kRecorded;
 
   // Sample k's recorded angles with their rates and accelerations.
   BenchAngles<double> Recorded(std::size_t k) const;
-  // Sample k's readings [mV]: the run's, or with predicted_readings the
-  // model's at theta for its recorded attitude.
+  // Sample k's readings [mV] (`readings`).
   Eigen::Vector3d Readings_mV(const ModelConfig& cfg, const double* theta, std::size_t k,
                               const BenchAngles<double>& recorded, const SampleContext& ctx) const {
-    return predicted_readings ? PredictedReadings_mV(cfg, theta, recorded, ctx)
-                              : run->readings_mV(k);
+    return readings == Readings::kRecorded
+               ? run->readings_mV(k)
+               : PredictedReadings_mV(cfg, theta, recorded, ctx,
+                                      readings == Readings::kPredictedAtRest);
   }
-  // The model's readings at theta for the recorded attitude at rest.
+  // The model's readings at theta for the recorded attitude, at rest or in
+  // its recorded motion.
   static Eigen::Vector3d PredictedReadings_mV(const ModelConfig& cfg, const double* theta,
                                               const BenchAngles<double>& recorded,
-                                              const SampleContext& ctx);
+                                              const SampleContext& ctx, bool at_rest);
 
   // Samples k0, k0 + 1, ... in turn (Recorded without a search per sample).
   class Walk {

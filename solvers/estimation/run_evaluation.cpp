@@ -332,7 +332,10 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
     out.measurement_blocks = std::move(mb);
     return out;
   }
-  // Over the columns formed; zero elsewhere, and no blocks kept.
+  // Over the columns formed; zero elsewhere, the blocks by those columns.
+  out.process_blocks = std::move(pb);
+  out.measurement_blocks = std::move(mb);
+  out.block_columns = col;
   out.information = Eigen::MatrixXd::Zero(n, n);
   out.information_scale = Eigen::VectorXd::Zero(n);
   for (int a = 0; a < nc; ++a) {

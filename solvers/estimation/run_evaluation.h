@@ -133,6 +133,9 @@ struct RunReduction {
   // the epoch scores (HAC) and the expected autocorrelation; with the information only.
   std::vector<ProcessBlock> process_blocks;
   std::vector<MeasurementBlock> measurement_blocks;
+  // The blocks' columns (indices into theta) when the theta part was formed
+  // by some of them (Reduce's columns); empty: all of them, in order.
+  std::vector<int> block_columns;
 };
 
 // What a reduction forms beyond the cost, the states and the noise's part
@@ -144,8 +147,8 @@ enum class ThetaPart { kNone, kGradient, kGradientAndInformation };
 // (above). The scale factors' part of the process weight is always pass's
 // theta. The theta part needs the pass's Jacobian.
 // columns: the theta part by these parameters only (indices into theta; the
-// gradient and information are zero in the others, and no blocks are kept),
-// or null for all of them.
+// gradient and information are zero in the others, and the blocks hold
+// these columns: block_columns), or null for all of them.
 RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& weights,
                     const Eigen::Vector3d& noise_mV, int threads,
                     ThetaPart theta_part = ThetaPart::kGradientAndInformation,

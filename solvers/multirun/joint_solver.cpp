@@ -207,7 +207,7 @@ std::vector<int> HeldByRule(const JointLayout& jl, const std::vector<RunProblem>
   // The information of the readings the model predicts (a single run's
   // decision reads the same: ChooseHeldParameters).
   std::vector<RunProblem> predicted = problems;
-  for (RunProblem& p : predicted) p.series.predicted_readings = true;
+  for (RunProblem& p : predicted) p.series.readings = SampleSeries::Readings::kPredictedAtRest;
   const BatchObjective objective = MakeJointObjective(jl, predicted, threads);
   std::vector<Eigen::Vector3d> noise;
   for (const RunProblem& p : problems) noise.push_back(p.noise_mV);
