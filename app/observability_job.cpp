@@ -179,8 +179,20 @@ ObservabilityOutcome ObservabilityRun(const ObservabilitySettings& s, const Obse
   // 1 kHz; a 25-min real run at 100 Hz): loading the run 64 % / 29 %,
   // building the problem 8 % / 1 %, the Fisher information 28 % / 70 %.
   Stage(session, "building the problem", 0.35);
-  const RunProblem p =
+  RunProblem p =
       BuildRunProblem(in.run, in.data, in.layout, s.epoch_s, derivatives, nullptr, s.threads);
+  // The Fisher information of a recorded run is that of the readings the
+  // model predicts at theta for its recorded motion (SampleSeries::readings;
+  // the angles' derivatives at every sample): the recorded readings' noise
+  // is no information (in the Jacobian it would be taken for the specific
+  // force a parameter multiplies). A scenario's readings are simulated
+  // without noise: its own.
+  if (!in.scenario) {
+    SharedRunWork every_sample;
+    p.series.at.clear();
+    p.series.derivatives = every_sample.Derivatives(in.data, derivatives, {}, s.threads);
+    p.series.readings = SampleSeries::Readings::kPredicted;
+  }
   Stage(session, "Fisher information", 0.4);
   o.result = AnalyseObservability(in.run, p, theta, oo);
   if (s.could_hide) {
