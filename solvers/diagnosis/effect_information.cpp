@@ -191,8 +191,9 @@ class CandidateAnalysis {
         options_.shared ? options_.shared->Weights(accel, threads)
                         : std::make_shared<const RunPass>(
                               WeightsPass(accel, accel.prior.mean, threads));
-    const RunReduction red = Reduce(accel, EvaluatePass(accel, theta_accel, true, threads),
-                                    *weights, accel.noise_mV, threads);
+    const RunReduction red =
+        Reduce(accel, EvaluatePass(accel, theta_accel, true, threads), *weights, accel.noise_mV,
+               threads, ThetaPart::kGradientAndInformationAtFixedNoise);
     const int nf = full_.size();
     I_ = Eigen::MatrixXd::Zero(nf, nf);
     g_ = Eigen::VectorXd::Zero(nf);

@@ -377,7 +377,8 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
     if (shared) weights.push_back(shared->Weights(pt, threads));
     BatchObjective all({LinkedRun{&pt, {}, {}}}, A, b, pt.prior.mean, threads, weights);
     all.HoldGyroNoise();
-    const BatchObjective::Point at = all.Evaluate(d.theta, {pt.noise_mV}, true);
+    const BatchObjective::Point at = all.Evaluate(d.theta, {pt.noise_mV}, true,
+                                                  ThetaPart::kGradientAndInformationAtFixedNoise);
     const Eigen::MatrixXd info_si = at.data_information + ConstraintInformation(pt);
     const Eigen::VectorXd& s = pt.prior.sigma;
     d.information = s.asDiagonal() * info_si * s.asDiagonal();

@@ -73,7 +73,9 @@ Eigen::MatrixXd DataInformation(const RunProblem& p, const Eigen::VectorXd& thet
   // The noise weights' shape at the nominal values, as the fit's (run_evaluation.h).
   const RunPass weights = WeightsPass(p, p.prior.mean, threads);
   const RunPass pass = EvaluatePass(p, theta, true, threads);
-  Eigen::MatrixXd info = Reduce(p, pass, weights, p.noise_mV, threads).information;
+  Eigen::MatrixXd info =
+      Reduce(p, pass, weights, p.noise_mV, threads, ThetaPart::kGradientAndInformationAtFixedNoise)
+          .information;
   if (RunHasGyro(p)) {  // the gyro's increments at its noise (gyro_term.h)
     // The information only: no gradient terms of the weights, no scores.
     info += ReduceGyro(EvaluateGyroPass(p, theta, true, threads), p.gyro_noise_rad_s, 1.0,

@@ -152,8 +152,11 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
   std::vector<Parts> comp(E - 1);
   // The noise's pseudo-residuals p_i (RunReduction::gradient_by_log_noise),
   // with the information only.
-  const bool information = pass.with_jacobian && theta_part == ThetaPart::kGradientAndInformation;
-  std::vector<std::array<Vec6, 3>> pseudo(information ? E - 1 : 0);
+  const bool information =
+      pass.with_jacobian && (theta_part == ThetaPart::kGradientAndInformation ||
+                             theta_part == ThetaPart::kGradientAndInformationAtFixedNoise);
+  const bool coupling = information && theta_part == ThetaPart::kGradientAndInformation;
+  std::vector<std::array<Vec6, 3>> pseudo(coupling ? E - 1 : 0);
   ParallelFor(E - 1, threads, [&](std::size_t e) {
     const ProcessNoise& qn = *wp.process[e].noise;
     // Q's whitening from step 1: Q^-1 v = LQ^T LQ v (products of the whole
@@ -180,7 +183,7 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
       QinvQiw[i] = solve_q(QiQinv_r[i]);
       c.q[i] = w.dot(QiQinv_r[i]);
       c.N[i] = B[i].trace();
-      if (information) pseudo[e][i] = -2.0 * (L * QiQinv_r[i]);
+      if (coupling) pseudo[e][i] = -2.0 * (L * QiQinv_r[i]);
     }
     // Both symmetric: q_ij = (Q_i w)^T Q^-1 (Q_j w), tr(B_i B_j) = sum B_i o B_j.
     for (int i = 0; i < 3; ++i) {
@@ -229,7 +232,7 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
   };
   std::vector<Eigen::VectorXd> share_m, share_p;  // without the information: N^T r0, C^T r0
   // With the information: each K_i column's part from the weights' derivative.
-  std::vector<std::array<Vec6, 3>> k_weight(information ? E - 1 : 0);
+  std::vector<std::array<Vec6, 3>> k_weight(coupling ? E - 1 : 0);
   if (!information) {
     share_m.resize(E);
     share_p.resize(E);
@@ -258,7 +261,7 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
       const Mat6 X_lower = X.triangularView<Eigen::Lower>();
       const Vec6 dLr = -(X_lower * pb[e].r0);
       pb[e].C.col(k_col[i]) += dLr * (-2.0 * var[i] / theta[kKx + i]);
-      if (information) k_weight[e][i] = dLr * (-2.0 * var[i] / theta[kKx + i]);
+      if (coupling) k_weight[e][i] = dLr * (-2.0 * var[i] / theta[kKx + i]);
     }
     if (!information) {
       share_p[e].noalias() = pb[e].C.transpose() * pb[e].r0;
@@ -286,9 +289,9 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
   // columns are the pseudo-residuals p_i and the K_i columns' weights' part
   // (whose derivative by the noise is added exactly below).
   SchurProbe probe;
-  probe.columns.resize(E - 1);
+  probe.columns.resize(coupling ? E - 1 : 0);
   Eigen::Matrix3d pp = Eigen::Matrix3d::Zero();
-  for (std::size_t e = 0; e + 1 < E; ++e) {
+  for (std::size_t e = 0; coupling && e + 1 < E; ++e) {
     Eigen::Matrix<double, 6, Eigen::Dynamic>& c = probe.columns[e];
     c.setZero(6, 6);
     for (int i = 0; i < 3; ++i) {
@@ -299,32 +302,34 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
   }
   Eigen::VectorXd scale;
   Eigen::MatrixXd info = ThetaInformationBySchur(pb, mb, Eigen::MatrixXd::Zero(0, nc), &scale,
-                                                 threads, &probe);
+                                                 threads, coupling ? &probe : nullptr);
   // Without an interval or a column the elimination formed nothing.
   const bool probed = probe.self.rows() == 6 && probe.cross.rows() == nc && nc > 0;
-  Eigen::MatrixXd by_noise = Eigen::MatrixXd::Zero(nc, 3);
-  if (probed) {
-    out.channel_state_coupling = pp - probe.self.topLeftCorner<3, 3>();
-    by_noise = probe.cross.leftCols<3>();
+  if (coupling) {
+    Eigen::MatrixXd by_noise = Eigen::MatrixXd::Zero(nc, 3);
+    if (probed) {
+      out.channel_state_coupling = pp - probe.self.topLeftCorner<3, 3>();
+      by_noise = probe.cross.leftCols<3>();
+      for (int i = 0; i < 3; ++i) {
+        if (k_col[i] >= 0) by_noise.row(k_col[i]) -= probe.self.block<1, 3>(3 + i, 0);
+      }
+    }
+    // The weights' part of d cost / d K_i is q_i / K_i (d var_i / d K_i =
+    // -2 var_i / K_i); by log sigma_j, the states solved for again, it moves
+    // by (2 q_i d_ij - 4 qq_ij + p_i^T P_x p_j) / K_i (the noise's Hessian's
+    // terms, NoiseHessian).
     for (int i = 0; i < 3; ++i) {
-      if (k_col[i] >= 0) by_noise.row(k_col[i]) -= probe.self.block<1, 3>(3 + i, 0);
+      if (k_col[i] < 0) continue;
+      for (int j = 0; j < 3; ++j) {
+        by_noise(k_col[i], j) += ((i == j ? 2.0 * out.channel_quadratic[i] : 0.0) -
+                                  4.0 * out.channel_cross_quadratic(i, j) +
+                                  out.channel_state_coupling(i, j)) /
+                                 theta[kKx + i];
+      }
     }
+    out.gradient_by_log_noise = Eigen::MatrixXd::Zero(n, 3);
+    for (int c = 0; c < nc; ++c) out.gradient_by_log_noise.row(col[c]) = by_noise.row(c);
   }
-  // The weights' part of d cost / d K_i is q_i / K_i (d var_i / d K_i =
-  // -2 var_i / K_i); by log sigma_j, the states solved for again, it moves
-  // by (2 q_i d_ij - 4 qq_ij + p_i^T P_x p_j) / K_i (the noise's Hessian's
-  // terms, NoiseHessian).
-  for (int i = 0; i < 3; ++i) {
-    if (k_col[i] < 0) continue;
-    for (int j = 0; j < 3; ++j) {
-      by_noise(k_col[i], j) += ((i == j ? 2.0 * out.channel_quadratic[i] : 0.0) -
-                                4.0 * out.channel_cross_quadratic(i, j) +
-                                out.channel_state_coupling(i, j)) /
-                               theta[kKx + i];
-    }
-  }
-  out.gradient_by_log_noise = Eigen::MatrixXd::Zero(n, 3);
-  for (int c = 0; c < nc; ++c) out.gradient_by_log_noise.row(col[c]) = by_noise.row(c);
   if (all_columns) {
     out.information = std::move(info);
     out.information_scale = std::move(scale);

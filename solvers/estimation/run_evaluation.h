@@ -139,8 +139,17 @@ struct RunReduction {
 };
 
 // What a reduction forms beyond the cost, the states and the noise's part
-// (all a noise estimate needs): the gradient in theta, and the information.
-enum class ThetaPart { kNone, kGradient, kGradientAndInformation };
+// (all a noise estimate needs): the gradient in theta, and the information
+// with the noise's coupling to theta (gradient_by_log_noise and
+// channel_state_coupling: a fit that estimates the noise needs them) or
+// without it (the information at a fixed noise: the decision, the score
+// tests, observability).
+enum class ThetaPart {
+  kNone,
+  kGradient,
+  kGradientAndInformation,
+  kGradientAndInformationAtFixedNoise
+};
 
 // weights: the WeightsPass whose noise weights' shape (each channel's
 // sensitive axes in L, the angle noise through B2) whitens the residuals

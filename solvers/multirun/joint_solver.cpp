@@ -211,7 +211,8 @@ std::vector<int> HeldByRule(const JointLayout& jl, const std::vector<RunProblem>
   const BatchObjective objective = MakeJointObjective(jl, predicted, threads);
   std::vector<Eigen::Vector3d> noise;
   for (const RunProblem& p : problems) noise.push_back(p.noise_mV);
-  BatchObjective::Point pt = objective.Evaluate(at, noise, true);
+  BatchObjective::Point pt =
+      objective.Evaluate(at, noise, true, ThetaPart::kGradientAndInformationAtFixedNoise);
   const Eigen::VectorXd sigma = jl.PriorSigma();
   // Data and constraint information in prior units.
   const Eigen::MatrixXd info =
