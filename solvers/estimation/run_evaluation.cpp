@@ -151,7 +151,7 @@ RunReduction Reduce(const RunProblem& p, const RunPass& pass, const RunPass& wei
   };
   std::vector<Parts> comp(E - 1);
   // The noise's pseudo-residuals p_i (RunReduction::gradient_by_log_noise),
-  // with the information only.
+  // with the noise's coupling only.
   const bool information =
       pass.with_jacobian && (theta_part == ThetaPart::kGradientAndInformation ||
                              theta_part == ThetaPart::kGradientAndInformationAtFixedNoise);

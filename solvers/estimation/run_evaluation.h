@@ -112,13 +112,15 @@ struct RunReduction {
   // (with the information: NoiseHessian).
   Eigen::Matrix3d channel_cross_quadratic = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d channel_cross_trace = Eigen::Matrix3d::Zero();
-  // With the information: the states' response to the noise, sum p_i^T P_x
+  // With the information and the noise's coupling (ThetaPart::
+  // kGradientAndInformation): the states' response to the noise, sum p_i^T P_x
   // p_j (below), which the noise's Hessian loses when the states are solved
   // for again at each noise (zero without: the noise's Newton steps at
   // fixed theta, MaximiseNoise, take the Hessian at fixed states, on the
   // real runs within 1e-5 of it).
   Eigen::Matrix3d channel_state_coupling = Eigen::Matrix3d::Zero();
-  // With the information: d gradient / d log sigma_i (n x 3), the states
+  // With the information and the noise's coupling: d gradient / d log
+  // sigma_i (n x 3; empty at a fixed noise), the states
   // solved for again at each noise: the coupling of theta and the noise in
   // -log L's Hessian. With Q_i = dQ/ds_i = 2 var_i W_i it is
   // J~_theta^T (I - P_x) p_i, p_i = -L Q_i Q^-1 r per interval (L the
