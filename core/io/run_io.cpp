@@ -278,7 +278,9 @@ RunData LoadRunData(const RunDescription& run, RunWarnings* warnings, int thread
   const double(&scale_of_imu_axis)[3] = nominal.scale;
   const double(&bias_of_imu_axis)[3] = nominal.bias;
   double range_of_imu_axis[3];
-  for (int j = 0; j < 3; ++j) range_of_imu_axis[j] = scale_of_imu_axis[j] + std::abs(bias_of_imu_axis[j]);
+  for (int j = 0; j < 3; ++j) {
+    range_of_imu_axis[j] = scale_of_imu_axis[j] + std::abs(bias_of_imu_axis[j]);
+  }
   CheckSamplesPlausible(table, {&t, {&lambda[0], &lambda[1]}, {&w[0], &w[1], &w[2]},
                                 {&rate[0], &rate[1]}},
                         scale_of_imu_axis, bias_of_imu_axis);

@@ -26,10 +26,9 @@ using ThetaRows3 = Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::ColMajor, 3, 
 Eigen::Map<Eigen::Vector3d> Col3(Eigen::Ref<Eigen::MatrixXd>& J, int c) {
   return Eigen::Map<Eigen::Vector3d>(J.data() + c * J.outerStride());
 }
-Eigen::Map<Eigen::Matrix3d, 0, Eigen::OuterStride<>> Cols3(Eigen::Ref<Eigen::MatrixXd>& J,
-                                                            int c) {
-  return Eigen::Map<Eigen::Matrix3d, 0, Eigen::OuterStride<>>(J.data() + c * J.outerStride(),
-                                                              Eigen::OuterStride<>(J.outerStride()));
+using Map3x3 = Eigen::Map<Eigen::Matrix3d, 0, Eigen::OuterStride<>>;
+Map3x3 Cols3(Eigen::Ref<Eigen::MatrixXd>& J, int c) {
+  return Map3x3(J.data() + c * J.outerStride(), Eigen::OuterStride<>(J.outerStride()));
 }
 
 // [v x]

@@ -157,7 +157,8 @@ class BatchMinimizer {
 
   const BatchObjective& objective_;
   std::vector<int> free_;
-  std::vector<int> formed_;  // free_ and options_.also_formed, sorted: what a step's reductions form
+  // free_ and options_.also_formed, sorted: what a step's reductions form.
+  std::vector<int> formed_;
   MinimizerOptions options_;
   std::vector<int> noisy_;      // the runs whose noise is estimated
   std::vector<double> rho_;     // their restricted-likelihood share (run_evaluation.h)

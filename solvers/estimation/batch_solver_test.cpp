@@ -594,8 +594,8 @@ TEST(HoldDecision, TheZeroOfAStillOuterAxisIsTheInnerAxisTilt) {
   EXPECT_EQ(std::find(d.held.begin(), d.held.end(), "dtheta_c"), d.held.end());
   const BatchResult r = SolveBatch(s.run, data, ParameterLayout(), {});
   ASSERT_TRUE(IsEstimated(r, "dtheta_c"));
-  const double z =
-      (r.estimate.theta[kDthetaC] - s.truth[kDthetaC]) / std::sqrt(r.estimate.cov(kDthetaC, kDthetaC));
+  const double z = (r.estimate.theta[kDthetaC] - s.truth[kDthetaC]) /
+                   std::sqrt(r.estimate.cov(kDthetaC, kDthetaC));
   EXPECT_LT(std::abs(z), 4.0) << r.estimate.theta[kDthetaC] << " against " << s.truth[kDthetaC];
 }
 
