@@ -187,12 +187,7 @@ ObservabilityOutcome ObservabilityRun(const ObservabilitySettings& s, const Obse
   // is no information (in the Jacobian it would be taken for the specific
   // force a parameter multiplies). A scenario's readings are simulated
   // without noise: its own.
-  if (!in.scenario) {
-    SharedRunWork every_sample;
-    p.series.at.clear();
-    p.series.derivatives = every_sample.Derivatives(in.data, derivatives, {}, s.threads);
-    p.series.readings = SampleSeries::Readings::kPredicted;
-  }
+  if (!in.scenario) ReadPredictedReadingsInMotion(&p, in.data, derivatives, s.threads);
   Stage(session, "Fisher information", 0.4);
   o.result = AnalyseObservability(in.run, p, theta, oo);
   if (s.could_hide) {

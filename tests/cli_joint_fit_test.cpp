@@ -141,6 +141,18 @@ TEST_F(JointFitCli, BadInputIsOneLineNamingTheRun) {
   const std::string runs = WriteText("runs.yaml", "runs: [a/run.yaml, b/run.yaml]\nper_run: [W0q]\n");
   ExpectError("fit " + runs + " -o " + Path("out.json"),
               runs + ": per_run: 'W0q' is not a parameter (see `triadcal params`)");
+  // An effect's parameter without the effect (the roll-pitch example's runs
+  // file lists thermal_drift's; its run.sh fits with --effects).
+  const std::string drift =
+      WriteText("drift.yaml", "runs: [a/run.yaml, b/run.yaml]\nper_run: [thermal_drift.rate_x]\n");
+  ExpectError("observability " + drift + " -o " + Path("out.json"),
+              drift + ": per_run: 'thermal_drift.rate_x' is a parameter of the effect "
+                      "thermal_drift, which this command does not estimate (add --effects "
+                      "thermal_drift)");
+  ExpectError("fit " + drift + " --effects angle_latency -o " + Path("out.json"),
+              drift + ": per_run: 'thermal_drift.rate_x' is a parameter of the effect "
+                      "thermal_drift, which this command does not estimate (add --effects "
+                      "thermal_drift)");
   const std::string twice = WriteText("twice.yaml", "runs: [a/run.yaml, {run: a/run.yaml, name: again}]\n");
   ExpectError("fit " + twice + " -o " + Path("out.json"),
               twice + ": runs[1]: " + Path("a/run.yaml") + " is listed twice (also " + twice +

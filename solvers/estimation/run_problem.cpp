@@ -132,6 +132,14 @@ SharedRunWork::Series SharedRunWork::Derivatives(const RunData& data,
   return e.series;
 }
 
+void ReadPredictedReadingsInMotion(RunProblem* p, const RunData& data,
+                                   const AngleDerivativeOptions& derivatives, int threads) {
+  SharedRunWork every_sample;
+  p->series.at.clear();
+  p->series.derivatives = every_sample.Derivatives(data, derivatives, {}, threads);
+  p->series.readings = SampleSeries::Readings::kPredicted;
+}
+
 RunProblem BuildRunProblem(const RunDescription& run, const RunData& data,
                            const ParameterLayout& layout, double epoch_s,
                            const AngleDerivativeOptions& derivatives, SharedRunWork* shared,

@@ -119,6 +119,14 @@ RunProblem BuildRunProblem(const RunDescription& run, const RunData& data,
                            const AngleDerivativeOptions& derivatives,
                            SharedRunWork* shared = nullptr, int threads = 0);
 
+// p read as a recorded run's Fisher information needs (observability, single
+// or joint): the readings the model predicts at theta for each sample's
+// recorded motion (SampleSeries::Readings::kPredicted, the angles' derivatives
+// at every sample of `data`, p's run), not the recorded readings, whose noise
+// the Jacobian would take for the specific force a parameter multiplies.
+void ReadPredictedReadingsInMotion(RunProblem* p, const RunData& data,
+                                   const AngleDerivativeOptions& derivatives, int threads = 0);
+
 // Sample indices of the measurement epochs: the first sample, then the first
 // sample at least epoch_s after the previous epoch, and the last sample.
 std::vector<std::size_t> ChooseEpochs(const RunData& data, double epoch_s);

@@ -5,6 +5,7 @@
 #include <set>
 
 #include "core/io/column_mapping.h"
+#include "core/model/effects.h"
 #include "core/model/errors.h"
 #include "core/model/mounting.h"
 #include "core/model/priors.h"
@@ -72,6 +73,21 @@ JointLayout::JointLayout(const std::vector<JointRun>& runs, const ParameterLayou
     }
   }
 
+  // A name the layout does not have: a catalogue effect's parameter whose
+  // effect this command does not estimate, or no parameter at all.
+  auto unknown = [&](const std::string& key, const std::string& name) {
+    const std::size_t dot = name.find('.');
+    for (const EffectSpec& e : EffectCatalogue()) {
+      if (dot == std::string::npos || name.compare(0, dot, e.name) != 0) continue;
+      for (const ParamSpec& p : e.params) {
+        if (name.compare(dot + 1, std::string::npos, p.name) == 0) {
+          fail(key + ": '" + name + "' is a parameter of the effect " + e.name +
+               ", which this command does not estimate (add --effects " + e.name + ")");
+        }
+      }
+    }
+    fail(key + ": '" + name + "' is not a parameter (see `triadcal params`)");
+  };
   // Which parameters are shared and which belong to each run.
   std::vector<bool> per_run(n, false);
   for (int i = 0; i < n; ++i) per_run[i] = !IsTriadParameter(layout, i);
@@ -82,7 +98,7 @@ JointLayout::JointLayout(const std::vector<JointRun>& runs, const ParameterLayou
       continue;
     }
     const int i = layout.IndexOf(name);
-    if (i < 0) fail("per_run: '" + name + "' is not a parameter (see `triadcal params`)");
+    if (i < 0) unknown("per_run", name);
     if (!IsTriadParameter(layout, i)) {
       fail("per_run: '" + name + "' belongs to each run already (bench set-up and angle- or "
            "geometry-stage effects are per run unless listed under shared)");
@@ -91,7 +107,7 @@ JointLayout::JointLayout(const std::vector<JointRun>& runs, const ParameterLayou
   }
   for (const std::string& name : spec.shared) {
     const int i = layout.IndexOf(name);
-    if (i < 0) fail("shared: '" + name + "' is not a parameter (see `triadcal params`)");
+    if (i < 0) unknown("shared", name);
     if (IsTriadParameter(layout, i)) {
       fail("shared: '" + name + "' is a triad parameter, shared already (list it under "
            "per_run to give each run its own)");
