@@ -408,6 +408,9 @@ class Loop {
   }
   // The round's score analysis at the current fit, and its threshold.
   void ScoreCandidates();
+  // The score analysis of candidates_ at the current fit (info_), the ones
+  // this run cannot test at all taken from their first analysis.
+  void AnalyseAtCurrentFit();
   // Which candidates the round refits (RefitIt), and their progress shares.
   void PlanRefits();
   // The score's criteria for a refit (RefitIt); whether c's one-step
@@ -467,6 +470,18 @@ class Loop {
   ParameterLayout layout_;
   BatchResult fit_;
   EffectInformation info_;     // the score analysis at the current fit
+  // Candidates with no component the run can test (none supported and
+  // separable: not supported by its motion, not separable from the model's
+  // parameters, or held for the run's data), as their first score analysis
+  // found them. The motion does not change, and a component the model's
+  // parameters explain still is once the model has grown: they are not
+  // analysed again (real slow roll run: 11 of the 57 columns of each later
+  // round's pass, and its angle stage Jets of 8 slots instead of 1).
+  struct FirstAnalysis {
+    int round;  // of that analysis
+    CandidateInformation information;
+  };
+  std::map<Effect, FirstAnalysis> untestable_;
   bool info_current_ = false;  // computed at `fit_` for the remaining candidates
   double last_threshold_ = 0.0;
 
@@ -527,11 +542,34 @@ bool Loop::RunRound(int round) {
 void Loop::ScoreCandidates() {
   Say("round " + std::to_string(round_) + ": score tests of " + std::to_string(candidates_.size()) +
       " candidates");
-  info_ = AnalyseCandidates(run_, data_, current_, fit_, candidates_, fit_opt_);
+  AnalyseAtCurrentFit();
   info_current_ = true;
   if (round_ == 1) res_.base_gradient_sigma = info_.base_gradient_sigma;
   threshold_ = opt_.alpha / static_cast<double>(candidates_.size());
   last_threshold_ = threshold_;
+}
+
+void Loop::AnalyseAtCurrentFit() {
+  std::vector<Effect> analysed;
+  for (Effect e : candidates_) {
+    if (!untestable_.count(e)) analysed.push_back(e);
+  }
+  info_ = AnalyseCandidates(run_, data_, current_, fit_, analysed, fit_opt_);
+  std::vector<CandidateInformation> all;
+  for (Effect e : candidates_) {
+    const auto known = untestable_.find(e);
+    if (known != untestable_.end()) {
+      all.push_back(known->second.information);
+      continue;
+    }
+    for (CandidateInformation& c : info_.candidates) {
+      if (c.effect != e) continue;
+      if (c.supported.empty()) untestable_.emplace(e, FirstAnalysis{round_, c});
+      all.push_back(std::move(c));
+      break;
+    }
+  }
+  info_.candidates = std::move(all);
 }
 
 void Loop::PlanRefits() {
@@ -668,6 +706,10 @@ bool Loop::Untestable(const CandidateInformation& c, CandidateTest* tp) const {
         t.note += " " + spec.name + "." + spec.params[ns.component].name + " from " + ns.with +
                   " (rho " + FormatNumber(ns.rho) + ")";
       }
+    }
+    const auto known = untestable_.find(c.effect);
+    if (known != untestable_.end() && known->second.round < round_) {
+      t.note += " (round " + std::to_string(known->second.round) + "'s analysis: not analysed again)";
     }
     return true;
   }
@@ -954,7 +996,7 @@ void Loop::CouldHide() {
   if (candidates_.empty()) return;
   if (!info_current_) {
     Say("score analysis at the final fit");
-    info_ = AnalyseCandidates(run_, data_, current_, fit_, candidates_, fit_opt_);
+    AnalyseAtCurrentFit();
     last_threshold_ = opt_.alpha / static_cast<double>(candidates_.size());
   }
   for (const CandidateInformation& c : info_.candidates) {
