@@ -6,18 +6,6 @@
 #include "solvers/estimation/state_space_model.h"
 
 namespace triadcal {
-namespace {
-
-// S^-1 G for the theta columns G (6 x n). With no columns (only the states
-// solved for) it returns the empty result without calling the solve: Eigen's
-// triangular solve reads an empty right-hand side's null data (UBSan).
-template <typename Decomposition>
-Eigen::MatrixXd SolveColumns(const Decomposition& d, const Eigen::MatrixXd& G) {
-  if (G.cols() == 0) return Eigen::MatrixXd(6, 0);
-  return d.solve(G);
-}
-
-}  // namespace
 
 Eigen::MatrixXd ThetaInformationBySchur(const std::vector<ProcessBlock>& process,
                                         const std::vector<MeasurementBlock>& measurement,
@@ -242,21 +230,36 @@ std::vector<Eigen::VectorXd> EpochScores(const std::vector<ProcessBlock>& proces
                                          const std::vector<MeasurementBlock>& measurement) {
   using Mat6 = Eigen::Matrix<double, 6, 6>;
   using Vec6 = Eigen::Matrix<double, 6, 1>;
+  using Rows6 = Eigen::Matrix<double, 6, Eigen::Dynamic>;
   const std::size_t E = measurement.size();
   std::vector<Eigen::VectorXd> scores(E);
   if (E == 0) return scores;
   // State x_e in T_e with x_0..x_{e-1} eliminated: its diagonal block S,
   // theta coupling G and right-hand side h; `done` is b_theta of T_e less what
-  // the eliminated states took.
+  // the eliminated states took. S^-1 as (L^-1)^T L^-1 (S = L L^T, as
+  // ThetaInformationBySchur): G^T S^-1 h = (L^-1 G)^T (L^-1 h). Six-row
+  // blocks formed in place: the recursion is serial, every epoch counts.
   const MeasurementBlock& m0 = measurement[0];
+  const Eigen::Index n = m0.N.cols();
+  if (n == 0) {  // no theta columns: nothing to score
+    for (Eigen::VectorXd& v : scores) v.resize(0);
+    return scores;
+  }
   Mat6 S = m0.M.transpose() * m0.M;
-  Eigen::MatrixXd G = m0.M.transpose() * m0.N;
+  Rows6 G(6, n), Gf(6, n), W(6, n);
+  G.noalias() = m0.M.transpose() * m0.N;
   Vec6 h = m0.M.transpose() * m0.r0;
-  Eigen::VectorXd done = m0.N.transpose() * m0.r0;
-  Eigen::VectorXd F_prev = Eigen::VectorXd::Zero(done.size());
+  Eigen::VectorXd done(n), F(n), F_prev = Eigen::VectorXd::Zero(n);
+  done.noalias() = m0.N.transpose() * m0.r0;
   for (std::size_t e = 0; e < E; ++e) {
     // F_e: x_e solved for within T_e.
-    const Eigen::VectorXd F = done - G.transpose() * Eigen::LDLT<Mat6>(S).solve(h);
+    {
+      const Mat6 Li = LowerInverse(Eigen::LLT<Mat6>(S).matrixLLT());
+      W.noalias() = Li * G;
+      const Vec6 z = Li * h;
+      F = done;
+      F.noalias() -= W.transpose() * z;
+    }
     scores[e] = F - F_prev;
     F_prev = F;
     if (e + 1 == E) break;
@@ -265,17 +268,20 @@ std::vector<Eigen::VectorXd> EpochScores(const std::vector<ProcessBlock>& proces
     const ProcessBlock& p = process[e];
     done.noalias() += p.C.transpose() * p.r0;
     const Mat6 Sf = S + p.A.transpose() * p.A;
-    const Eigen::MatrixXd Gf = G + p.A.transpose() * p.C;
+    Gf = G;
+    Gf.noalias() += p.A.transpose() * p.C;
     const Vec6 hf = h + p.A.transpose() * p.r0;
-    const Eigen::LDLT<Mat6> ldlt(Sf);
-    const Eigen::MatrixXd SiG = SolveColumns(ldlt, Gf);
-    const Vec6 Sih = ldlt.solve(hf);
-    done.noalias() -= Gf.transpose() * Sih;
-    const Mat6 U = p.A.transpose() * p.B;
+    const Mat6 Li = LowerInverse(Eigen::LLT<Mat6>(Sf).matrixLLT());
+    W.noalias() = Li * Gf;
+    const Vec6 z = Li * hf;
+    done.noalias() -= W.transpose() * z;
+    const Mat6 LiU = Li * (p.A.transpose() * p.B);
     const MeasurementBlock& m = measurement[e + 1];
-    S = p.B.transpose() * p.B + m.M.transpose() * m.M - U.transpose() * ldlt.solve(U);
-    G = p.B.transpose() * p.C + m.M.transpose() * m.N - U.transpose() * SiG;
-    h = p.B.transpose() * p.r0 + m.M.transpose() * m.r0 - U.transpose() * Sih;
+    S = p.B.transpose() * p.B + m.M.transpose() * m.M - LiU.transpose() * LiU;
+    G.noalias() = p.B.transpose() * p.C;
+    G.noalias() += m.M.transpose() * m.N;
+    G.noalias() -= LiU.transpose() * W;
+    h = p.B.transpose() * p.r0 + m.M.transpose() * m.r0 - LiU.transpose() * z;
     done.noalias() += m.N.transpose() * m.r0;
   }
   return scores;
