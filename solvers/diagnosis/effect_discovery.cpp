@@ -709,7 +709,8 @@ bool Loop::Untestable(const CandidateInformation& c, CandidateTest* tp) const {
     }
     const auto known = untestable_.find(c.effect);
     if (known != untestable_.end() && known->second.round < round_) {
-      t.note += " (round " + std::to_string(known->second.round) + "'s analysis: not analysed again)";
+      t.note += " (round " + std::to_string(known->second.round) +
+                "'s analysis: not analysed again)";
     }
     return true;
   }
