@@ -554,7 +554,14 @@ void Loop::AnalyseAtCurrentFit() {
   for (Effect e : candidates_) {
     if (!untestable_.count(e)) analysed.push_back(e);
   }
-  info_ = AnalyseCandidates(run_, data_, current_, fit_, analysed, fit_opt_);
+  if (analysed.empty()) {
+    // Every candidate left is one the run cannot test: nothing to linearise
+    // (the last analysis of the real slow roll run, 0.05 s).
+    info_ = EffectInformation{};
+    info_.chi2_per_dof = fit_.chi2_per_dof;
+  } else {
+    info_ = AnalyseCandidates(run_, data_, current_, fit_, analysed, fit_opt_);
+  }
   std::vector<CandidateInformation> all;
   for (Effect e : candidates_) {
     const auto known = untestable_.find(e);
