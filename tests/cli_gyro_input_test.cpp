@@ -242,6 +242,38 @@ TEST_F(CliGyroInput, MonteCarloAndObservabilityCarryTheGyro) {
   EXPECT_LT(o["crb"]["gyro.Kx"].get<double>(), 1e-3);  // prior 0.1: determined
 }
 
+// The point the decision linearises at (the nominal values with the scale
+// factors and zero offsets fitted; `--init nominal` starts there) fits the
+// gyro's zero offsets, not its scale factors: its rate residuals' weights
+// follow them, and with its noise held nothing balances that. A large
+// g-sensitivity left in the residual (the real fast roll run's is -23
+// (deg/s)/g) ran gyro.Ky off to 0.775 (truth 1) with them free.
+TEST_F(CliGyroInput, TheDecisionsPointDoesNotRunOffAlongTheGyroScaleFactors) {
+  const std::string sc = WriteText(
+      "gsens.yaml",
+      "seed: 5\n"
+      "profile: {amplitude_deg: [360, 90], period_s: [30, 12], duration_s: 60, rate_hz: 50}\n"
+      "truth: {Kx: 171.5, Ky: 175.8, Kz: 174.8, W0x: 1504.2, W0y: 1504.2, W0z: 1504.3, "
+      "gyro.Kx: 1.004, gyro.W0x: 2.0, gyro.W0y: -0.5, gyro.W0z: 1.0, gyro.Gyx: -20}\n"
+      "noise: {accel_mV: 0.97, angle_arcsec: 15, gyro_dps: 0.05}\n"
+      "run:\n"
+      "  triad: {scale_mV_per_g: [174, 174, 174], bias_mV: [1500, 1500, 1500]}\n"
+      "  gyro: {noise_dps: 0.05}\n"
+      "  constraints: [{expr: \"dpsi - dlambda2\", value_arcmin: 0, sigma_arcsec: 30}]\n");
+  ASSERT_EQ(Run("simulate " + sc + " -o " + Path("gsens") + " -q").exit_code, 0);
+  const testing_fixtures::CliResult r =
+      Run("fit " + Path("gsens/run.yaml") + " --init nominal -o " + Path("g.json") + " -q");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json start = nlohmann::json::parse(ReadFile(Path("g.json")))["initial"];
+  for (const char* k : {"gyro.Kx", "gyro.Ky", "gyro.Kz"}) {
+    EXPECT_NEAR(start["parameters"][k]["value"].get<double>(), 1.0, 0.01) << k;
+  }
+  // Its zero offsets are fitted (gyro.W0y also takes what the g-sensitivity
+  // leaves along the shaft's gravity).
+  EXPECT_NEAR(start["parameters"]["gyro.W0x"]["value"].get<double>(), 2.0, 0.05);
+  EXPECT_NEAR(start["parameters"]["gyro.W0z"]["value"].get<double>(), 1.0, 0.05);
+}
+
 // diagnose on a run with a gyro (SPEC section 10): every fit of the loop
 // estimates the gyro beside the accelerometer, each state of OUT carries the
 // gyro's noise, verdict and residual, and an undeclared angle latency -- one
