@@ -242,6 +242,21 @@ TEST_F(CliGyroInput, MonteCarloAndObservabilityCarryTheGyro) {
   EXPECT_LT(o["crb"]["gyro.Kx"].get<double>(), 1e-3);  // prior 0.1: determined
 }
 
+// A 60-s paper-like scenario at 50 Hz with a gyro (seed 5, 0.05 deg/s of
+// gyro noise, declared so): the triad's truth, `gyro_truth` added to it,
+// and `effects` (an effects: block, or empty).
+std::string GyroScenario(const std::string& gyro_truth, const std::string& effects) {
+  return "seed: 5\n"
+         "profile: {amplitude_deg: [360, 90], period_s: [30, 12], duration_s: 60, rate_hz: 50}\n"
+         "truth: {Kx: 171.5, Ky: 175.8, Kz: 174.8, W0x: 1504.2, W0y: 1504.2, W0z: 1504.3, " +
+         gyro_truth + "}\n" +
+         "noise: {accel_mV: 0.97, angle_arcsec: 15, gyro_dps: 0.05}\n" + effects +
+         "run:\n"
+         "  triad: {scale_mV_per_g: [174, 174, 174], bias_mV: [1500, 1500, 1500]}\n"
+         "  gyro: {noise_dps: 0.05}\n"
+         "  constraints: [{expr: \"dpsi - dlambda2\", value_arcmin: 0, sigma_arcsec: 30}]\n";
+}
+
 // The point the decision linearises at (the nominal values with the scale
 // factors and zero offsets fitted; `--init nominal` starts there) fits the
 // gyro's zero offsets, not its scale factors: its rate residuals' weights
@@ -251,15 +266,8 @@ TEST_F(CliGyroInput, MonteCarloAndObservabilityCarryTheGyro) {
 TEST_F(CliGyroInput, TheDecisionsPointDoesNotRunOffAlongTheGyroScaleFactors) {
   const std::string sc = WriteText(
       "gsens.yaml",
-      "seed: 5\n"
-      "profile: {amplitude_deg: [360, 90], period_s: [30, 12], duration_s: 60, rate_hz: 50}\n"
-      "truth: {Kx: 171.5, Ky: 175.8, Kz: 174.8, W0x: 1504.2, W0y: 1504.2, W0z: 1504.3, "
-      "gyro.Kx: 1.004, gyro.W0x: 2.0, gyro.W0y: -0.5, gyro.W0z: 1.0, gyro.Gyx: -20}\n"
-      "noise: {accel_mV: 0.97, angle_arcsec: 15, gyro_dps: 0.05}\n"
-      "run:\n"
-      "  triad: {scale_mV_per_g: [174, 174, 174], bias_mV: [1500, 1500, 1500]}\n"
-      "  gyro: {noise_dps: 0.05}\n"
-      "  constraints: [{expr: \"dpsi - dlambda2\", value_arcmin: 0, sigma_arcsec: 30}]\n");
+      GyroScenario("gyro.Kx: 1.004, gyro.W0x: 2.0, gyro.W0y: -0.5, gyro.W0z: 1.0, gyro.Gyx: -20",
+                   ""));
   ASSERT_EQ(Run("simulate " + sc + " -o " + Path("gsens") + " -q").exit_code, 0);
   const testing_fixtures::CliResult r =
       Run("fit " + Path("gsens/run.yaml") + " --init nominal -o " + Path("g.json") + " -q");
@@ -282,18 +290,9 @@ TEST_F(CliGyroInput, TheDecisionsPointDoesNotRunOffAlongTheGyroScaleFactors) {
 // the loop the verdict passes and every gyro parameter the run determines is
 // within 4 sigma of the truth.
 TEST_F(CliGyroInput, DiagnoseCarriesTheGyroAndFindsTheSharedLatency) {
-  const std::string sc = WriteText(
-      "sc.yaml",
-      "seed: 5\n"
-      "profile: {amplitude_deg: [360, 90], period_s: [30, 12], duration_s: 60, rate_hz: 50}\n"
-      "truth: {Kx: 171.5, Ky: 175.8, Kz: 174.8, W0x: 1504.2, W0y: 1504.2, W0z: 1504.3, "
-      "gyro.Kx: 1.004, gyro.W0y: -0.5, gyro.Gxz: 0.05}\n"
-      "noise: {accel_mV: 0.97, angle_arcsec: 15, gyro_dps: 0.05}\n"
-      "effects:\n  angle_latency: {tau_ms: 5.0}\n"
-      "run:\n"
-      "  triad: {scale_mV_per_g: [174, 174, 174], bias_mV: [1500, 1500, 1500]}\n"
-      "  gyro: {noise_dps: 0.05}\n"
-      "  constraints: [{expr: \"dpsi - dlambda2\", value_arcmin: 0, sigma_arcsec: 30}]\n");
+  const std::string sc =
+      WriteText("sc.yaml", GyroScenario("gyro.Kx: 1.004, gyro.W0y: -0.5, gyro.Gxz: 0.05",
+                                        "effects:\n  angle_latency: {tau_ms: 5.0}\n"));
   ASSERT_EQ(Run("simulate " + sc + " -o " + Path("sim") + " -q").exit_code, 0);
   const testing_fixtures::CliResult r =
       Run("diagnose " + Path("sim/run.yaml") + " -o " + Path("d.json") +
