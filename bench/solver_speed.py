@@ -36,7 +36,10 @@ decision, the minimiser's passes over the samples and its reductions, the
 covariance, the rest: from the OUT's time_s) and a PASS/MISS line per target;
 writes DIR/solver_speed.json. Medians over --repeats (default 3) of every
 command timed (filter, fit and diagnose alike: one diagnose of the real slow
-roll run took 1.70 s, five took 1.68-2.08 s, median 1.91 s).
+roll run took 1.70 s, five took 1.68-2.08 s, median 1.91 s), a run's
+commands taken in turn, repeat by repeat, so that a load that drifts during
+the script biases no ratio (run in blocks, slow's diagnose/fit read 2.86 on
+a loaded machine and 3.33 on a quiet one, 2026-11-29).
 """
 import argparse
 import json
@@ -79,12 +82,22 @@ def timed(cmd, ok=(0,)):
             "peak_MB": usage.ru_maxrss / 1024.0, "exit": code}
 
 
-def median_of(cmd, repeats, ok=(0,)):
-    runs = [timed(cmd, ok) for _ in range(repeats)]
+def medians(runs):
     keys = ("wall_s", "cpu_s", "peak_MB")
     out = {k: statistics.median(r[k] for r in runs) for k in keys}
     out["exit"] = runs[-1]["exit"]
     return out
+
+
+def medians_interleaved(cmds, repeats):
+    """[(cmd, ok), ...] run in turn, `repeats` rounds: each command's medians.
+    A ratio of two of them is not biased by a load that drifts between
+    their blocks of repeats."""
+    runs = [[] for _ in cmds]
+    for _ in range(repeats):
+        for i, (cmd, ok) in enumerate(cmds):
+            runs[i].append(timed(cmd, ok))
+    return [medians(r) for r in runs]
 
 
 def target(name, ok, text):
@@ -120,19 +133,23 @@ def print_splits(rows):
 
 def filter_fit_diagnose(a, work, name, run):
     """filter, fit and diagnose (unless --skip-diagnose), each the median of
-    a.repeats, on run: the row, and diagnose's OUT (or None)."""
-    fil = median_of([BIN, "filter", run, "-o", os.path.join(work, name + "_filter.json"),
-                     "--force", "-q"], a.repeats)
+    a.repeats, run in turn (medians_interleaved), on run: the row, and
+    diagnose's OUT (or None)."""
     fit_out = os.path.join(work, name + "_fit.json")
-    fit = median_of([BIN, "fit", run, "-o", fit_out, "--force", "-q"], a.repeats, ok=(0, 4))
+    diag_out = os.path.join(work, name + "_diagnose.json")
+    cmds = [([BIN, "filter", run, "-o", os.path.join(work, name + "_filter.json"), "--force",
+              "-q"], (0,)),
+            ([BIN, "fit", run, "-o", fit_out, "--force", "-q"], (0, 4))]
+    if not a.skip_diagnose:
+        cmds.append(([BIN, "diagnose", run, "-o", diag_out, "--force", "-q"], (0, 4)))
+    timings = medians_interleaved(cmds, a.repeats)
+    fil, fit = timings[0], timings[1]
     fj = json.load(open(fit_out))
     row = {"filter": fil, "fit": fit, "fit_steps": fj["iterations"]["steps"],
            "converged": fj["converged"], "fit_split": split_of(fj, fit)}
     dj = None
     if not a.skip_diagnose:
-        diag_out = os.path.join(work, name + "_diagnose.json")
-        row["diagnose"] = median_of([BIN, "diagnose", run, "-o", diag_out, "--force", "-q"],
-                                    a.repeats, ok=(0, 4))
+        row["diagnose"] = timings[2]
         dj = json.load(open(diag_out))
         row["selected"] = dj.get("selected", [])
     return row, dj
@@ -211,10 +228,10 @@ def simulated(a, work, result):
                        stdout=subprocess.DEVNULL)
         run = os.path.join(d, "run.yaml")
         repeats = a.repeats if name == "paper-90s" else 1
-        fil = median_of([BIN, "filter", run, "-o", os.path.join(d, "filter.json"), "--force",
-                         "-q"], repeats)
-        fit = median_of([BIN, "fit", run, "-o", os.path.join(d, "fit.json"), "--force", "-q"],
-                        repeats)
+        fil, fit = medians_interleaved(
+            [([BIN, "filter", run, "-o", os.path.join(d, "filter.json"), "--force", "-q"], (0,)),
+             ([BIN, "fit", run, "-o", os.path.join(d, "fit.json"), "--force", "-q"], (0,))],
+            repeats)
         result[name] = {"filter": fil, "fit": fit,
                         "fit_split": split_of(json.load(open(os.path.join(d, "fit.json"))), fit)}
         print(f"\n{name}: filter {fil['wall_s']:.2f} s wall, {fil['cpu_s']:.2f} s CPU, "
