@@ -109,6 +109,17 @@ JointInput LoadJointInput(const std::vector<std::string>& inputs, const std::str
   in.layout = std::make_unique<JointLayout>(in.runs, ParameterLayout(list, false, unit),
                                             JointSpecOf(in.file),
                                             in.file.path.empty() ? "command line" : in.file.path);
+  for (const JointRun& r : in.runs) {
+    if (r.run.gyro && r.data.has_gyro()) in.gyro_not_calibrated.push_back(r.name);
+  }
+  if (!in.gyro_not_calibrated.empty() && session->warning) {
+    std::string names;
+    for (const std::string& n : in.gyro_not_calibrated) names += (names.empty() ? "" : ", ") + n;
+    const bool one = in.gyro_not_calibrated.size() == 1;
+    session->warning(std::string(one ? "run " : "runs ") + names + (one ? " carries" : " carry") +
+                     " a gyro, which several runs together do not calibrate yet: the "
+                     "accelerometer triad only (fit each run alone for its gyro)");
+  }
   return in;
 }
 
@@ -198,8 +209,16 @@ std::string JointVerdict(const JointLayout& jl, const JointResult& r) {
   return Agreement(jl, r) + WithConsideredClause(jl, r);
 }
 
-nlohmann::json JointJson(const JointLayout& jl, const std::vector<JointRun>& runs,
-                         const JointResult& r, const RunsFile& file) {
+nlohmann::json GyroNotCalibratedJson(const std::vector<std::string>& runs) {
+  return {{"runs", runs},
+          {"reason", runs.empty() ? "no run carries a gyro"
+                                  : "several runs together calibrate the accelerometer triad "
+                                    "only; fit each run alone for its gyro"}};
+}
+
+nlohmann::json JointJson(const JointLayout& jl, const JointInput& in, const JointResult& r) {
+  const std::vector<JointRun>& runs = in.runs;
+  const RunsFile& file = in.file;
   nlohmann::json out;
   out["command"] = "fit";
   out["kind"] = "joint";
@@ -302,6 +321,7 @@ nlohmann::json JointJson(const JointLayout& jl, const std::vector<JointRun>& run
     jr.push_back(e);
   }
   out["runs"] = jr;
+  out["gyro_not_calibrated"] = GyroNotCalibratedJson(in.gyro_not_calibrated);
   out["chi2_per_dof"] = r.chi2_per_dof;
   out["degrees_of_freedom"] = r.degrees_of_freedom;
   out["converged"] = r.converged;
@@ -320,7 +340,7 @@ JointFitOutcome JointFitRun(const FitSettings& s, const JointInput& in, const Se
   opt.batch.fraction = session.fraction;
   JointFitOutcome out;
   out.result = SolveJoint(in.runs, *in.layout, opt);
-  out.json = JointJson(*in.layout, in.runs, out.result, in.file);
+  out.json = JointJson(*in.layout, in, out.result);
   return out;
 }
 

@@ -30,17 +30,24 @@ JointSpec JointSpecOf(const RunsFile& runs);
 // runs file, or several run.yaml), loaded, and their joint unknowns with
 // the effects of `effects` (checked against every run's data). The units
 // follow the first run's readings.
+// The runs that carry a gyro (a gyro block and its columns) are named in
+// gyro_not_calibrated: the joint problem holds the accelerometer triad only,
+// and loading says so (a warning); each such run calibrates its gyro alone.
 struct JointInput {
   RunsFile file;
   std::vector<JointRun> runs;
   std::unique_ptr<JointLayout> layout;
+  std::vector<std::string> gyro_not_calibrated;
 };
+
+// The OUT key of a joint fit or observability: the runs whose gyro the joint
+// problem leaves out, and why (an empty array: none carries one).
+nlohmann::json GyroNotCalibratedJson(const std::vector<std::string>& runs);
 JointInput LoadJointInput(const std::vector<std::string>& inputs, const std::string& effects,
                           Session* session, int threads = 0);
 
 // OUT.json of a joint fit (docs/multi-run.md).
-nlohmann::json JointJson(const JointLayout& layout, const std::vector<JointRun>& runs,
-                         const JointResult& r, const RunsFile& file);
+nlohmann::json JointJson(const JointLayout& layout, const JointInput& in, const JointResult& r);
 
 // The verdict line: converged or not, and which runs disagree.
 std::string JointVerdict(const JointLayout& jl, const JointResult& r);

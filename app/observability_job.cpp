@@ -273,6 +273,7 @@ JointObservabilityOutcome JointObservabilityRun(const ObservabilitySettings& s, 
                   {"held_alone", info.held_alone[r]}});
   }
   out["runs"] = jr;
+  out["gyro_not_calibrated"] = GyroNotCalibratedJson(in->gyro_not_calibrated);
   out["settings"] = {{"epoch_s", s.epoch_s}, {"effects", s.effects}};
   return o;
 }

@@ -104,6 +104,35 @@ TEST_F(CliGyroInput, GyroColumnsWithoutAGyroBlockWarnOnce) {
   EXPECT_TRUE(std::filesystem::exists(Path("out.json")));
 }
 
+// Several runs together calibrate the accelerometer triad only: runs that
+// carry a gyro are named, once, in a warning and in the OUT of the joint fit
+// and of the joint observability (before, the gyro was dropped silently).
+TEST_F(CliGyroInput, SeveralRunsTogetherNameTheGyroTheyDoNotCalibrate) {
+  for (const char* copy : {"b.csv", "c.csv"}) {
+    std::filesystem::copy_file(Path("gyro.csv"), Path(copy));  // a run listed twice is refused
+  }
+  const std::string a = WriteText("a.yaml", "data: gyro.csv\ngyro: {}\n");
+  const std::string b = WriteText("b.yaml", "data: b.csv\n");  // gyro columns, no block
+  const std::string c = WriteText("c.yaml", "data: c.csv\ngyro: {}\n");
+  const std::string warning =
+      "triadcal: warning: runs a, c carry a gyro, which several runs together do not calibrate "
+      "yet: the accelerometer triad only (fit each run alone for its gyro)\n";
+  for (const char* command : {"observability", "fit"}) {
+    const std::string out = Path(std::string(command) + ".json");
+    const testing_fixtures::CliResult r =
+        Run(std::string(command) + " " + a + " " + b + " " + c + " -o " + out + " -q");
+    ASSERT_EQ(r.exit_code, 0) << command << ": " << r.err;
+    const std::size_t at = r.err.find(warning);
+    EXPECT_NE(at, std::string::npos) << command << ": " << r.err;
+    EXPECT_EQ(r.err.find(warning, at + 1), std::string::npos) << command << ": said twice";
+    const nlohmann::json j = nlohmann::json::parse(ReadFile(out));
+    EXPECT_EQ(j["gyro_not_calibrated"]["runs"], nlohmann::json({"a", "c"})) << command;
+    for (const auto& [name, p] : j["parameters"].items()) {
+      EXPECT_NE(name.rfind("gyro.", 0), 0u) << command << ": " << name;
+    }
+  }
+}
+
 // The fit's OUT carries the gyro's own verdict, residual analysis and plot
 // (the HTML report's gyro section); the accelerometer's keys as before. A
 // gyro whose scale differs with the rate's sign (1 %, not in the model)
