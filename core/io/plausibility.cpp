@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <utility>
 
 #include "core/model/errors.h"
 #include "core/model/priors.h"
@@ -185,7 +186,7 @@ void CheckSamplesPlausible(const DataTable& table, const ChannelSet& c,
     }
     std::vector<double> dt(t.size() - 1);
     for (std::size_t k = 1; k < t.size(); ++k) dt[k - 1] = t[k] - t[k - 1];
-    const double median = Median(dt);
+    const double median = Median(std::move(dt));  // dt is not read again
     if (median > B::kMaxMedianInterval_s) {
       throw InputError(table.path + ": " + c.t->label + ": median sample interval " + Num(median) +
                        " s is beyond the bound " + Num(B::kMaxMedianInterval_s) +

@@ -221,6 +221,23 @@ TEST_F(RunIoTest, CsvParsedOnTwoThreads) {
     EXPECT_EQ(std::string(e.what()),
               Path("bad.csv") + ":151: column 't': not a number: '" + early_t + "'");
   }
+  // A check after reading names a second-half row by its file line too (the
+  // rows keep their lines).
+  std::vector<std::string> back = lines;
+  back[late] = "0" + back[late].substr(back[late].find(','));
+  write("back.csv", back);
+  for (int threads : {0, 1}) {
+    try {
+      LoadRunData(Describe("back.csv"), &warnings, threads);
+      ADD_FAILURE() << "back.csv read without an error";
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(Path("back.csv") + ":" + std::to_string(late + 1) +
+                                                ": ",
+                                            0),
+                0u)
+          << e.what();
+    }
+  }
 }
 
 // One file column may feed two channels (the reader hands a column over to
