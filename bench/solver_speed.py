@@ -2,7 +2,7 @@
 """The estimation core's speed and behaviour targets (issue 31), measured in one run.
 
 usage: bench/solver_speed.py [--workdir DIR] [--repeats N] [--skip-real]
-                             [--skip-40min] [--skip-diagnose] [--gyro]
+                             [--skip-40min] [--skip-diagnose] [--gyro] [--threads N]
        (TRIADCAL=path/to/triadcal to use another binary)
 
 One command at a time, each timed with os.wait4 (wall, CPU = user + system of
@@ -64,8 +64,13 @@ SHARED = os.path.join(ROOT, "..", "shared", "data", "real")
 targets = []
 
 
+THREADS = []  # --threads N: given to every fit and diagnose timed (filter has no such option)
+
+
 def timed(cmd, ok=(0,)):
     """Runs cmd (stdout and stderr discarded); returns wall s, CPU s, peak MB, exit."""
+    if cmd[1] in ("fit", "diagnose"):
+        cmd = cmd + THREADS
     start = time.monotonic()
     pid = os.fork()
     if pid == 0:
@@ -323,10 +328,16 @@ def main():
     p.add_argument("--skip-40min", action="store_true")
     p.add_argument("--skip-diagnose", action="store_true")
     p.add_argument("--gyro", action="store_true")
+    p.add_argument("--threads", type=int, help="threads of every fit and diagnose timed "
+                   "(default: triadcal's, all cores); more than the cores measure memory, "
+                   "not time")
     a = p.parse_args()
+    if a.threads:
+        THREADS[:] = ["--threads", str(a.threads)]
     work = a.workdir or tempfile.mkdtemp(prefix="solver_speed.")
     os.makedirs(work, exist_ok=True)
-    print(f"binary {BIN}; load {os.getloadavg()[0]:.2f}; work {work}")
+    print(f"binary {BIN}; load {os.getloadavg()[0]:.2f}; work {work}"
+          + (f"; --threads {a.threads}" if a.threads else ""))
     result = {"real": {}}
     if not a.skip_real:
         real_runs(a, work, result)

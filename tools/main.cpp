@@ -9,6 +9,7 @@
 
 #include <CLI/CLI.hpp>
 #include <glog/logging.h>
+#include <malloc.h>
 
 #include "core/io/data_table.h"
 #include "core/io/file_util.h"
@@ -63,6 +64,12 @@ std::size_t EditDistance(const std::string& a, const std::string& b) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Two malloc arenas, not glibc's eight per core: a pass's blocks are made
+  // on the worker threads and freed on the main one, and each arena kept its
+  // share, so the peak grew with the threads (`bench/solver_speed.py
+  // --threads 8`: the 40-min 1-kHz fit's peak 203 MB, 191 MB with two
+  // arenas, in the same time).
+  mallopt(M_ARENA_MAX, 2);
   // MPI only under an MPI launcher (tools/distribution/mpi_context.h).
   triadcal::MpiSession mpi(&argc, &argv);
   CLI::App app{
