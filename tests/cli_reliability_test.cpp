@@ -884,7 +884,7 @@ TEST_F(CliReliability, DivergedFilterSaysSoAndWritesNothing) {
 
 // A run read as counts with offsets of 1500 declared 0, through `fit`: the
 // RTS start's filter diverges, so the fit starts from the nominal values with
-// the scale and offset fitted, says so, and converges at the truth (it took
+// the zero offsets fitted, says so, and converges at the truth (it took
 // the diverged estimate as its start and stopped there, not converged).
 TEST_F(CliReliability, FitStartsFromNominalWhenItsFilterDiverges) {
   const std::string sc = WriteText("sc.yaml", "profile: {duration_s: 20, rate_hz: 100}\n");
@@ -909,6 +909,39 @@ TEST_F(CliReliability, FitStartsFromNominalWhenItsFilterDiverges) {
               4.0 * p["sigma"].get<double>())
         << name << " " << p.dump();
   }
+}
+
+// The point the decision linearises at (and `--init nominal` starts from)
+// fits the zero offsets only: the scale factors stay at their nominal
+// values, the prior's mean. On a vertical shaft, which determines none of
+// them, the misfit of an undeclared 8.6-ms angle latency had moved them
+// there by 8 and 5 % (Ky 1081, Kz 950 against 996 and 1010; on the real
+// pitch run Ky went to 22 500 mg/g), and the decision's information is
+// formed at that point.
+TEST_F(CliReliability, TheDecisionsPointKeepsTheScaleFactorsAtNominal) {
+  const std::string sc = WriteText(
+      "shaft.yaml",
+      "seed: 3\n"
+      "profile: {amplitude_deg: [0, 90], period_s: [30, 7.2], duration_s: 120, rate_hz: 100}\n"
+      "truth: {Kx: 1004, Ky: 996, Kz: 1010, W0x: 25, W0y: -40, W0z: 60, dtheta_c: 20}\n"
+      "noise: {accel_mV: [3, 12, 12], angle_arcsec: 91}\n"
+      "effects: {angle_latency: {tau_ms: 8.6}}\n"
+      "run:\n"
+      "  triad: {scale_mV_per_g: [1000, 1000, 1000], bias_mV: [0, 0, 0], noise_mV: 12}\n"
+      "  constraints: []\n");
+  ASSERT_EQ(Run("simulate " + sc + " -o " + Path("sim") + " -q").exit_code, 0);
+  std::string yaml = ReadFile(Path("sim/run.yaml"));
+  WriteText("sim/run.yaml", yaml + "columns:\n  lambda1: {value: 0}\n");
+  const CliResult r =
+      Run("fit " + Path("sim/run.yaml") + " --init nominal -o " + Path("out.json") + " -q");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(ReadFile(Path("out.json")));
+  for (const char* k : {"Kx", "Ky", "Kz"}) {
+    EXPECT_EQ(j["initial"]["parameters"][k]["value"].get<double>(), 1000.0) << k;
+  }
+  // The offsets are fitted there (W0x, along the shaft, to its reading's level).
+  EXPECT_NEAR(j["initial"]["parameters"]["W0x"]["value"].get<double>(),
+              j["parameters"]["W0x"]["value"].get<double>(), 1.0);
 }
 
 // The same run through diagnose and batch: each says where its fit started
@@ -947,7 +980,7 @@ TEST_F(CliReliability, DiagnoseAndBatchSayWhereTheFitStarted) {
 // 1500 counts, estimates nonlinearities under which the readings model no
 // longer inverts. That is its divergence (the inverse is not a number there:
 // SpecificForceFromReadings_g); the fit starts from the nominal values with
-// scale and offset fitted, converges, finds the simulated sensor and says the
+// the zero offsets fitted, converges, finds the simulated sensor and says the
 // declared offsets are wrong. Before, the inverse's last iterate was taken:
 // the smoother lost the track without diverging, and the fit from its
 // estimates headed for a degenerate optimum (Kz towards 0) and did not

@@ -264,14 +264,22 @@ std::vector<int> SupportedByInformation(const Eigen::MatrixXd& information,
   return kept;
 }
 
-// The decision's point: the nominal values with the scale factors and zero
-// offsets (the gyro's too) fitted, three Levenberg-Marquardt steps on the
-// samples thinned by m. The thinned run is gone when it returns (the
-// decision's full pass comes after it: the 40-min 1-kHz run's peak memory).
-Eigen::VectorXd ScaleAndOffsetPoint(const RunDescription& run, const RunData& data,
-                                    const ParameterLayout& layout, double epoch_s,
-                                    const AngleDerivativeOptions& derivatives, std::size_t m,
-                                    int threads) {
+// The decision's point: the nominal values with the zero offsets fitted (the
+// accelerometer's and the gyro's), three Levenberg-Marquardt steps on the
+// samples thinned by m. Not the scale factors: the residual's weights follow
+// them, and with the noise held no log-determinant balances that, so a
+// misfit moved the ones the run does not determine (the real pitch run's Ky
+// to 22 500 mg/g, a simulated vertical shaft's Ky and Kz by 8 and 5 %, every
+// real gyro run's gyro.K 280 to 5e4 sigma short of its minimum), and the
+// decision's information was formed there; at their nominal values, the
+// prior's mean, it is the information the prior expects (the predicted
+// readings' information scales with them). The thinned run is gone when it
+// returns (the decision's full pass comes after it: the 40-min 1-kHz run's
+// peak memory).
+Eigen::VectorXd ZeroOffsetPoint(const RunDescription& run, const RunData& data,
+                                const ParameterLayout& layout, double epoch_s,
+                                const AngleDerivativeOptions& derivatives, std::size_t m,
+                                int threads) {
   const RunData thin = Decimate(data, m);
   const RunProblem pt = BuildRunProblem(run, thin, layout, epoch_s, derivatives, nullptr, threads);
   Eigen::MatrixXd A;
@@ -283,19 +291,14 @@ Eigen::VectorXd ScaleAndOffsetPoint(const RunDescription& run, const RunData& da
   mo.max_iterations = 3;  // a point to linearise at, not an estimate
   mo.tolerance = 5e-3;
   mo.full_information = false;  // the information is the decision's pass's
-  std::vector<int> scale_offset = {kKx, kKy, kKz, kW0x, kW0y, kW0z};
-  // The gyro's zero offsets too (a bias of degrees per second is common), not
-  // its scale factors: its rate residuals' weights follow them, and with its
-  // noise held no log-determinant balances that, so far from the minimum
-  // (every real gyro run at nominal offsets) the steps ran off along them
-  // and the point stayed 280 to 5e4 sigma from its minimum; with the offsets
-  // alone it converges in 2-3 steps.
+  // A sensor's offsets are tens to hundreds of mg (a gyro's degrees per second).
+  std::vector<int> offsets = {kW0x, kW0y, kW0z};
   if (objective.has_gyro(0)) {
-    for (int i = kGW0x; i <= kGW0z; ++i) scale_offset.push_back(layout.gyro_offset() + i);
+    for (int i = kGW0x; i <= kGW0z; ++i) offsets.push_back(layout.gyro_offset() + i);
   }
-  BatchMinimizer scale_and_offset(objective, scale_offset, mo);
+  BatchMinimizer offsets_only(objective, offsets, mo);
   MinimizerSummary summary;
-  return scale_and_offset.Minimize(pt.prior.mean, {pt.noise_mV}, &summary).phi;
+  return offsets_only.Minimize(pt.prior.mean, {pt.noise_mV}, &summary).phi;
 }
 
 std::map<int, std::vector<int>> DeterminedOnlyWithConsidered(
@@ -355,16 +358,13 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
   // 0 estimated, 1 consider, 2 held
   std::vector<int> kind(n, 0);
   if (o.auto_hold) {
-    // At the nominal values with the scale factors and zero offsets fitted
-    // (a degenerate direction has no information there; a sensor's offsets
-    // are tens to hundreds of mg, and at nominal zero offsets a reading that
-    // never changes -- the shaft of a single-axis run -- would look like a
-    // specific force that cross-couples). That point is found on the samples
-    // thinned to decimation_hz; the information there is all the samples'
-    // (one pass): thinned, the increments' quadrature is coarser than the
-    // motion and the information of a weak direction is not the fit's (real
-    // pitch run at 31 Hz: Ky's 0.079 prior units left, 0.0039 at 100 Hz;
-    // alpha_x's 6.2e8, 8.1e8 at 100 Hz).
+    // At the nominal values with the zero offsets fitted (ZeroOffsetPoint; a
+    // degenerate direction has no information there). That point is found on
+    // the samples thinned to decimation_hz; the information there is all the
+    // samples' (one pass): thinned, the increments' quadrature is coarser
+    // than the motion and the information of a weak direction is not the
+    // fit's (real pitch run at 31 Hz: Ky's 0.079 prior units left, 0.0039
+    // at 100 Hz; alpha_x's 6.2e8, 8.1e8 at 100 Hz).
     // It is the information of the readings the model predicts there for
     // the recorded attitude (SampleSeries::readings), not of the
     // recorded readings: a parameter that multiplies a small component of
@@ -373,7 +373,7 @@ HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data
     // noise across the shaft: gamma_y and gamma_z were estimated, and the
     // fit turned them to 13 400'; HoldDecision.ReadingNoiseIsNoInformation).
     const std::size_t m = ThinningFactor(data, decimation_hz);
-    d.theta = ScaleAndOffsetPoint(run, data, layout, epoch_s, derivatives, m, threads);
+    d.theta = ZeroOffsetPoint(run, data, layout, epoch_s, derivatives, m, threads);
     RunProblem pt = BuildRunProblem(run, data, layout, epoch_s, derivatives, shared, threads);
     pt.series.readings = SampleSeries::Readings::kPredictedAtRest;
     Eigen::MatrixXd A;
@@ -600,7 +600,7 @@ class BatchSolve {
   void Start() {
     Say("initialising (" +
         std::string(opt_.init == BatchInit::kRts       ? "RTS smoother"
-                    : opt_.init == BatchInit::kNominal ? "nominal values, scale and offset fitted"
+                    : opt_.init == BatchInit::kNominal ? "nominal values, zero offsets fitted"
                                                        : "given") +
         ")");
     Fraction(0.1);
@@ -614,14 +614,14 @@ class BatchSolve {
       char why[200];
       std::snprintf(why, sizeof(why),
                     "the RTS smoother diverged (its covariance lost its positive definiteness "
-                    "at t = %.3g s): started from the nominal values, scale and offset fitted",
+                    "at t = %.3g s): started from the nominal values, zero offsets fitted",
                     diverged_at_s);
       res_.start_note = why;
       Say(why);
     }
     if ((opt_.init == BatchInit::kNominal || diverged_at_s >= 0.0) &&
         decision_.theta.size() == p_.n) {
-      res_.initial.theta = decision_.theta;  // the nominal values, scale and offset fitted
+      res_.initial.theta = decision_.theta;  // the nominal values, zero offsets fitted
     }
     res_.init_seconds = Seconds(t_start_);
     theta0_ = res_.initial.theta;

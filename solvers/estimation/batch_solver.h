@@ -58,10 +58,10 @@ enum class BatchInit { kRts, kNominal, kGiven };
 
 // Which parameters are estimated (ChooseHeldParameters). In prior units
 // (each parameter divided by its prior sigma) a pivoted Cholesky of the data
-// information at the nominal values (the scale factors and zero offsets
-// fitted first) keeps (SupportedByInformation) every parameter the data
-// determine, beyond the ones kept before it, with at least min_information
-// and separably: those are estimated. The rest are not determined by the
+// information at the nominal values (the zero offsets fitted first) keeps
+// (SupportedByInformation) every parameter the data determine, beyond the
+// ones kept before it, with at least min_information and separably: those
+// are estimated. The rest are not determined by the
 // run: with less than null_information left they are structural nulls (held;
 // the others of their direction are estimated relative to them), else
 // consider parameters (held at nominal, their prior uncertainty in the
@@ -143,8 +143,8 @@ std::map<int, std::vector<int>> DeterminedOnlyWithConsidered(
 // there they also carry how each run's mounting differs from the others'.
 std::vector<int> ZerosOfStillAxes(const RunData& data);
 
-// At the nominal values with the scale factors and zero offsets fitted (on
-// the samples thinned to decimation_hz), at run's noise, from the
+// At the nominal values with the zero offsets fitted (on the samples
+// thinned to decimation_hz), at run's noise, from the
 // information of all the samples there. shared: work to share with a fit of
 // the same run (its weights' reference pass), or null.
 HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data,
@@ -242,7 +242,7 @@ struct BatchResult {
   Estimate estimate;            // theta and its covariance (SI)
   Estimate initial;             // the starting point (with the RTS sigma when from RTS)
   // Not empty when the start is not the one asked for, and why (the RTS
-  // smoother diverged: the nominal values, scale and offset fitted).
+  // smoother diverged: the nominal values, zero offsets fitted).
   std::string start_note;
   // Not estimated: the structural nulls and the user's holds (held), and the
   // parameters the run does not determine (consider); both at nominal.
