@@ -913,9 +913,9 @@ TEST_F(CliReliability, FitStartsFromNominalWhenItsFilterDiverges) {
 
 // The point the decision linearises at (and `--init nominal` starts from)
 // fits the zero offsets only: the scale factors stay at their nominal
-// values, the prior's mean. On a vertical shaft, which determines none of
+// values, the prior's mean. On this vertical shaft, which determines none of
 // them, the misfit of an undeclared 8.6-ms angle latency had moved them
-// there by 8 and 5 % (Ky 1081, Kz 950 against 996 and 1010; on the real
+// there to Kx 1006, Ky 1861, Kz 760 mV/g (truth 1004, 996, 1010; on the real
 // pitch run Ky went to 22 500 mg/g), and the decision's information is
 // formed at that point.
 TEST_F(CliReliability, TheDecisionsPointKeepsTheScaleFactorsAtNominal) {
