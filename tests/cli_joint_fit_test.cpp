@@ -5,6 +5,7 @@
 // exact one-line error with exit 2 and no output file.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -119,6 +120,46 @@ TEST_F(JointFitCli, ObservabilityOfTheRunsTogether) {
   EXPECT_EQ(j["runs"].size(), 2u);
   ExpectError("observability " + a + " " + b + " --at " + a + " -o " + Path("out.json"),
               "--at: not available for several runs yet");
+}
+
+// Two single-axis runs of the same mounting: the shaft's scale factor Ky is
+// held by each alone, and together they do not determine it either (the same
+// axis never leaves the horizontal). The joint decision, at the nominal
+// values as a single run's, holds it. Decided at the runs' own estimates (their
+// misalignments away from 0) Ky drew information from its product with them:
+// "Ky 1000 +- 100 mV/g", its prior sigma, "determined only by the runs
+// together".
+TEST_F(JointFitCli, TwoShaftsAlikeDoNotDetermineWhatNeitherDetermines) {
+  const std::string scenario = WriteText("roll.yaml", R"(
+profile: {amplitude_deg: [90, 0], period_s: [20, 12], duration_s: 120, rate_hz: 50}
+truth: {Kx: 1004, Ky: 996, Kz: 1010, W0x: 25, W0y: -40, W0z: 60, alpha_x: 30, alpha_y: -20,
+        beta_x: 25, beta_z: 15, gamma_y: -30, gamma_z: 20}
+noise: {accel_mV: 3, angle_arcsec: 20}
+run:
+  triad: {scale_mV_per_g: [1000, 1000, 1000], bias_mV: [0, 0, 0], noise_mV: 3}
+  constraints: []
+)");
+  std::string runs;
+  for (const char* name : {"r1", "r2"}) {
+    const auto s = RunTriadcal("simulate " + scenario + " -o " + Path(name) + " --seed " +
+                                   std::string(name + 1),
+                               Path("sim.err"));
+    ASSERT_EQ(s.status, 0) << s.err;
+    const std::string yaml = Path(std::string(name) + "/run.yaml");
+    WriteText(std::string(name) + "/run.yaml",
+              ReadFile(yaml) + "columns:\n  lambda2: {value: 0}\n");  // no inner axis
+    runs += " " + yaml;
+  }
+  const auto f = RunTriadcal("fit" + runs + " -o " + Path("fit.json") + " -q", Path("fit.err"));
+  ASSERT_EQ(f.status, 0) << f.err;
+  const nlohmann::json fit = nlohmann::json::parse(ReadFile(Path("fit.json")));
+  for (const nlohmann::json& run : fit["runs"]) {
+    const nlohmann::json& held = run["alone"]["held"];
+    EXPECT_NE(std::find(held.begin(), held.end(), "Ky"), held.end()) << run["name"];
+  }
+  EXPECT_TRUE(fit["parameters"]["Ky"].value("held", false)) << fit["parameters"]["Ky"].dump();
+  const nlohmann::json& jointly = fit["determined_jointly_only"];
+  EXPECT_EQ(std::find(jointly.begin(), jointly.end(), "Ky"), jointly.end()) << jointly.dump();
 }
 
 TEST_F(JointFitCli, BadInputIsOneLineNamingTheRun) {
