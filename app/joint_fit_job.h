@@ -39,12 +39,12 @@ struct JointInput {
   std::unique_ptr<JointLayout> layout;
   std::vector<std::string> gyro_not_calibrated;
 };
+JointInput LoadJointInput(const std::vector<std::string>& inputs, const std::string& effects,
+                          Session* session, int threads = 0);
 
 // The OUT key of a joint fit or observability: the runs whose gyro the joint
 // problem leaves out, and why (an empty array: none carries one).
 nlohmann::json GyroNotCalibratedJson(const std::vector<std::string>& runs);
-JointInput LoadJointInput(const std::vector<std::string>& inputs, const std::string& effects,
-                          Session* session, int threads = 0);
 
 // OUT.json of a joint fit (docs/multi-run.md).
 nlohmann::json JointJson(const JointLayout& layout, const JointInput& in, const JointResult& r);

@@ -61,8 +61,8 @@ enum class BatchInit { kRts, kNominal, kGiven };
 // information at the nominal values (the zero offsets fitted first) keeps
 // (SupportedByInformation) every parameter the data determine, beyond the
 // ones kept before it, with at least min_information and separably: those
-// are estimated. The rest are not determined by the
-// run: with less than null_information left they are structural nulls (held;
+// are estimated. The rest are not determined by the run: with less than
+// null_information left they are structural nulls (held;
 // the others of their direction are estimated relative to them), else
 // consider parameters (held at nominal, their prior uncertainty in the
 // others' sigma). `hold` holds a parameter outright (no consider term: the
@@ -144,8 +144,8 @@ std::map<int, std::vector<int>> DeterminedOnlyWithConsidered(
 std::vector<int> ZerosOfStillAxes(const RunData& data);
 
 // At the nominal values with the zero offsets fitted (on the samples
-// thinned to decimation_hz), at run's noise, from the
-// information of all the samples there. shared: work to share with a fit of
+// thinned to decimation_hz), at run's noise, from the information of all the
+// samples there. shared: work to share with a fit of
 // the same run (its weights' reference pass), or null.
 HoldDecision ChooseHeldParameters(const RunDescription& run, const RunData& data,
                                   const ParameterLayout& layout, const HoldPolicy& policy,
