@@ -269,7 +269,8 @@ std::vector<int> SupportedByInformation(const Eigen::MatrixXd& information,
 // samples thinned by m. Not the scale factors: the residual's weights follow
 // them, and with the noise held no log-determinant balances that, so a
 // misfit moved the ones the run does not determine (the real pitch run's Ky
-// to 22 500 mg/g, a simulated vertical shaft's Ky and Kz by 8 and 5 %, every
+// to 22 500 mg/g, a simulated vertical shaft's Ky and Kz to 1861 and 760
+// mV/g against 996 and 1010, test TheDecisionsPointKeepsTheScaleFactorsAtNominal; every
 // real gyro run's gyro.K 280 to 5e4 sigma short of its minimum), and the
 // decision's information was formed there; at their nominal values, the
 // prior's mean, it is the information the prior expects (the predicted
