@@ -270,8 +270,8 @@ std::vector<int> SupportedByInformation(const Eigen::MatrixXd& information,
 // them, and with the noise held no log-determinant balances that, so a
 // misfit moved the ones the run does not determine (the real pitch run's Ky
 // to 22 500 mg/g, a simulated vertical shaft's Ky and Kz to 1861 and 760
-// mV/g against 996 and 1010, test TheDecisionsPointKeepsTheScaleFactorsAtNominal; every
-// real gyro run's gyro.K 280 to 5e4 sigma short of its minimum), and the
+// mV/g against 996 and 1010, CliReliability.TheDecisionsPointKeepsThe...;
+// every real gyro run's gyro.K 280 to 5e4 sigma short of its minimum), and the
 // decision's information was formed there; at their nominal values, the
 // prior's mean, it is the information the prior expects (the predicted
 // readings' information scales with them). The thinned run is gone when it
