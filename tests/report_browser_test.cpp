@@ -353,6 +353,28 @@ TEST_F(ReportBrowserTest, GyroFitShowsItsOwnVerdictParametersAndResidual) {
   EXPECT_NE(RowOf(page, "Kx").find("<td>"), std::string::npos);
 }
 
+// A joint fit of runs with a gyro: the page says which runs' gyro the joint
+// problem leaves out (OUT's gyro_not_calibrated), as the command's warning
+// does.
+TEST_F(ReportBrowserTest, JointFitSaysWhichGyroItDoesNotCalibrate) {
+  if (chromium_.empty()) GTEST_SKIP() << "chromium is not installed (setup.sh installs it)";
+  MakeFitReport("g1", 7, /*with_gyro=*/true);
+  MakeFitReport("g2", 8, /*with_gyro=*/true);
+  ASSERT_EQ(Run("fit " + Path("g1/run.yaml") + " " + Path("g2/run.yaml") + " -o " +
+                Path("joint.json")),
+            0)
+      << Err();
+  ASSERT_EQ(Run("report " + Path("joint.json") + " -o " + Path("joint.html")), 0) << Err();
+  const BrowserResult r = Load(Path("joint.html"));
+  EXPECT_EQ(r.status, "ok") << r.result.dump();
+  EXPECT_TRUE(r.console.empty()) << Joined(r.console);
+  const std::string page = MainOf(r.dom);
+  EXPECT_NE(page.find("gyro not calibrated here (runs g1, g2): several runs together calibrate "
+                      "the accelerometer triad only"),
+            std::string::npos)
+      << page.substr(0, 2000);
+}
+
 // diagnose on a run with a gyro: the report shows the gyro's verdict before
 // and after the loop, and its residual before and after.
 TEST_F(ReportBrowserTest, GyroDiagnoseShowsTheGyroBeforeAndAfter) {

@@ -387,6 +387,11 @@
     if (out.scenario) facts.push('scenario: ' + out.scenario);
     if (isNum(out.samples)) facts.push(out.samples + ' samples');
     if (isNum(out.chi2_per_dof)) facts.push('chi2/dof ' + g(out.chi2_per_dof, 4) + ' (1 expected)');
+    // Several runs together calibrate the accelerometer triad only.
+    var gn = out.gyro_not_calibrated;
+    if (gn && gn.runs && gn.runs.length) {
+      facts.push('gyro not calibrated here (runs ' + gn.runs.join(', ') + '): ' + gn.reason);
+    }
     var pv = out.provenance || {};
     if (pv.sensor && pv.sensor.serial) facts.push('sensor ' + pv.sensor.serial);
     if (pv.sensor && pv.sensor.model) facts.push('model ' + pv.sensor.model);
