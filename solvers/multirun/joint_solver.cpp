@@ -199,10 +199,9 @@ std::vector<int> JointIndicesOf(const JointLayout& jl, const std::string& name,
 // combined information at the nominal values, with --hold/--free on top:
 // 0 estimated, 1 consider (not determined: nominal, prior uncertainty
 // carried), 2 held. *pt_out, when given, gets that evaluation (of the
-// readings the model predicts at `at`).
+// readings the model predicts at the nominal values).
 std::vector<int> HeldByRule(const JointLayout& jl, const std::vector<RunProblem>& problems,
-                            const JointOptions& opt, int threads, const Eigen::VectorXd& at,
-                            BatchObjective::Point* pt_out) {
+                            const JointOptions& opt, int threads, BatchObjective::Point* pt_out) {
   const int m = jl.size();
   // The information of the readings the model predicts (a single run's
   // decision reads the same: ChooseHeldParameters).
@@ -212,7 +211,7 @@ std::vector<int> HeldByRule(const JointLayout& jl, const std::vector<RunProblem>
   std::vector<Eigen::Vector3d> noise;
   for (const RunProblem& p : problems) noise.push_back(p.noise_mV);
   BatchObjective::Point pt =
-      objective.Evaluate(at, noise, true, ThetaPart::kGradientAndInformationAtFixedNoise);
+      objective.Evaluate(jl.Nominal(), noise, true, ThetaPart::kGradientAndInformationAtFixedNoise);
   const Eigen::VectorXd sigma = jl.PriorSigma();
   // Data and constraint information in prior units.
   const Eigen::MatrixXd info =
@@ -400,7 +399,7 @@ JointInformation JointInformationAtNominal(const std::vector<JointRun>& runs,
   // observability (ReadPredictedReadingsInMotion; at rest it was up to 1.2 %
   // off the single run's CRB for a runs file of that one run).
   BatchObjective::Point at_rest;
-  const std::vector<int> kind = HeldByRule(jl, problems, opt, threads, jl.Nominal(), &at_rest);
+  const std::vector<int> kind = HeldByRule(jl, problems, opt, threads, &at_rest);
   std::vector<RunProblem> in_motion = problems;
   std::vector<Eigen::Vector3d> noise;
   for (int r = 0; r < R; ++r) {
@@ -523,7 +522,7 @@ JointResult SolveJoint(const std::vector<JointRun>& runs, const JointLayout& jl,
   // +-100 mg/g, and an angle both determine held instead; 14 steps, 5 now).
   // What is not estimated starts at its nominal value.
   say("joint: choosing the parameters the runs determine together");
-  const std::vector<int> kind = HeldByRule(jl, problems, opt, threads, jl.Nominal(), nullptr);
+  const std::vector<int> kind = HeldByRule(jl, problems, opt, threads, nullptr);
   std::vector<int> free;
   for (int j = 0; j < m; ++j) {
     if (kind[j] == 0) free.push_back(j);
